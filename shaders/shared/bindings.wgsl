@@ -1,0 +1,10 @@
+// Every resource of the trace pipeline, in one place. Binding order is the order of
+// `gpu::render::BINDINGS` on the host.
+#import shared/types
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read> primitives: array<Primitive>;
+@group(0) @binding(2) var<storage, read> materials: array<Material>;
+@group(0) @binding(3) var<storage, read> emitters: array<Emitter>;
+// Two vec4 per pixel: [2i] = (sum r, sum g, sum b, samples), [2i + 1] = (sum r^2, g^2, b^2, 0).
+@group(0) @binding(4) var<storage, read_write> accum: array<vec4<f32>>;

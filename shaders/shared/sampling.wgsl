@@ -1,0 +1,51 @@
+// Sampling primitives: orthonormal bases, disks, hemispheres, ray origin offsets.
+#import shared/types
+
+// f32 nearest to pi: the same bits as std::f32::consts::PI on the CPU.
+const PI: f32 = 3.14159265358979;
+
+// Orthonormal basis around unit n, branchless (Duff et al., JCGT 2017).
+// Returns (tangent, bitangent); with n they form a right-handed frame.
+fn onb_tangents(n: vec3<f32>) -> array<vec3<f32>, 2> {
+    let s = select(-1.0, 1.0, n.z >= 0.0);
+    let a = -1.0 / (s + n.z);
+    let b = n.x * n.y * a;
+    let t = vec3<f32>(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    let bt = vec3<f32>(b, s + n.y * n.y * a, -n.y);
+    return array<vec3<f32>, 2>(t, bt);
+}
+
+// Uniform point on the unit disk, polar mapping.
+fn sample_disk(u: vec2<f32>) -> vec2<f32> {
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    return vec2<f32>(r * cos(phi), r * sin(phi));
+}
+
+// Cosine-weighted direction about unit n (Malley's method): pdf = cos(theta) / pi.
+fn sample_cosine_hemisphere(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let d = sample_disk(u);
+    let z = sqrt(max(0.0, 1.0 - u.x));
+    let tb = onb_tangents(n);
+    return normalize(d.x * tb[0] + d.y * tb[1] + z * n);
+}
+
+// Ray origin just off a surface. First leave the box of half-size `err` around p that
+// holds the true surface point (pbrt-v4's OffsetRayOrigin, with a scalar error bound),
+// then step 256 ulps of each coordinate, or a fixed 1/65536 near the origin (Waechter and
+// Binder, Ray Tracing Gems, chapter 6), which also covers the rounding of that addition.
+// n must be unit length and point to the side the new ray leaves on.
+fn offset_ray(p: vec3<f32>, n: vec3<f32>, err: f32) -> vec3<f32> {
+    let an = abs(n);
+    let q = p + n * (err * (an.x + an.y + an.z));
+    let of_i = vec3<i32>(256.0 * n);
+    let q_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(q) + select(of_i, -of_i, q < vec3<f32>(0.0)));
+    let q_f = q + (1.0 / 65536.0) * n;
+    return select(q_i, q_f, abs(q) < vec3<f32>(1.0 / 32.0));
+}
+
+// Largest absolute coordinate.
+fn max_abs(v: vec3<f32>) -> f32 {
+    let a = abs(v);
+    return max(a.x, max(a.y, a.z));
+}

@@ -1,0 +1,104 @@
+// Records shared with the host. Each struct mirrors one `#[repr(C)]` struct in
+// src/scene/records.rs; tests/layout.rs checks sizes and offsets against naga's layout.
+// vec3 never appears in a storage struct (16-byte alignment): positions are vec4 with .w used
+// for a scalar or left as padding.
+
+// Primitive tags (switch in intersect.wgsl).
+const PRIM_SPHERE: u32 = 0u;
+const PRIM_TRIANGLE: u32 = 1u;
+
+// Material tags (switch in materials.wgsl).
+const MAT_LAMBERTIAN: u32 = 0u;
+const MAT_EMISSIVE: u32 = 1u;
+
+// Material flags.
+const MAT_FLAG_TWO_SIDED: u32 = 1u;
+
+// A ray that hits nothing reports this primitive index.
+const NO_HIT: u32 = 0xffffffffu;
+// Largest finite f32: "no intersection" and "unbounded" without relying on infinities.
+const FAR: f32 = 3.40282347e+38;
+
+struct Primitive {
+    tag: u32,
+    material: u32,
+    flags: u32,
+    pad: u32,
+    // sphere: center.xyz, radius | triangle: vertex 0
+    a: vec4<f32>,
+    // triangle: vertex 1
+    b: vec4<f32>,
+    // triangle: vertex 2
+    c: vec4<f32>,
+}
+
+struct Material {
+    tag: u32,
+    flags: u32,
+    pad0: u32,
+    pad1: u32,
+    albedo: vec4<f32>,
+    // radiance emitted from the front side (both sides with MAT_FLAG_TWO_SIDED)
+    emission: vec4<f32>,
+    params: vec4<f32>,
+}
+
+struct Emitter {
+    primitive: u32,
+    material: u32,
+    area: f32,
+    power: f32,
+}
+
+// Per-dispatch constants: camera, image, pass and tile.
+struct Params {
+    // camera position, .w = lens radius
+    cam_origin: vec4<f32>,
+    // unit right vector, .w = half width of the focus plane
+    cam_right: vec4<f32>,
+    // unit up vector, .w = half height of the focus plane
+    cam_up: vec4<f32>,
+    // unit forward vector, .w = focus distance
+    cam_forward: vec4<f32>,
+    // radiance of rays that leave the scene, .w unused
+    background: vec4<f32>,
+    width: u32,
+    height: u32,
+    max_depth: u32,
+    seed: u32,
+    sample_index: u32,
+    num_primitives: u32,
+    num_emitters: u32,
+    tile_x: u32,
+    tile_y: u32,
+    tile_width: u32,
+    tile_height: u32,
+    pad: u32,
+}
+
+struct Ray {
+    origin: vec3<f32>,
+    dir: vec3<f32>,
+}
+
+// What the closest-hit search reports: distance, primitive, and the primitive's own
+// parameters of the hit (barycentrics for triangles).
+struct Candidate {
+    t: f32,
+    prim: u32,
+    u: f32,
+    v: f32,
+}
+
+// The shading record of the closest hit.
+struct Hit {
+    // hit point, computed from the primitive (not origin + t * dir)
+    p: vec3<f32>,
+    // geometric normal on the front side (outward for spheres, right-hand rule for triangles)
+    ng: vec3<f32>,
+    // true when the ray arrives on the front side
+    front_face: bool,
+    material: u32,
+    // bound on the absolute error of each coordinate of p, from the primitive's magnitude
+    err: f32,
+}

@@ -1,0 +1,75 @@
+// One sample per pixel per dispatch over one tile of the image: camera ray, then an
+// iterative bounce loop; the result is added to the accumulation buffer.
+#import shared/bindings
+#import shared/intersect
+#import shared/materials
+#import shared/rng
+#import shared/sampling
+#import shared/types
+
+// Dimension pairs drawn from the RNG at each bounce.
+const DIM_PIXEL: u32 = 0u;
+const DIM_LENS: u32 = 1u;
+const DIM_BSDF: u32 = 2u;
+
+// Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left, x grows along
+// the camera's right vector. `jitter` is the position inside the pixel, `lens` in [0, 1)^2.
+fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
+    let s = (f32(x) + jitter.x) / f32(params.width);
+    let t = (f32(y) + jitter.y) / f32(params.height);
+    let right = params.cam_right.xyz;
+    let up = params.cam_up.xyz;
+    let forward = params.cam_forward.xyz;
+    let target_offset = forward * params.cam_forward.w
+        + right * ((2.0 * s - 1.0) * params.cam_right.w)
+        + up * ((1.0 - 2.0 * t) * params.cam_up.w);
+    let d = sample_disk(lens) * params.cam_origin.w;
+    let lens_offset = right * d.x + up * d.y;
+    return Ray(params.cam_origin.xyz + lens_offset, normalize(target_offset - lens_offset));
+}
+
+// Radiance along one camera path. max_depth counts rays: 1 shows emitters and the
+// background, 2 adds direct lighting, and so on.
+fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
+    var ray = camera;
+    var radiance = vec3<f32>(0.0);
+    var throughput = vec3<f32>(1.0);
+    for (var depth = 0u; depth < params.max_depth; depth++) {
+        let cand = intersect_scene(ray);
+        if (cand.prim == NO_HIT) {
+            radiance += throughput * params.background.rgb;
+            break;
+        }
+        let hit = surface_at(ray, cand);
+        let mat = materials[hit.material];
+        radiance += throughput * emitted(mat, hit);
+        if (depth + 1u >= params.max_depth) {
+            break;
+        }
+        let u = rand_2d(pixel, sample, depth, DIM_BSDF, params.seed);
+        let s = scatter(mat, ray, hit, u);
+        if (!s.ok) {
+            break;
+        }
+        throughput *= s.weight;
+        let side = select(-hit.ng, hit.ng, dot(s.dir, hit.ng) > 0.0);
+        ray = Ray(offset_ray(hit.p, side, hit.err), s.dir);
+    }
+    return radiance;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    if (gid.x >= params.tile_width || gid.y >= params.tile_height) {
+        return;
+    }
+    let x = params.tile_x + gid.x;
+    let y = params.tile_y + gid.y;
+    let pixel = y * params.width + x;
+    let sample = params.sample_index;
+    let jitter = rand_2d(pixel, sample, 0u, DIM_PIXEL, params.seed);
+    let lens = rand_2d(pixel, sample, 0u, DIM_LENS, params.seed);
+    let c = trace_path(pixel, sample, camera_ray(x, y, jitter, lens));
+    accum[2u * pixel] += vec4<f32>(c, 1.0);
+    accum[2u * pixel + 1u] += vec4<f32>(c * c, 0.0);
+}

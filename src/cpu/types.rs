@@ -1,0 +1,31 @@
+//! Mirrors the non-record structs of `shaders/shared/types.wgsl`.
+
+use glam::Vec3;
+
+pub use crate::scene::records::{FAR, NO_HIT};
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+/// Closest-hit search result: distance, primitive, primitive-specific parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    pub t: f32,
+    pub prim: u32,
+    pub u: f32,
+    pub v: f32,
+}
+
+/// Shading record of the closest hit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Hit {
+    pub p: Vec3,
+    pub ng: Vec3,
+    pub front_face: bool,
+    pub material: u32,
+    /// Bound on the absolute error of each coordinate of p.
+    pub err: f32,
+}

@@ -1,0 +1,227 @@
+//! Progressive rendering on the GPU: buffers, the trace pipeline, passes split into tiles,
+//! and readback of the accumulation buffer.
+
+use wgpu::util::DeviceExt;
+
+use super::context::{GpuContext, GpuError};
+use super::shader;
+use crate::scene::records::Params;
+use crate::scene::{FlatScene, Tile};
+
+/// Most pixels one dispatch (one submission) traces: bounds the time of a submission.
+pub const MAX_TILE_PIXELS: u32 = 1 << 18;
+
+/// Workgroup size of `trace.wgsl`'s entry point.
+const WORKGROUP: u32 = 8;
+
+/// Binding numbers of `shaders/shared/bindings.wgsl`, in order.
+const BINDINGS: [(u32, wgpu::BufferBindingType); 5] = [
+    (0, wgpu::BufferBindingType::Uniform),
+    (1, wgpu::BufferBindingType::Storage { read_only: true }),
+    (2, wgpu::BufferBindingType::Storage { read_only: true }),
+    (3, wgpu::BufferBindingType::Storage { read_only: true }),
+    (4, wgpu::BufferBindingType::Storage { read_only: false }),
+];
+
+pub struct GpuRenderer {
+    ctx: GpuContext,
+    scene: FlatScene,
+    pipeline: wgpu::ComputePipeline,
+    bind_group: wgpu::BindGroup,
+    params: wgpu::Buffer,
+    accum: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    tiles: Vec<Tile>,
+}
+
+/// A storage buffer holding `items`, or one zeroed element when there are none (WebGPU
+/// forbids empty bindings).
+fn storage_buffer<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    label: &str,
+    items: &[T],
+) -> wgpu::Buffer {
+    let zero = [T::zeroed()];
+    let items = if items.is_empty() { &zero[..] } else { items };
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(items),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+/// Splits the image into bands of whole rows of at most [`MAX_TILE_PIXELS`] pixels.
+pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
+    let rows = (MAX_TILE_PIXELS / width).max(1);
+    (0..height)
+        .step_by(rows as usize)
+        .map(|y| Tile {
+            x: 0,
+            y,
+            width,
+            height: rows.min(height - y),
+        })
+        .collect()
+}
+
+impl GpuRenderer {
+    pub fn new(ctx: GpuContext, scene: &FlatScene) -> Result<Self, GpuError> {
+        let device = &ctx.device;
+        let wgsl = shader::trace_shader()?;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("trace.wgsl"),
+            source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+        });
+        let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = BINDINGS
+            .iter()
+            .map(|&(binding, ty)| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            })
+            .collect();
+        let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("trace bindings"),
+            entries: &layout_entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("trace layout"),
+            bind_group_layouts: &[Some(&bgl)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("trace"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("params"),
+            size: std::mem::size_of::<Params>() as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let primitives = storage_buffer(device, "primitives", &scene.primitives);
+        let materials = storage_buffer(device, "materials", &scene.materials);
+        let emitters = storage_buffer(device, "emitters", &scene.emitters);
+        // Two vec4<f32> per pixel; wgpu zero-initialises new buffers.
+        let accum_size = scene.width as u64 * scene.height as u64 * 32;
+        let accum = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("accumulation"),
+            size: accum_size,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size: accum_size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let buffers = [&params, &primitives, &materials, &emitters, &accum];
+        let entries: Vec<wgpu::BindGroupEntry> = BINDINGS
+            .iter()
+            .zip(buffers)
+            .map(|(&(binding, _), buf)| wgpu::BindGroupEntry {
+                binding,
+                resource: buf.as_entire_binding(),
+            })
+            .collect();
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("trace bind group"),
+            layout: &bgl,
+            entries: &entries,
+        });
+        Ok(Self {
+            tiles: tiles(scene.width, scene.height),
+            scene: scene.clone(),
+            ctx,
+            pipeline,
+            bind_group,
+            params,
+            accum,
+            readback,
+        })
+    }
+
+    /// The adapter's description.
+    pub fn name(&self) -> String {
+        super::context::describe(&self.ctx.info)
+    }
+
+    /// Adds sample `sample_index` of every pixel: one submission per tile, then waits.
+    pub fn render_pass(&mut self, sample_index: u32) -> Result<(), GpuError> {
+        for &tile in &self.tiles {
+            let params = self.scene.params(sample_index, tile);
+            // Staged writes land at the start of the next submission, so each tile's
+            // dispatch sees its own parameters.
+            self.ctx
+                .queue
+                .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+            let mut encoder = self
+                .ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("trace pass"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &self.bind_group, &[]);
+                pass.dispatch_workgroups(
+                    tile.width.div_ceil(WORKGROUP),
+                    tile.height.div_ceil(WORKGROUP),
+                    1,
+                );
+            }
+            self.ctx.queue.submit([encoder.finish()]);
+        }
+        self.wait()
+    }
+
+    fn wait(&self) -> Result<(), GpuError> {
+        self.ctx
+            .device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map(|_| ())
+            .map_err(|e| GpuError::Readback(e.to_string()))
+    }
+
+    /// Copies the accumulation buffer back: two `[f32; 4]` per pixel.
+    pub fn accumulation(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
+        let mut encoder = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        encoder.copy_buffer_to_buffer(&self.accum, 0, &self.readback, 0, self.accum.size());
+        self.ctx.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        self.readback
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, move |r| {
+                let _ = tx.send(r);
+            });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let data = {
+            let view = self
+                .readback
+                .get_mapped_range(..)
+                .map_err(|e| GpuError::Readback(e.to_string()))?;
+            bytemuck::cast_slice::<u8, [f32; 4]>(&view).to_vec()
+        };
+        self.readback.unmap();
+        Ok(data)
+    }
+}

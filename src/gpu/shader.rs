@@ -1,0 +1,154 @@
+//! Shader sources and the small preprocessor that assembles them.
+//!
+//! Directives (each alone on its line):
+//! - `#import shared/name` pulls in `shaders/shared/name.wgsl`, once per assembled shader;
+//! - `#if NAME` / `#ifdef NAME`, `#ifndef NAME`, `#else`, `#endif` keep or drop lines by
+//!   whether `NAME` is in the set of defines (they nest).
+
+use std::collections::BTreeSet;
+
+/// Every shader file, by the name `#import` uses; embedded so the binary runs from anywhere.
+pub const SHADER_FILES: &[(&str, &str)] = &[
+    ("trace", include_str!("../../shaders/trace.wgsl")),
+    (
+        "shared/bindings",
+        include_str!("../../shaders/shared/bindings.wgsl"),
+    ),
+    (
+        "shared/intersect",
+        include_str!("../../shaders/shared/intersect.wgsl"),
+    ),
+    (
+        "shared/materials",
+        include_str!("../../shaders/shared/materials.wgsl"),
+    ),
+    ("shared/rng", include_str!("../../shaders/shared/rng.wgsl")),
+    (
+        "shared/sampling",
+        include_str!("../../shaders/shared/sampling.wgsl"),
+    ),
+    (
+        "shared/types",
+        include_str!("../../shaders/shared/types.wgsl"),
+    ),
+];
+
+/// Entry-point files: each is assembled into one shader module.
+pub const ENTRY_SHADERS: &[&str] = &["trace"];
+
+#[derive(Debug, thiserror::Error)]
+pub enum ShaderError {
+    #[error("shader {file}:{line}: {message}")]
+    Preprocess {
+        file: String,
+        line: usize,
+        message: String,
+    },
+    #[error("shader {name} does not validate:\n{message}")]
+    Invalid { name: String, message: String },
+}
+
+/// Assembles shader `entry` with its imports, keeping the `#if` branches selected by
+/// `defines`.
+pub fn preprocess(entry: &str, defines: &BTreeSet<String>) -> Result<String, ShaderError> {
+    preprocess_files(entry, defines, SHADER_FILES)
+}
+
+/// [`preprocess`] over a given set of `(name, source)` files.
+pub fn preprocess_files(
+    entry: &str,
+    defines: &BTreeSet<String>,
+    files: &[(&str, &str)],
+) -> Result<String, ShaderError> {
+    let mut out = String::new();
+    let mut imported = BTreeSet::new();
+    imported.insert(entry.to_string());
+    expand(entry, defines, files, &mut imported, &mut out)?;
+    Ok(out)
+}
+
+fn expand(
+    name: &str,
+    defines: &BTreeSet<String>,
+    files: &[(&str, &str)],
+    imported: &mut BTreeSet<String>,
+    out: &mut String,
+) -> Result<(), ShaderError> {
+    let source = |name: &str| files.iter().find(|(n, _)| *n == name).map(|(_, s)| *s);
+    let err = |line: usize, message: String| ShaderError::Preprocess {
+        file: name.to_string(),
+        line,
+        message,
+    };
+    let src = source(name).ok_or_else(|| err(0, format!("no shader file named {name}")))?;
+    // One entry per open #if: (this branch is active, the enclosing context is active).
+    let mut stack: Vec<(bool, bool)> = Vec::new();
+    let active = |stack: &[(bool, bool)]| stack.last().is_none_or(|&(a, _)| a);
+    for (i, line) in src.lines().enumerate() {
+        let lineno = i + 1;
+        let trimmed = line.trim();
+        let mut words = trimmed.split_whitespace();
+        match words.next() {
+            Some(d @ ("#if" | "#ifdef" | "#ifndef")) => {
+                let flag = words
+                    .next()
+                    .ok_or_else(|| err(lineno, format!("{d} needs a name")))?;
+                let outer = active(&stack);
+                let on = defines.contains(flag) != (d == "#ifndef");
+                stack.push((outer && on, outer));
+            }
+            Some("#else") => {
+                let (a, outer) = stack
+                    .pop()
+                    .ok_or_else(|| err(lineno, "#else without #if".into()))?;
+                stack.push((outer && !a, outer));
+            }
+            Some("#endif") => {
+                stack
+                    .pop()
+                    .ok_or_else(|| err(lineno, "#endif without #if".into()))?;
+            }
+            Some("#import") if active(&stack) => {
+                let dep = words
+                    .next()
+                    .ok_or_else(|| err(lineno, "#import needs a name".into()))?;
+                if source(dep).is_none() {
+                    return Err(err(lineno, format!("#import of unknown file {dep}")));
+                }
+                if imported.insert(dep.to_string()) {
+                    expand(dep, defines, files, imported, out)?;
+                }
+            }
+            _ if active(&stack) => {
+                out.push_str(line);
+                out.push('\n');
+            }
+            _ => {}
+        }
+    }
+    if !stack.is_empty() {
+        return Err(err(src.lines().count(), "#if without #endif".into()));
+    }
+    Ok(())
+}
+
+/// Parses and validates assembled WGSL with naga, as wgpu will.
+pub fn validate(name: &str, wgsl: &str) -> Result<naga::Module, ShaderError> {
+    let invalid = |message: String| ShaderError::Invalid {
+        name: name.to_string(),
+        message,
+    };
+    let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| invalid(e.emit_to_string(wgsl)))?;
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default(),
+    )
+    .validate(&module)
+    .map_err(|e| invalid(e.emit_to_string(wgsl)))?;
+    Ok(module)
+}
+
+/// The trace shader for a scene.
+pub fn trace_shader() -> Result<String, ShaderError> {
+    preprocess("trace", &BTreeSet::new())
+}

@@ -1,0 +1,117 @@
+//! Accumulation buffer -> image files: PNG (8-bit sRGB), EXR (linear float), PPM (binary P6).
+
+use std::path::{Path, PathBuf};
+
+use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
+use image::{ImageEncoder, ImageFormat};
+
+/// Output formats, chosen by file extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// 8-bit, sRGB transfer, clamped to [0, 1].
+    Png,
+    /// Linear float RGB: the radiance itself.
+    Exr,
+    /// Binary P6, 8-bit sRGB like PNG.
+    Ppm,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ImageError {
+    #[error(
+        "{}: unknown image extension (use .png, .exr or .ppm)",
+        path.display()
+    )]
+    UnknownExtension { path: PathBuf },
+    #[error("{}: cannot write image: {source}", path.display())]
+    Write {
+        path: PathBuf,
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
+
+impl OutputFormat {
+    /// The format named by `path`'s extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<Self, ImageError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("png") => Ok(Self::Png),
+            Some("exr") => Ok(Self::Exr),
+            Some("ppm") => Ok(Self::Ppm),
+            _ => Err(ImageError::UnknownExtension {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
+}
+
+/// The sRGB transfer function (IEC 61966-2-1) of a linear value, clamped to [0, 1].
+pub fn linear_to_srgb(x: f32) -> f32 {
+    let x = if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) };
+    if x <= 0.0031308 {
+        12.92 * x
+    } else {
+        1.055 * x.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Linear RGB -> 8-bit sRGB, rounding to nearest.
+pub fn to_srgb8(rgb: &[f32]) -> Vec<u8> {
+    rgb.iter()
+        .map(|&x| (linear_to_srgb(x) * 255.0 + 0.5) as u8)
+        .collect()
+}
+
+/// Writes linear RGB (`width * height * 3` floats, row-major from the top-left) to `path` in
+/// the format its extension names. The file is written beside the target and renamed over
+/// it, so a reader never sees a half-written image.
+pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), ImageError> {
+    let format = OutputFormat::from_path(path)?;
+    let wrap = |e: Box<dyn std::error::Error + Send + Sync>| ImageError::Write {
+        path: path.to_path_buf(),
+        source: e,
+    };
+    let tmp = temp_path(path);
+    let result = (|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+        match format {
+            OutputFormat::Png => {
+                image::RgbImage::from_raw(width, height, to_srgb8(rgb))
+                    .ok_or("image size does not match the pixel data")?
+                    .save_with_format(&tmp, ImageFormat::Png)?;
+            }
+            OutputFormat::Exr => {
+                image::Rgb32FImage::from_raw(width, height, rgb.to_vec())
+                    .ok_or("image size does not match the pixel data")?
+                    .save_with_format(&tmp, ImageFormat::OpenExr)?;
+            }
+            OutputFormat::Ppm => {
+                let file = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
+                PnmEncoder::new(file)
+                    .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
+                    .write_image(
+                        &to_srgb8(rgb),
+                        width,
+                        height,
+                        image::ExtendedColorType::Rgb8,
+                    )?;
+            }
+        }
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(wrap)
+}
+
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}

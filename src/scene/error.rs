@@ -1,0 +1,90 @@
+//! Scene errors that name the file, line, column and key.
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// One problem found in a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Problem {
+    /// 1-based line and column of the table or value at fault (0 when unknown).
+    pub line: usize,
+    pub column: usize,
+    /// Dotted path of the key, e.g. `objects[2].radius`.
+    pub key: String,
+    pub message: String,
+}
+
+/// Why a scene could not be loaded.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    #[error("{}: cannot read scene: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}", display_problems(path, problems))]
+    Invalid {
+        path: PathBuf,
+        problems: Vec<Problem>,
+    },
+}
+
+impl SceneError {
+    /// The problems found (empty for I/O errors).
+    pub fn problems(&self) -> &[Problem] {
+        match self {
+            SceneError::Io { .. } => &[],
+            SceneError::Invalid { problems, .. } => problems,
+        }
+    }
+}
+
+fn display_problems(path: &std::path::Path, problems: &[Problem]) -> String {
+    let mut out = String::new();
+    for (i, p) in problems.iter().enumerate() {
+        if i > 0 {
+            out.push('\n');
+        }
+        out.push_str(&p.to_string_in(path));
+    }
+    out
+}
+
+impl Problem {
+    fn to_string_in(&self, path: &std::path::Path) -> String {
+        let key = if self.key.is_empty() {
+            String::new()
+        } else {
+            format!("{}: ", self.key)
+        };
+        if self.line == 0 {
+            format!("{}: {key}{}", path.display(), self.message)
+        } else {
+            format!(
+                "{}:{}:{}: {key}{}",
+                path.display(),
+                self.line,
+                self.column,
+                self.message
+            )
+        }
+    }
+}
+
+impl fmt::Display for Problem {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.to_string_in(std::path::Path::new("<scene>")))
+    }
+}
+
+/// 1-based (line, column) of a byte offset in `src`.
+pub fn line_col(src: &str, offset: usize) -> (usize, usize) {
+    let mut offset = offset.min(src.len());
+    while !src.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &src[..offset];
+    let line = before.matches('\n').count() + 1;
+    let col = before.rfind('\n').map_or(offset, |nl| offset - nl - 1) + 1;
+    (line, col)
+}

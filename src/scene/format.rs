@@ -1,0 +1,135 @@
+//! The TOML scene format: a serde model of what a user writes. Unknown keys are rejected.
+
+use std::collections::BTreeMap;
+
+use serde::Deserialize;
+use toml::Spanned;
+
+/// A whole scene file.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    #[serde(default)]
+    pub render: RenderDesc,
+    pub camera: CameraDesc,
+    #[serde(default)]
+    pub background: BackgroundDesc,
+    #[serde(default)]
+    pub materials: BTreeMap<String, Spanned<MaterialDesc>>,
+    #[serde(default)]
+    pub objects: Vec<Spanned<ObjectDesc>>,
+}
+
+/// `[render]`: image size, sample count, path length, seed.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RenderDesc {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel: one progressive pass each.
+    pub spp: u32,
+    /// Rays per path: 1 shows emitters and background, 2 adds direct lighting, ...
+    pub max_depth: u32,
+    pub seed: u32,
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        Self {
+            width: 256,
+            height: 256,
+            spp: 64,
+            max_depth: 8,
+            seed: 0,
+        }
+    }
+}
+
+/// `[camera]`: a pinhole or thin-lens camera.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub look_from: [f32; 3],
+    pub look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    pub up: [f32; 3],
+    /// Vertical field of view, degrees.
+    #[serde(default = "default_vfov")]
+    pub vfov: f32,
+    /// Lens diameter; 0 is a pinhole.
+    #[serde(default)]
+    pub aperture: f32,
+    /// Distance to the plane in focus; defaults to |look_at - look_from|.
+    #[serde(default)]
+    pub focus_distance: Option<f32>,
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+fn default_vfov() -> f32 {
+    40.0
+}
+
+/// `[background]`: radiance of rays that leave the scene.
+#[derive(Debug, Clone, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BackgroundDesc {
+    #[serde(default)]
+    pub color: [f32; 3],
+}
+
+/// `[materials]` entries, selected by `type`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum MaterialDesc {
+    /// Ideal diffuse reflector; scatters on whichever side the ray hits.
+    Lambertian { albedo: [f32; 3] },
+    /// A light: emits `radiance` from its front side, or both with `two_sided`; absorbs.
+    Emissive {
+        radiance: [f32; 3],
+        #[serde(default)]
+        two_sided: bool,
+    },
+}
+
+/// `[[objects]]` entries, selected by `type`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum ObjectDesc {
+    Sphere {
+        center: [f32; 3],
+        radius: f32,
+        material: String,
+    },
+    /// Front side: right-hand-rule normal of the vertex order.
+    Triangle {
+        vertices: [[f32; 3]; 3],
+        material: String,
+    },
+    /// Planar and convex; split into a triangle fan. Front side as for triangles.
+    Polygon {
+        vertices: Vec<[f32; 3]>,
+        material: String,
+    },
+}
+
+impl ObjectDesc {
+    /// The scene `type` name.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            ObjectDesc::Sphere { .. } => "sphere",
+            ObjectDesc::Triangle { .. } => "triangle",
+            ObjectDesc::Polygon { .. } => "polygon",
+        }
+    }
+
+    pub fn material(&self) -> &str {
+        match self {
+            ObjectDesc::Sphere { material, .. }
+            | ObjectDesc::Triangle { material, .. }
+            | ObjectDesc::Polygon { material, .. } => material,
+        }
+    }
+}

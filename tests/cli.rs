@@ -1,0 +1,144 @@
+//! The `wgtrace` binary as a user runs it: formats, overrides, previews, errors, `info`.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn wgtrace(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+        .args(args)
+        .output()
+        .expect("run wgtrace")
+}
+
+fn tmp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("wgtrace-cli-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn cornell() -> String {
+    common::repo_path("scenes/cornell.toml")
+        .display()
+        .to_string()
+}
+
+fn render_to(out: &Path, extra: &[&str]) -> Output {
+    let out_s = out.display().to_string();
+    let scene = cornell();
+    let mut args = vec![
+        "render", &scene, "-o", &out_s, "--width", "40", "--height", "30", "--spp", "4", "-q",
+    ];
+    args.extend_from_slice(extra);
+    let o = wgtrace(&args);
+    assert!(
+        o.status.success(),
+        "wgtrace {args:?} failed:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    o
+}
+
+#[test]
+fn renders_png_exr_and_ppm_of_the_requested_size_and_reports() {
+    let dir = tmp_dir("formats");
+    for ext in ["png", "exr", "ppm"] {
+        let out = dir.join(format!("cornell.{ext}"));
+        let o = render_to(&out, &[]);
+        let img = image::open(&out).unwrap_or_else(|e| panic!("{ext}: {e}"));
+        assert_eq!((img.width(), img.height()), (40, 30), "{ext}");
+        let stdout = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            stdout.contains("40x30, 4 spp") && stdout.contains("Msamples/s"),
+            "{stdout}"
+        );
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(stderr.contains("device: "), "{stderr}");
+    }
+    // EXR holds linear radiance; PNG and PPM hold its sRGB encoding.
+    let exr = image::open(dir.join("cornell.exr")).unwrap().to_rgb32f();
+    let png = image::open(dir.join("cornell.png")).unwrap().to_rgb8();
+    let ppm = image::open(dir.join("cornell.ppm")).unwrap().to_rgb8();
+    assert_eq!(png, ppm);
+    for (l, s) in exr.pixels().zip(png.pixels()) {
+        for c in 0..3 {
+            let expected = (wgtrace::image_io::linear_to_srgb(l[c]) * 255.0 + 0.5) as u8;
+            assert_eq!(s[c], expected);
+        }
+    }
+    // The light is visible, so some EXR values exceed 1 (not clamped).
+    assert!(exr.pixels().any(|p| p[0] > 1.0));
+}
+
+#[test]
+fn cpu_backend_and_overrides_work_and_preview_rewrites_the_file() {
+    let dir = tmp_dir("cpu");
+    let out = dir.join("c.png");
+    let o = render_to(
+        &out,
+        &[
+            "--backend",
+            "cpu",
+            "--max-depth",
+            "2",
+            "--seed",
+            "5",
+            "--preview-every",
+            "1",
+        ],
+    );
+    assert!(String::from_utf8_lossy(&o.stderr).contains("CPU reference"));
+    assert_eq!(image::open(&out).unwrap().width(), 40);
+    // No temporary files left behind.
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1);
+}
+
+#[test]
+fn bad_input_gives_a_clear_error_and_nonzero_exit() {
+    let dir = tmp_dir("errors");
+    let scene = cornell();
+    let o = wgtrace(&[
+        "render",
+        &scene,
+        "-o",
+        &dir.join("x.jpg").display().to_string(),
+    ]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("x.jpg: unknown image extension"), "{e}");
+
+    let o = wgtrace(&["render", "no/such/scene.toml"]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("no/such/scene.toml: cannot read scene"), "{e}");
+
+    let bad = dir.join("bad.toml");
+    std::fs::write(
+        &bad,
+        "[camera]\nlook_from = [0, 0, 1]\nlook_at = [0, 0, 0]\nfov = 3\n",
+    )
+    .unwrap();
+    let o = wgtrace(&["render", &bad.display().to_string()]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("bad.toml:4:1") && e.contains("fov"), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+
+    let o = wgtrace(&["render", &scene, "--spp", "0", "-o", "/dev/null/x.png"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("render.spp"));
+}
+
+#[test]
+fn info_lists_the_vulkan_adapters() {
+    let o = wgtrace(&["info"]);
+    assert!(o.status.success());
+    let s = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        s.starts_with("[0] "),
+        "no Vulkan adapter listed (install mesa-vulkan-drivers):\n{s}"
+    );
+    assert!(s.contains("Vulkan"), "{s}");
+}

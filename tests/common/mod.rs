@@ -1,0 +1,185 @@
+//! Helpers shared by the integration tests.
+#![allow(dead_code)]
+// The quantile coefficients are quoted as published.
+#![allow(clippy::excessive_precision)]
+
+use std::path::{Path, PathBuf};
+
+use wgtrace::render::{render_progressive, Accumulation};
+use wgtrace::{Engine, FlatScene, Overrides};
+
+/// Opens the GPU backend or fails the test: GPU tests never skip.
+pub fn gpu_engine(scene: &FlatScene) -> Engine {
+    match Engine::gpu(scene, 0) {
+        Ok(e) => e,
+        Err(e) => panic!(
+            "GPU test needs a Vulkan adapter and found none ({e}). Install Mesa's software \
+             driver: `apt-get update && apt-get install -y mesa-vulkan-drivers`"
+        ),
+    }
+}
+
+/// Renders all passes of `scene` on `engine` and returns the accumulation.
+pub fn render(mut engine: Engine, scene: &FlatScene) -> Accumulation {
+    render_progressive(&mut engine, scene, |_, _| {
+        Ok::<(), wgtrace::gpu::GpuError>(())
+    })
+    .expect("render");
+    engine
+        .accumulation(scene.width, scene.height)
+        .expect("readback")
+}
+
+pub fn render_gpu(scene: &FlatScene) -> Accumulation {
+    render(gpu_engine(scene), scene)
+}
+
+pub fn render_cpu(scene: &FlatScene) -> Accumulation {
+    render(Engine::cpu(scene), scene)
+}
+
+/// Parses scene text (named `test.toml` in errors).
+pub fn scene_from_str(src: &str) -> FlatScene {
+    wgtrace::load_scene_str(src, Path::new("test.toml"), &Overrides::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+pub fn repo_path(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
+}
+
+/// Every scene file in `scenes/`.
+pub fn scene_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(repo_path("scenes"))
+        .expect("scenes/")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(!files.is_empty(), "no scenes in scenes/");
+    files
+}
+
+/// Standard normal quantile (Acklam's rational approximation, relative error < 1.2e-9).
+pub fn normal_quantile(p: f64) -> f64 {
+    assert!(p > 0.0 && p < 1.0);
+    const A: [f64; 6] = [
+        -3.969683028665376e1,
+        2.209460984245205e2,
+        -2.759285104469687e2,
+        1.383577518672690e2,
+        -3.066479806614716e1,
+        2.506628277459239,
+    ];
+    const B: [f64; 5] = [
+        -5.447609879822406e1,
+        1.615858368580409e2,
+        -1.556989798598866e2,
+        6.680131188771972e1,
+        -1.328068155288572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784894002430293e-3,
+        -3.223964580411365e-1,
+        -2.400758277161838,
+        -2.549732539343734,
+        4.374664141464968,
+        2.938163982698783,
+    ];
+    const D: [f64; 4] = [
+        7.784695709041462e-3,
+        3.224671290700398e-1,
+        2.445134137142996,
+        3.754408661907416,
+    ];
+    let tail = |q: f64| {
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    if p < 0.02425 {
+        tail((-2.0 * p.ln()).sqrt())
+    } else if p > 1.0 - 0.02425 {
+        -tail((-2.0 * (1.0 - p).ln()).sqrt())
+    } else {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    }
+}
+
+/// Two-sided z threshold for `tests` simultaneous tests at family-wise level `alpha`
+/// (Sidak correction).
+pub fn sidak_z(alpha: f64, tests: usize) -> f64 {
+    let per_test = 1.0 - (1.0 - alpha).powf(1.0 / tests as f64);
+    normal_quantile(1.0 - per_test / 2.0)
+}
+
+/// Result of comparing two renders of one scene tile by tile.
+#[derive(Debug)]
+pub struct Comparison {
+    /// Tiles x channels whose means differ by more than the statistical bound.
+    pub failed_tiles: Vec<String>,
+    pub tiles: usize,
+    /// Fraction of pixels whose three channels agree to 1e-3 (relative above 1).
+    pub agree_fraction: f64,
+}
+
+/// Compares two accumulations of the same scene and sample count.
+///
+/// Per `tile` x `tile` block and channel, the difference of the two block means must stay
+/// within z * sqrt(2) * standard error, where the standard error of one block mean comes from
+/// the per-pixel sample variances (`reference`'s) and the sample count, and z is the Sidak
+/// threshold at family-wise level 1e-3 over all blocks and channels. A small floor
+/// (1e-5 relative) absorbs float rounding in zero-variance blocks.
+pub fn compare(a: &Accumulation, reference: &Accumulation, tile: u32) -> Comparison {
+    assert_eq!((a.width, a.height), (reference.width, reference.height));
+    let (w, h) = (a.width, a.height);
+    let tiles_x = w.div_ceil(tile);
+    let tiles_y = h.div_ceil(tile);
+    let n_tests = (tiles_x * tiles_y * 3) as usize;
+    let z = sidak_z(1e-3, n_tests);
+    let mut failed = Vec::new();
+    for ty in 0..tiles_y {
+        for tx in 0..tiles_x {
+            let mut sum_a = [0f64; 3];
+            let mut sum_r = [0f64; 3];
+            let mut var_sum = [0f64; 3];
+            let mut count = 0f64;
+            for y in ty * tile..((ty + 1) * tile).min(h) {
+                for x in tx * tile..((tx + 1) * tile).min(w) {
+                    let i = (y * w + x) as usize;
+                    let (ma, mr, vr) = (a.mean(i), reference.mean(i), reference.variance(i));
+                    let n = reference.samples(i) as f64;
+                    for c in 0..3 {
+                        sum_a[c] += ma[c] as f64;
+                        sum_r[c] += mr[c] as f64;
+                        var_sum[c] += vr[c] as f64 / n;
+                    }
+                    count += 1.0;
+                }
+            }
+            for c in 0..3 {
+                let (ma, mr) = (sum_a[c] / count, sum_r[c] / count);
+                let se = var_sum[c].sqrt() / count;
+                let bound = z * std::f64::consts::SQRT_2 * se + 1e-5 * mr.abs().max(1e-3);
+                if (ma - mr).abs() > bound {
+                    failed.push(format!(
+                        "tile ({tx}, {ty}) channel {c}: {ma:.6} vs {mr:.6}, bound {bound:.6}"
+                    ));
+                }
+            }
+        }
+    }
+    let agree = (0..a.pixel_count())
+        .filter(|&i| {
+            let (ma, mr) = (a.mean(i), reference.mean(i));
+            (0..3).all(|c| (ma[c] - mr[c]).abs() <= 1e-3 * mr[c].abs().max(1.0))
+        })
+        .count();
+    Comparison {
+        failed_tiles: failed,
+        tiles: (tiles_x * tiles_y) as usize,
+        agree_fraction: agree as f64 / a.pixel_count() as f64,
+    }
+}

@@ -1,0 +1,289 @@
+//! CPU unit tests: intersections (hit, miss, range, inside), sampling, RNG, scene loading.
+
+mod common;
+
+use std::path::Path;
+
+use glam::Vec3;
+use wgtrace::cpu::bindings::Bindings;
+use wgtrace::cpu::intersect::{intersect_scene, intersect_sphere, intersect_triangle, surface_at};
+use wgtrace::cpu::rng::{pcg4d, rand_2d};
+use wgtrace::cpu::sampling::{offset_ray, sample_cosine_hemisphere};
+use wgtrace::cpu::types::{Ray, FAR, NO_HIT};
+use wgtrace::Overrides;
+
+fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
+    Ray {
+        origin: Vec3::from(o),
+        dir: Vec3::from(d).normalize(),
+    }
+}
+
+#[test]
+fn sphere_hit_miss_range_and_inside() {
+    let c = Vec3::new(0.0, 0.0, -5.0);
+    // Hit from outside: the near root.
+    let t = intersect_sphere(c, 1.0, &ray([0.0; 3], [0.0, 0.0, -1.0]), FAR);
+    assert!((t - 4.0).abs() < 1e-5, "{t}");
+    // Miss: passes beside.
+    assert_eq!(
+        intersect_sphere(c, 1.0, &ray([0.0; 3], [0.0, 1.0, -1.0]), FAR),
+        FAR
+    );
+    // Behind the origin: miss.
+    assert_eq!(
+        intersect_sphere(c, 1.0, &ray([0.0; 3], [0.0, 0.0, 1.0]), FAR),
+        FAR
+    );
+    // Range: t_max before the sphere.
+    assert_eq!(
+        intersect_sphere(c, 1.0, &ray([0.0; 3], [0.0, 0.0, -1.0]), 3.9),
+        FAR
+    );
+    // Inside: the far root.
+    let t = intersect_sphere(c, 1.0, &ray([0.0, 0.0, -5.0], [1.0, 0.0, 0.0]), FAR);
+    assert!((t - 1.0).abs() < 1e-6, "{t}");
+    // Tiny sphere far away, where the textbook quadratic loses every digit.
+    let far_c = Vec3::new(0.0, 0.0, -1000.0);
+    let t = intersect_sphere(far_c, 0.01, &ray([0.0; 3], [0.0, 0.0, -1.0]), FAR);
+    assert!((t - 999.99).abs() < 1e-3, "{t}");
+}
+
+#[test]
+fn triangle_hit_miss_range_both_sides_and_barycentrics() {
+    let (v0, v1, v2) = (
+        Vec3::new(0.0, 0.0, -2.0),
+        Vec3::new(1.0, 0.0, -2.0),
+        Vec3::new(0.0, 1.0, -2.0),
+    );
+    let h = intersect_triangle(v0, v1, v2, &ray([0.25, 0.25, 0.0], [0.0, 0.0, -1.0]), FAR);
+    assert!((h.x - 2.0).abs() < 1e-6 && (h.y - 0.25).abs() < 1e-6 && (h.z - 0.25).abs() < 1e-6);
+    // From behind: still a hit.
+    let h = intersect_triangle(v0, v1, v2, &ray([0.25, 0.25, -4.0], [0.0, 0.0, 1.0]), FAR);
+    assert!((h.x - 2.0).abs() < 1e-6);
+    // Outside the edge v1-v2.
+    let h = intersect_triangle(v0, v1, v2, &ray([0.6, 0.6, 0.0], [0.0, 0.0, -1.0]), FAR);
+    assert_eq!(h.x, FAR);
+    // Range.
+    let h = intersect_triangle(v0, v1, v2, &ray([0.25, 0.25, 0.0], [0.0, 0.0, -1.0]), 1.5);
+    assert_eq!(h.x, FAR);
+    // Parallel to the plane.
+    let h = intersect_triangle(v0, v1, v2, &ray([0.25, 0.25, -2.0], [1.0, 0.0, 0.0]), FAR);
+    assert_eq!(h.x, FAR);
+}
+
+const POLYGON_SCENE: &str = r#"
+[camera]
+look_from = [0, 0, 5]
+look_at = [0, 0, 0]
+[materials]
+m = { type = "lambertian", albedo = [0.5, 0.5, 0.5] }
+[[objects]]
+type = "polygon"   # a regular hexagon of radius 1 in z = 0, facing +z
+vertices = [[1, 0, 0], [0.5, 0.8660254, 0], [-0.5, 0.8660254, 0], [-1, 0, 0], [-0.5, -0.8660254, 0], [0.5, -0.8660254, 0]]
+material = "m"
+"#;
+
+#[test]
+fn polygon_fan_hits_inside_misses_outside_and_faces_by_vertex_order() {
+    let scene = common::scene_from_str(POLYGON_SCENE);
+    assert_eq!(scene.primitives.len(), 4, "hexagon -> 4 fan triangles");
+    let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+    for (x, y, hit) in [
+        (0.0, 0.0, true),
+        (0.9, 0.0, true),
+        (0.0, 0.85, true),
+        (-0.7, -0.5, true),
+        (0.0, 0.9, false),
+        (0.95, 0.5, false),
+        (2.0, 0.0, false),
+    ] {
+        let r = ray([x, y, 1.0], [0.0, 0.0, -1.0]);
+        let cand = intersect_scene(&b, &r);
+        assert_eq!(cand.prim != NO_HIT, hit, "({x}, {y})");
+        if hit {
+            assert!((cand.t - 1.0).abs() < 1e-6);
+            let h = surface_at(&b, &r, &cand);
+            assert!(h.front_face, "ray from +z sees the front");
+            assert!((h.ng - Vec3::Z).length() < 1e-6);
+            assert!(h.p.z.abs() < 1e-6 && (h.p.x - x).abs() < 1e-6);
+        }
+    }
+    let back = ray([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]);
+    let h = surface_at(&b, &back, &intersect_scene(&b, &back));
+    assert!(!h.front_face);
+}
+
+fn sphere_scene(center: [f32; 3], radius: f32) -> wgtrace::FlatScene {
+    common::scene_from_str(&format!(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\n\
+         m = {{ type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }}\n[[objects]]\n\
+         type = \"sphere\"\ncenter = {center:?}\nradius = {radius}\nmaterial = \"m\"\n"
+    ))
+}
+
+/// Rays spawned from a sphere hit into the outward hemisphere never re-hit it (pbrt-v4's
+/// re-intersection test), for radii from 1e-3 to 1e4 and centres far from the origin,
+/// including the large ground sphere whose reprojected hit point carries an error of
+/// ulp(radius) where |p| is small.
+#[test]
+fn rays_leaving_a_sphere_never_rehit_it_at_any_scale() {
+    let cases = [
+        ([0.3, -0.2, 0.7], 1e-3),
+        ([0.3, -0.2, 0.7], 1.0),
+        ([3e3, -2e3, 7e3], 1e4),
+        ([0.0, -100.0, 0.0], 100.0),
+        ([1e4, 1e4, -1e4], 0.5),
+    ];
+    for (center, radius) in cases {
+        let scene = sphere_scene(center, radius);
+        let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+        let c = Vec3::from(center);
+        for i in 0..2000 {
+            // A ray from outside, above the sphere, aimed at a point inside it.
+            let n0 = sample_cosine_hemisphere(Vec3::Y, rand_2d(i, 0, 0, 0, 7));
+            let target = c + 0.5 * radius * n0;
+            let origin = c + 3.0 * radius * sample_cosine_hemisphere(n0, rand_2d(i, 1, 0, 0, 7));
+            let r = Ray {
+                origin,
+                dir: (target - origin).normalize(),
+            };
+            let cand = intersect_scene(&b, &r);
+            assert_ne!(cand.prim, NO_HIT, "{center:?} r {radius}: aimed ray missed");
+            let h = surface_at(&b, &r, &cand);
+            let d = sample_cosine_hemisphere(h.ng, rand_2d(i, 2, 0, 0, 7));
+            let out = Ray {
+                origin: offset_ray(h.p, h.ng, h.err),
+                dir: d,
+            };
+            let again = intersect_scene(&b, &out);
+            assert_eq!(
+                again.prim, NO_HIT,
+                "{center:?} r {radius}: self-intersection at {:?}",
+                h.p
+            );
+        }
+    }
+}
+
+#[test]
+fn rng_is_deterministic_uniform_and_keyed_by_every_input() {
+    assert_eq!(pcg4d([1, 2, 3, 4]), pcg4d([1, 2, 3, 4]));
+    let base = rand_2d(10, 20, 3, 2, 5);
+    for other in [
+        rand_2d(11, 20, 3, 2, 5),
+        rand_2d(10, 21, 3, 2, 5),
+        rand_2d(10, 20, 4, 2, 5),
+        rand_2d(10, 20, 3, 3, 5),
+        rand_2d(10, 20, 3, 2, 6),
+    ] {
+        assert_ne!(base, other);
+    }
+    // Mean and variance of 2^16 draws: U(0,1) has mean 1/2, variance 1/12.
+    let n = 1 << 16;
+    let xs: Vec<f32> = (0..n).flat_map(|i| rand_2d(i, 0, 0, 0, 0)).collect();
+    let mean = xs.iter().map(|&x| x as f64).sum::<f64>() / xs.len() as f64;
+    let var = xs.iter().map(|&x| (x as f64 - mean).powi(2)).sum::<f64>() / xs.len() as f64;
+    // 5 standard errors.
+    assert!(
+        (mean - 0.5).abs() < 5.0 * (1.0f64 / 12.0 / xs.len() as f64).sqrt(),
+        "{mean}"
+    );
+    assert!((var - 1.0 / 12.0).abs() < 1e-3, "{var}");
+    assert!(xs.iter().all(|&x| (0.0..1.0).contains(&x)));
+}
+
+#[test]
+fn cosine_hemisphere_has_the_cosine_moments() {
+    // E[cos] = 2/3 and E[cos^2] = 1/2 under pdf cos/pi.
+    let n = Vec3::new(0.3, -0.5, 0.8).normalize();
+    let count = 1 << 16;
+    let (mut m1, mut m2) = (0.0f64, 0.0f64);
+    for i in 0..count {
+        let d = sample_cosine_hemisphere(n, rand_2d(i, 0, 0, 2, 1));
+        assert!((d.length() - 1.0).abs() < 1e-5);
+        let c = d.dot(n) as f64;
+        assert!(c >= -1e-6);
+        m1 += c;
+        m2 += c * c;
+    }
+    let (m1, m2) = (m1 / count as f64, m2 / count as f64);
+    assert!((m1 - 2.0 / 3.0).abs() < 5e-3, "{m1}");
+    assert!((m2 - 0.5).abs() < 5e-3, "{m2}");
+}
+
+fn load_err(src: &str) -> String {
+    match wgtrace::load_scene_str(src, Path::new("bad.toml"), &Overrides::default()) {
+        Ok(_) => panic!("scene should not load"),
+        Err(e) => e.to_string(),
+    }
+}
+
+#[test]
+fn scene_errors_name_file_line_and_key_and_collect_all() {
+    let src = r#"[camera]
+look_from = [0, 0, 5]
+look_at = [0, 0, 0]
+
+[materials]
+m = { type = "lambertian", albedo = [0.5, 0.5, 0.5] }
+
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = -1
+material = "nope"
+"#;
+    let e = load_err(src);
+    assert!(
+        e.contains("bad.toml:8:1: objects[0].material: unknown material \"nope\" (defined: m)"),
+        "{e}"
+    );
+    assert!(
+        e.contains("bad.toml:8:1: objects[0].radius: must be > 0, got -1"),
+        "{e}"
+    );
+
+    let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nzoom = 2\n");
+    assert!(e.contains("bad.toml:4:1") && e.contains("zoom"), "{e}");
+    let e = load_err("[camera]\nlook_from = [0, 0, 5\n");
+    assert!(e.starts_with("bad.toml:2:"), "{e}");
+    let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[render]\nspp = 0\n");
+    assert!(e.contains("render.spp: must be >= 1, got 0"), "{e}");
+    let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\nm = { type = \"lambertian\", albedo = [1, 1, 1] }\n[[objects]]\ntype = \"polygon\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0.2, 0.5, 0], [0, 1, 0]]\nmaterial = \"m\"\n");
+    assert!(e.contains("convex"), "{e}");
+}
+
+#[test]
+fn overrides_replace_render_settings_and_are_validated() {
+    let o = Overrides {
+        width: Some(33),
+        height: Some(17),
+        spp: Some(3),
+        max_depth: Some(2),
+        seed: Some(9),
+    };
+    let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
+    assert_eq!(
+        (s.width, s.height, s.spp, s.max_depth, s.seed),
+        (33, 17, 3, 2, 9)
+    );
+    let zero = Overrides {
+        width: Some(0),
+        ..Default::default()
+    };
+    let e = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &zero).unwrap_err();
+    assert!(e.to_string().contains("render.width"), "{e}");
+}
+
+#[test]
+fn every_shipped_scene_loads_and_has_emitters_or_a_background() {
+    for path in common::scene_files() {
+        let s = wgtrace::load_scene(&path, &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+        assert!(
+            !s.emitters.is_empty() || s.background.iter().any(|&c| c > 0.0),
+            "{} is dark",
+            path.display()
+        );
+    }
+}

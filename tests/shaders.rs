@@ -1,0 +1,120 @@
+//! Shaders validate with naga, the preprocessor behaves, and every record shared with WGSL
+//! has the layout naga gives the shader's struct. No GPU needed.
+
+use std::collections::BTreeSet;
+
+use wgtrace::gpu::shader::{preprocess, validate, ENTRY_SHADERS, SHADER_FILES};
+use wgtrace::scene::records::record_layouts;
+
+#[test]
+fn every_entry_shader_validates_with_naga() {
+    for entry in ENTRY_SHADERS {
+        let src = preprocess(entry, &BTreeSet::new()).unwrap();
+        validate(entry, &src).unwrap_or_else(|e| panic!("{e}"));
+    }
+}
+
+#[test]
+fn every_shader_file_is_embedded_and_imported() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
+    let mut on_disk = Vec::new();
+    for sub in ["", "shared"] {
+        for e in std::fs::read_dir(dir.join(sub)).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "wgsl") {
+                let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+                on_disk.push(if sub.is_empty() {
+                    stem
+                } else {
+                    format!("{sub}/{stem}")
+                });
+            }
+        }
+    }
+    on_disk.sort();
+    let mut embedded: Vec<String> = SHADER_FILES.iter().map(|(n, _)| n.to_string()).collect();
+    embedded.sort();
+    assert_eq!(
+        on_disk, embedded,
+        "shaders/ and gpu::shader::SHADER_FILES differ"
+    );
+    // The trace shader pulls in every shared file exactly once.
+    let src = preprocess("trace", &BTreeSet::new()).unwrap();
+    assert_eq!(src.matches("fn pcg4d(").count(), 1);
+    assert_eq!(src.matches("struct Primitive {").count(), 1);
+    assert!(!src.contains("#import"));
+}
+
+#[test]
+fn preprocessor_selects_branches_imports_once_and_reports_errors() {
+    use wgtrace::gpu::shader::preprocess_files;
+    let files = [
+        (
+            "main",
+            "#import a\n#import b\n#if FAST\nfast\n#ifndef WIDE\nnarrow\n#endif\n#else\nslow\n#import c\n#endif\nend",
+        ),
+        ("a", "#import b\nA"),
+        ("b", "B"),
+        ("c", "C"),
+    ];
+    let defs = |names: &[&str]| names.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>();
+    let lines = |d: &[&str]| preprocess_files("main", &defs(d), &files).unwrap();
+    assert_eq!(lines(&[]), "B\nA\nslow\nC\nend\n");
+    assert_eq!(lines(&["FAST"]), "B\nA\nfast\nnarrow\nend\n");
+    assert_eq!(lines(&["FAST", "WIDE"]), "B\nA\nfast\nend\n");
+
+    let bad = |src: &'static str| {
+        preprocess_files("m", &defs(&[]), &[("m", src)])
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(bad("#if X\nx").contains("#if without #endif"));
+    assert!(bad("#endif").contains("m:1: #endif without #if"));
+    assert!(bad("x\n#import nope").contains("m:2: #import of unknown file nope"));
+    let err = preprocess("no/such/file", &defs(&[])).unwrap_err();
+    assert!(
+        err.to_string()
+            .contains("no shader file named no/such/file"),
+        "{err}"
+    );
+}
+
+/// Finds the struct named `name` in a naga module and returns (size, [(member, offset)]).
+fn naga_struct(module: &naga::Module, name: &str) -> Option<(u32, Vec<(String, u32)>)> {
+    module.types.iter().find_map(|(_, ty)| {
+        if ty.name.as_deref() != Some(name) {
+            return None;
+        }
+        match &ty.inner {
+            naga::TypeInner::Struct { members, span } => Some((
+                *span,
+                members
+                    .iter()
+                    .map(|m| (m.name.clone().unwrap_or_default(), m.offset))
+                    .collect(),
+            )),
+            _ => None,
+        }
+    })
+}
+
+#[test]
+fn records_match_naga_layout_of_the_shader() {
+    let src = preprocess("trace", &BTreeSet::new()).unwrap();
+    let module = validate("trace", &src).unwrap();
+    for rec in record_layouts() {
+        let (size, members) = naga_struct(&module, rec.name)
+            .unwrap_or_else(|| panic!("struct {} not found in the shader", rec.name));
+        assert_eq!(rec.size as u32, size, "{}: size (Rust vs WGSL)", rec.name);
+        let rust: Vec<(String, u32)> = rec
+            .fields
+            .iter()
+            .map(|(n, o)| (n.to_string(), *o as u32))
+            .collect();
+        assert_eq!(
+            rust, members,
+            "{}: fields and offsets (Rust vs WGSL)",
+            rec.name
+        );
+    }
+}
