@@ -131,6 +131,38 @@ fn bad_input_gives_a_clear_error_and_nonzero_exit() {
     assert!(String::from_utf8_lossy(&o.stderr).contains("render.spp"));
 }
 
+/// Without any Vulkan driver (the loader pointed at no ICD), `render` says so in one line
+/// and renders on the CPU; `info` says there is none.
+#[test]
+fn without_vulkan_render_falls_back_to_the_cpu_in_one_line() {
+    let dir = tmp_dir("novulkan");
+    let out = dir.join("c.png").display().to_string();
+    let scene = cornell();
+    let run = |args: &[&str]| {
+        Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+            .args(args)
+            .env("VK_ICD_FILENAMES", dir.join("none.json"))
+            .env("VK_DRIVER_FILES", dir.join("none.json"))
+            .output()
+            .unwrap()
+    };
+    let o = run(&[
+        "render", &scene, "-o", &out, "--spp", "1", "--width", "16", "--height", "16", "-q",
+    ]);
+    assert!(o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    let notes: Vec<&str> = e
+        .lines()
+        .filter(|l| l.contains("no Vulkan adapter"))
+        .collect();
+    assert_eq!(notes.len(), 1, "{e}");
+    assert!(notes[0].contains("rendering on the CPU instead"), "{e}");
+    assert!(e.contains("device: CPU reference"), "{e}");
+    assert_eq!(image::open(&out).unwrap().width(), 16);
+    let o = run(&["info"]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("no Vulkan adapter found"));
+}
+
 #[test]
 fn info_lists_the_vulkan_adapters() {
     let o = wgtrace(&["info"]);
