@@ -126,6 +126,16 @@ fn bad_input_gives_a_clear_error_and_nonzero_exit() {
     assert!(e.contains("bad.toml:4:1") && e.contains("fov"), "{e}");
     assert!(!e.contains("panicked"), "{e}");
 
+    // 16384^2 pixels need 8 GiB of accumulation: over every adapter's binding limit.
+    let big = dir.join("big.png").display().to_string();
+    let o = wgtrace(&[
+        "render", &scene, "-o", &big, "--width", "16384", "--height", "16384",
+    ]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("16384x16384 image needs 8192 MiB"), "{e}");
+    assert!(!e.contains("panicked"), "{e}");
+
     let o = wgtrace(&["render", &scene, "--spp", "0", "-o", "/dev/null/x.png"]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("render.spp"));

@@ -13,6 +13,17 @@ pub enum GpuError {
     Device(#[from] wgpu::RequestDeviceError),
     #[error("GPU buffer readback failed: {0}")]
     Readback(String),
+    #[error(
+        "a {width}x{height} image needs {needed_mib} MiB of accumulation buffer, more than \
+         this adapter's {limit_mib} MiB per storage binding; use a smaller size or \
+         --backend cpu"
+    )]
+    ImageTooLarge {
+        width: u32,
+        height: u32,
+        needed_mib: u64,
+        limit_mib: u64,
+    },
     #[error(transparent)]
     Shader(#[from] super::shader::ShaderError),
 }

@@ -67,6 +67,20 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
 impl GpuRenderer {
     pub fn new(ctx: GpuContext, scene: &FlatScene) -> Result<Self, GpuError> {
         let device = &ctx.device;
+        // Two vec4<f32> per pixel; wgpu zero-initialises new buffers.
+        let accum_size = scene.width as u64 * scene.height as u64 * 32;
+        let limits = device.limits();
+        let limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        if accum_size > limit {
+            return Err(GpuError::ImageTooLarge {
+                width: scene.width,
+                height: scene.height,
+                needed_mib: accum_size.div_ceil(1 << 20),
+                limit_mib: limit >> 20,
+            });
+        }
         let wgsl = shader::trace_shader()?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
@@ -112,8 +126,6 @@ impl GpuRenderer {
         let primitives = storage_buffer(device, "primitives", &scene.primitives);
         let materials = storage_buffer(device, "materials", &scene.materials);
         let emitters = storage_buffer(device, "emitters", &scene.emitters);
-        // Two vec4<f32> per pixel; wgpu zero-initialises new buffers.
-        let accum_size = scene.width as u64 * scene.height as u64 * 32;
         let accum = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulation"),
             size: accum_size,
