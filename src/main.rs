@@ -148,7 +148,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     );
     let (w, h) = (scene.width, scene.height);
     let write = |engine: &mut Engine| -> anyhow::Result<()> {
-        let acc = engine.accumulation(w, h)?;
+        let acc = engine.accumulation()?;
         write_image(&output, w, h, &acc.to_rgb())?;
         Ok(())
     };

@@ -75,10 +75,10 @@ impl Engine {
     }
 
     /// The accumulated samples so far.
-    pub fn accumulation(&mut self, width: u32, height: u32) -> Result<Accumulation, GpuError> {
-        let data = match self {
-            Engine::Gpu(g) => g.accumulation()?,
-            Engine::Cpu(c) => c.accumulation(),
+    pub fn accumulation(&mut self) -> Result<Accumulation, GpuError> {
+        let ((width, height), data) = match self {
+            Engine::Gpu(g) => (g.size(), g.accumulation()?),
+            Engine::Cpu(c) => (c.size(), c.accumulation()),
         };
         Ok(Accumulation {
             width,
@@ -182,5 +182,5 @@ pub fn render_scene(scene: &FlatScene, choice: BackendChoice) -> Result<Accumula
         BackendChoice::Gpu { adapter } => Engine::gpu(scene, adapter)?,
     };
     render_progressive(&mut engine, scene, |_, _| Ok::<(), GpuError>(()))?;
-    engine.accumulation(scene.width, scene.height)
+    engine.accumulation()
 }

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::bindings::Bindings;
 use super::sampling::max_abs;
-use super::types::{Candidate, Hit, Ray, FAR, NO_HIT};
+use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{Primitive, PRIM_SPHERE, PRIM_TRIANGLE};
 
 /// Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `ray.dir` is unit length.
@@ -47,7 +47,9 @@ pub fn intersect_triangle(v0: Vec3, v1: Vec3, v2: Vec3, ray: &Ray, t_max: f32) -
     let inv_det = 1.0 / det;
     let tv = ray.origin - v0;
     let b1 = tv.dot(pv) * inv_det;
-    if !(0.0..=1.0).contains(&b1) {
+    // Written as in WGSL (not `contains`), so a NaN takes the same branch on both backends.
+    #[allow(clippy::manual_range_contains)]
+    if b1 < 0.0 || b1 > 1.0 {
         return miss;
     }
     let qv = tv.cross(e1);
@@ -60,10 +62,6 @@ pub fn intersect_triangle(v0: Vec3, v1: Vec3, v2: Vec3, ray: &Ray, t_max: f32) -
         return miss;
     }
     Vec3::new(t, b1, b2)
-}
-
-fn xyz(v: [f32; 4]) -> Vec3 {
-    Vec3::new(v[0], v[1], v[2])
 }
 
 /// Closest hit along the ray among all primitives.

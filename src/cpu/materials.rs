@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::sampling::sample_cosine_hemisphere;
-use super::types::{Hit, Ray};
+use super::types::{xyz, Hit, Ray};
 use crate::scene::records::{Material, MAT_FLAG_TWO_SIDED, MAT_LAMBERTIAN};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -15,14 +15,10 @@ pub struct Scatter {
     pub weight: Vec3,
 }
 
-fn rgb(v: [f32; 4]) -> Vec3 {
-    Vec3::new(v[0], v[1], v[2])
-}
-
 /// Radiance the surface emits toward the ray that hit it.
 pub fn emitted(mat: &Material, hit: &Hit) -> Vec3 {
     if hit.front_face || (mat.flags & MAT_FLAG_TWO_SIDED) != 0 {
-        rgb(mat.emission)
+        xyz(mat.emission)
     } else {
         Vec3::ZERO
     }
@@ -34,7 +30,7 @@ pub fn scatter_lambertian(mat: &Material, hit: &Hit, u: [f32; 2]) -> Scatter {
     Scatter {
         ok: true,
         dir: sample_cosine_hemisphere(n, u),
-        weight: rgb(mat.albedo),
+        weight: xyz(mat.albedo),
     }
 }
 

@@ -8,16 +8,12 @@ use super::intersect::{intersect_scene, surface_at};
 use super::materials::{emitted, scatter};
 use super::rng::rand_2d;
 use super::sampling::{offset_ray, sample_disk};
-use super::types::{Ray, NO_HIT};
+use super::types::{xyz, Ray, NO_HIT};
 use crate::scene::FlatScene;
 
 pub const DIM_PIXEL: u32 = 0;
 pub const DIM_LENS: u32 = 1;
 pub const DIM_BSDF: u32 = 2;
-
-fn xyz(v: [f32; 4]) -> Vec3 {
-    Vec3::new(v[0], v[1], v[2])
-}
 
 /// Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left.
 pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]) -> Ray {
@@ -133,5 +129,10 @@ impl CpuRenderer {
     /// The accumulation buffer: two `[f32; 4]` per pixel, row-major from the top-left.
     pub fn accumulation(&self) -> Vec<[f32; 4]> {
         self.accum.clone()
+    }
+
+    /// Image width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.scene.width, self.scene.height)
     }
 }

@@ -4,6 +4,12 @@ use glam::Vec3;
 
 pub use crate::scene::records::{FAR, NO_HIT};
 
+/// WGSL's `.xyz` (and `.rgb`) swizzle of a record's vec4.
+#[inline]
+pub fn xyz(v: [f32; 4]) -> Vec3 {
+    Vec3::new(v[0], v[1], v[2])
+}
+
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ray {
     pub origin: Vec3,

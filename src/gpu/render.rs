@@ -11,6 +11,9 @@ use crate::scene::{FlatScene, Tile};
 /// Most pixels one dispatch (one submission) traces: bounds the time of a submission.
 pub const MAX_TILE_PIXELS: u32 = 1 << 18;
 
+/// Accumulation bytes per pixel: two vec4<f32> (sum with count, sum of squares).
+pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
+
 /// Workgroup size of `trace.wgsl`'s entry point.
 const WORKGROUP: u32 = 8;
 
@@ -67,8 +70,8 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
 impl GpuRenderer {
     pub fn new(ctx: GpuContext, scene: &FlatScene) -> Result<Self, GpuError> {
         let device = &ctx.device;
-        // Two vec4<f32> per pixel; wgpu zero-initialises new buffers.
-        let accum_size = scene.width as u64 * scene.height as u64 * 32;
+        // wgpu zero-initialises new buffers, so the sums start at 0.
+        let accum_size = scene.width as u64 * scene.height as u64 * ACCUM_BYTES_PER_PIXEL;
         let limits = device.limits();
         let limit = limits
             .max_storage_buffer_binding_size
@@ -162,6 +165,11 @@ impl GpuRenderer {
             accum,
             readback,
         })
+    }
+
+    /// Image width and height.
+    pub fn size(&self) -> (u32, u32) {
+        (self.scene.width, self.scene.height)
     }
 
     /// The adapter's description.

@@ -23,9 +23,7 @@ pub fn render(mut engine: Engine, scene: &FlatScene) -> Accumulation {
         Ok::<(), wgtrace::gpu::GpuError>(())
     })
     .expect("render");
-    engine
-        .accumulation(scene.width, scene.height)
-        .expect("readback")
+    engine.accumulation().expect("readback")
 }
 
 pub fn render_gpu(scene: &FlatScene) -> Accumulation {
