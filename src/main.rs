@@ -71,6 +71,9 @@ struct RenderArgs {
     /// Rewrite the output file every N passes, to watch the render converge.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     preview_every: Option<u32>,
+    /// Test every primitive on every ray instead of traversing the BVH (for comparisons).
+    #[arg(long)]
+    no_bvh: bool,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -120,8 +123,20 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         spp: args.spp,
         max_depth: args.max_depth,
         seed: args.seed,
+        no_bvh: args.no_bvh,
     };
+    let loading = std::time::Instant::now();
     let scene = wgtrace::load_scene(&args.scene, &overrides)?;
+    if !args.quiet {
+        eprintln!(
+            "scene: {} primitives ({} unbounded), {} BVH nodes of depth {}, {:.2} s to load",
+            scene.primitives.len(),
+            scene.num_unbounded,
+            scene.bvh.len(),
+            scene.bvh_depth,
+            loading.elapsed().as_secs_f64()
+        );
+    }
     let choice = match args.backend {
         BackendArg::Gpu => BackendChoice::Gpu {
             adapter: args.adapter,

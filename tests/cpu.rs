@@ -262,6 +262,7 @@ fn overrides_replace_render_settings_and_are_validated() {
         spp: Some(3),
         max_depth: Some(2),
         seed: Some(9),
+        no_bvh: false,
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
     assert_eq!(

@@ -123,6 +123,44 @@ fn furnace_sphere_shows_albedo_times_background_on_both_backends() {
     }
 }
 
+/// The furnace at extreme scales: a sphere of radius 1e-3 and one of radius 1e4 whose center
+/// is 3.7e4 from the origin, each filling the whole frame. Every pixel sees the sphere, so
+/// every pixel must be exactly albedo x background at max_depth 2 and 5 on both backends: a
+/// hole (a missed primary ray) shows the background, a speckle (a bounce ray that re-hits
+/// the sphere) darkens the pixel.
+#[test]
+fn tiny_and_huge_spheres_render_without_holes_or_speckles() {
+    let l = [0.8f32, 0.6, 1.0];
+    let a = [0.5f32, 0.25, 0.75];
+    for (center, radius) in [([1.0f32, 2.0, 3.0], 1e-3f32), ([3e4, -2e4, 1e4], 1e4)] {
+        for depth in [2, 5] {
+            let [x, y, z] = center;
+            let src = FURNACE
+                .replace("MAX_DEPTH", &depth.to_string())
+                .replace(
+                    "center = [0, 0, 0]\nradius = 1",
+                    &format!("center = [{x}, {y}, {z}]\nradius = {radius}"),
+                )
+                .replace(
+                    "look_from = [0, 0, 3]",
+                    &format!("look_from = [{x}, {y}, {}]", z + 3.0 * radius),
+                )
+                .replace("look_at = [0, 0, 0]", &format!("look_at = [{x}, {y}, {z}]"))
+                .replace("vfov = 45", "vfov = 20");
+            let s = scene_from_str(&src);
+            for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+                let bad = (0..img.pixel_count())
+                    .filter(|&i| (0..3).any(|c| (img.mean(i)[c] - a[c] * l[c]).abs() > 1e-5))
+                    .count();
+                assert_eq!(
+                    bad, 0,
+                    "{name}: radius {radius}, max_depth {depth}: {bad} pixels off"
+                );
+            }
+        }
+    }
+}
+
 /// With max_depth = 1 only emitters and the background are visible, exactly: a front-facing
 /// light shows its radiance, a back-facing one-sided light is black, a back-facing
 /// two-sided light shows its radiance, everything else shows the background. The camera's

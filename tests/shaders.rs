@@ -100,11 +100,15 @@ fn naga_struct(module: &naga::Module, name: &str) -> Option<(u32, Vec<(String, u
 
 #[test]
 fn records_match_naga_layout_of_the_shader() {
-    let src = preprocess("trace", &BTreeSet::new()).unwrap();
-    let module = validate("trace", &src).unwrap();
+    let modules: Vec<naga::Module> = ENTRY_SHADERS
+        .iter()
+        .map(|name| validate(name, &preprocess(name, &BTreeSet::new()).unwrap()).unwrap())
+        .collect();
     for rec in record_layouts() {
-        let (size, members) = naga_struct(&module, rec.name)
-            .unwrap_or_else(|| panic!("struct {} not found in the shader", rec.name));
+        let (size, members) = modules
+            .iter()
+            .find_map(|m| naga_struct(m, rec.name))
+            .unwrap_or_else(|| panic!("struct {} not found in any entry shader", rec.name));
         assert_eq!(rec.size as u32, size, "{}: size (Rust vs WGSL)", rec.name);
         let rust: Vec<(String, u32)> = rec
             .fields

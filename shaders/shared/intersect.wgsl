@@ -1,5 +1,6 @@
-// Ray-primitive intersection, one function per primitive type, and the closest-hit search
-// that switches on the primitive tag. Every function returns FAR for a miss.
+// Ray-primitive intersection: one function per primitive type, the object-space wrapper for
+// transformed primitives, the closest-hit search (planes, then the BVH), and surface_at (hit
+// point, normals, uv, error bound). Every intersection function returns FAR for a miss.
 #import shared/bindings
 #import shared/sampling
 #import shared/types
@@ -59,57 +60,450 @@ fn intersect_triangle(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, ray: Ray, t_m
     return vec3<f32>(t, b1, b2);
 }
 
-// Closest hit along the ray among all primitives.
-fn intersect_scene(ray: Ray) -> Candidate {
-    var best = Candidate(FAR, NO_HIT, 0.0, 0.0);
-    for (var i = 0u; i < params.num_primitives; i++) {
-        let prim = primitives[i];
-        switch prim.tag {
-            case PRIM_SPHERE: {
-                let t = intersect_sphere(prim.a.xyz, prim.a.w, ray, best.t);
-                if (t < best.t) {
-                    best = Candidate(t, i, 0.0, 0.0);
+// Plane through `point` with unit normal n: t = -((o - point) . n) / (d . n). The sign and
+// range are tested before dividing (num * denom > 0, |num| < t_max |denom|), so a ray
+// parallel to the plane (d . n = 0) is a miss and t is always finite.
+fn intersect_plane(point: vec3<f32>, n: vec3<f32>, ray: Ray, t_max: f32) -> f32 {
+    let denom = dot(ray.dir, n);
+    let num = -dot(ray.origin - point, n);
+    if (num * denom > 0.0 && abs(num) < t_max * abs(denom)) {
+        return num / denom;
+    }
+    return FAR;
+}
+
+// Disk: the plane of unit normal n through `center`, within `radius` of the center.
+fn intersect_disk(center: vec3<f32>, n: vec3<f32>, radius: f32, ray: Ray, t_max: f32) -> f32 {
+    let t = intersect_plane(center, n, ray, t_max);
+    if (t < FAR) {
+        let q = ray.origin + t * ray.dir - center;
+        if (dot(q, q) <= radius * radius) {
+            return t;
+        }
+    }
+    return FAR;
+}
+
+// 1 / d, with zero and tiny components first replaced by +-1e-30 (sign kept, zero taken as
+// +), so that slab distances are finite and never 0 * inf = NaN.
+fn safe_inverse(d: vec3<f32>) -> vec3<f32> {
+    let tiny = select(vec3<f32>(1e-30), vec3<f32>(-1e-30), d < vec3<f32>(0.0));
+    return 1.0 / select(d, tiny, abs(d) < vec3<f32>(1e-30));
+}
+
+// Index of the largest component (the first of equals).
+fn argmax3(v: vec3<f32>) -> u32 {
+    if (v.x >= v.y && v.x >= v.z) {
+        return 0u;
+    }
+    return select(2u, 1u, v.y >= v.z);
+}
+
+// Index of the smallest component (the first of equals).
+fn argmin3(v: vec3<f32>) -> u32 {
+    if (v.x <= v.y && v.x <= v.z) {
+        return 0u;
+    }
+    return select(2u, 1u, v.y <= v.z);
+}
+
+// Axis-aligned box, slab method: per axis the distances to its two planes; the ray is inside
+// between t_near = max of the per-axis minima and t_far = min of the maxima. Returns
+// (t, axis of the face): t_near when the box is ahead, t_far when the ray starts inside.
+fn intersect_box(lo: vec3<f32>, hi: vec3<f32>, ray: Ray, t_max: f32) -> vec2<f32> {
+    let inv = safe_inverse(ray.dir);
+    let t0 = (lo - ray.origin) * inv;
+    let t1 = (hi - ray.origin) * inv;
+    let t_min = min(t0, t1);
+    let t_max3 = max(t0, t1);
+    let t_near = max(t_min.x, max(t_min.y, t_min.z));
+    let t_far = min(t_max3.x, min(t_max3.y, t_max3.z));
+    if (t_near <= t_far) {
+        if (t_near > 0.0 && t_near < t_max) {
+            return vec2<f32>(t_near, f32(argmax3(t_min)));
+        }
+        if (t_far > 0.0 && t_far < t_max) {
+            return vec2<f32>(t_far, f32(argmin3(t_max3)));
+        }
+    }
+    return vec2<f32>(FAR, 0.0);
+}
+
+// Finite cylinder from `base` to `top`. The side: a t^2 + 2 b t + c = 0 for the squared
+// distance to the axis of the ray's components across the axis, in the stable form (the
+// discriminant b^2 - a c = a (r^2 - |op - (b / a) dp|^2), the larger-magnitude root first),
+// each root kept only within the height. With caps, the two end disks too.
+// Returns (t, part): part 0 = side, 1 = base cap, 2 = top cap.
+fn intersect_cylinder(base: vec3<f32>, top: vec3<f32>, radius: f32, caps: bool, ray: Ray, t_max: f32) -> vec2<f32> {
+    let axis = top - base;
+    let h = length(axis);
+    let ax = axis / h;
+    let oc = ray.origin - base;
+    let o_ax = dot(oc, ax);
+    let d_ax = dot(ray.dir, ax);
+    let op = oc - o_ax * ax;
+    let dp = ray.dir - d_ax * ax;
+    var best = vec2<f32>(FAR, 0.0);
+    var t_lim = t_max;
+    let a = dot(dp, dp);
+    // a = 0: the ray runs along the axis and only the caps can be hit.
+    if (a > 1e-20) {
+        let b = dot(op, dp);
+        let perp = op - (b / a) * dp;
+        let r2 = radius * radius;
+        let disc = r2 - dot(perp, perp);
+        if (disc >= 0.0) {
+            let c = dot(op, op) - r2;
+            let q = -b - select(-1.0, 1.0, b >= 0.0) * sqrt(a * disc);
+            if (q != 0.0) {
+                let t0 = min(q / a, c / q);
+                let t1 = max(q / a, c / q);
+                let s0 = o_ax + t0 * d_ax;
+                let s1 = o_ax + t1 * d_ax;
+                if (t0 > 0.0 && t0 < t_lim && s0 >= 0.0 && s0 <= h) {
+                    best = vec2<f32>(t0, 0.0);
+                    t_lim = t0;
+                } else if (t1 > 0.0 && t1 < t_lim && s1 >= 0.0 && s1 <= h) {
+                    best = vec2<f32>(t1, 0.0);
+                    t_lim = t1;
                 }
             }
-            case PRIM_TRIANGLE: {
-                let h = intersect_triangle(prim.a.xyz, prim.b.xyz, prim.c.xyz, ray, best.t);
-                if (h.x < best.t) {
-                    best = Candidate(h.x, i, h.y, h.z);
-                }
-            }
-            default: {}
+        }
+    }
+    if (caps) {
+        let t_base = intersect_disk(base, ax, radius, ray, t_lim);
+        if (t_base < t_lim) {
+            best = vec2<f32>(t_base, 1.0);
+            t_lim = t_base;
+        }
+        let t_top = intersect_disk(top, ax, radius, ray, t_lim);
+        if (t_top < t_lim) {
+            best = vec2<f32>(t_top, 2.0);
         }
     }
     return best;
 }
 
-// Shading record of a candidate hit: the point is recomputed from the primitive (re-projected
-// onto the sphere, barycentric on the triangle), which keeps it on the surface to within a
-// few ulps whatever the distance travelled.
-// The error bound grows with the magnitudes that formed p: center and radius for spheres
-// (about 16 ulps), the vertices for triangles (about 8 ulps).
-fn surface_at(ray: Ray, cand: Candidate) -> Hit {
-    let prim = primitives[cand.prim];
-    var p = vec3<f32>(0.0);
-    var ng = vec3<f32>(0.0, 0.0, 1.0);
-    var err = 0.0;
+// The world-to-object transform of a primitive applied to a ray: the origin by the affine
+// map, the direction by its linear part (not normalized).
+fn ray_to_object(data: u32, ray: Ray) -> Ray {
+    let r0 = shape_data[data];
+    let r1 = shape_data[data + 1u];
+    let r2 = shape_data[data + 2u];
+    let o = vec4<f32>(ray.origin, 1.0);
+    return Ray(vec3<f32>(dot(r0, o), dot(r1, o), dot(r2, o)),
+        vec3<f32>(dot(r0.xyz, ray.dir), dot(r1.xyz, ray.dir), dot(r2.xyz, ray.dir)));
+}
+
+// An object-space point in world space (the object-to-world rows).
+fn point_to_world(data: u32, p: vec3<f32>) -> vec3<f32> {
+    let o = vec4<f32>(p, 1.0);
+    return vec3<f32>(dot(shape_data[data + 3u], o), dot(shape_data[data + 4u], o),
+        dot(shape_data[data + 5u], o));
+}
+
+// An object-space normal in world space: the transpose of the world-to-object linear part
+// (the inverse transpose of object-to-world), normalized.
+fn normal_to_world(data: u32, n: vec3<f32>) -> vec3<f32> {
+    return normalize(shape_data[data].xyz * n.x + shape_data[data + 1u].xyz * n.y
+        + shape_data[data + 2u].xyz * n.z);
+}
+
+// Error bound of a point mapped to world space: the object-space bound through the matrix,
+// plus the rounding of the matrix product (a few ulps of the magnitudes summed).
+fn transform_error(data: u32, p: vec3<f32>, err: f32) -> f32 {
+    var e = 0.0;
+    for (var k = 0u; k < 3u; k++) {
+        let row = shape_data[data + 3u + k];
+        let m = abs(row.xyz);
+        e = max(e, (m.x + m.y + m.z) * err + (dot(m, abs(p)) + abs(row.w)) * (1.0 / 2097152.0));
+    }
+    return e;
+}
+
+// One primitive in its own space: (t, u, v) as in Candidate.
+fn intersect_local(prim: Primitive, ray: Ray, t_max: f32) -> vec3<f32> {
+    switch prim.tag {
+        case PRIM_SPHERE: {
+            return vec3<f32>(intersect_sphere(prim.a.xyz, prim.a.w, ray, t_max), 0.0, 0.0);
+        }
+        case PRIM_TRIANGLE: {
+            return intersect_triangle(prim.a.xyz, prim.b.xyz, prim.c.xyz, ray, t_max);
+        }
+        case PRIM_PLANE: {
+            return vec3<f32>(intersect_plane(prim.a.xyz, prim.b.xyz, ray, t_max), 0.0, 0.0);
+        }
+        case PRIM_BOX: {
+            return vec3<f32>(intersect_box(prim.a.xyz, prim.b.xyz, ray, t_max), 0.0);
+        }
+        case PRIM_CYLINDER: {
+            let caps = (prim.flags & PRIM_FLAG_CAPS) != 0u;
+            return vec3<f32>(intersect_cylinder(prim.a.xyz, prim.b.xyz, prim.a.w, caps, ray, t_max), 0.0);
+        }
+        case PRIM_DISK: {
+            return vec3<f32>(intersect_disk(prim.a.xyz, prim.b.xyz, prim.a.w, ray, t_max), 0.0, 0.0);
+        }
+        default: {
+            return vec3<f32>(FAR, 0.0, 0.0);
+        }
+    }
+}
+
+// Primitive i in world space. A transformed primitive is intersected in object space with
+// the direction normalized (the sphere test needs unit length); t is mapped back by the
+// direction's length.
+fn intersect_primitive(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
+    let prim = primitives[i];
+    if ((prim.flags & PRIM_FLAG_TRANSFORM) == 0u) {
+        return intersect_local(prim, ray, t_max);
+    }
+    let r = ray_to_object(prim.data, ray);
+    let scale = length(r.dir);
+    let t_lim = min(t_max, FAR / max(scale, 1.0)) * scale;
+    let h = intersect_local(prim, Ray(r.origin, r.dir / scale), t_lim);
+    if (h.x < FAR) {
+        return vec3<f32>(h.x / scale, h.y, h.z);
+    }
+    return h;
+}
+
+// Primitive i tested against the closest hit so far; the closer of the two.
+fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
+    let h = intersect_primitive(i, ray, best.t);
+    if (h.x < best.t) {
+        return Candidate(h.x, i, h.y, h.z);
+    }
+    return best;
+}
+
+// Entry distance of the ray into a BVH node's box (clamped to 0), or FAR when the box is
+// missed or entered at or beyond t_max. t_far is widened by 2 gamma(3) (pbrt-v4's robust
+// bounds test) so rounding never culls a box the ray grazes.
+fn intersect_aabb(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let t_min = min(t0, t1);
+    let t_max3 = max(t0, t1);
+    let t_near = max(max(t_min.x, max(t_min.y, t_min.z)), 0.0);
+    let t_far = min(t_max3.x, min(t_max3.y, t_max3.z)) * BOX_WIDEN;
+    if (t_near <= t_far && t_near < t_max) {
+        return t_near;
+    }
+    return FAR;
+}
+
+// 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps) with eps = 2^-24.
+const BOX_WIDEN: f32 = 1.0000003576278687;
+
+// Closest hit along the ray: every unbounded primitive (planes), then the BVH in order
+// (nearer child first, a far child pushed with its entry distance and skipped when the
+// closest hit is already nearer), or every bounded primitive when use_bvh = 0.
+fn intersect_scene(ray: Ray) -> Candidate {
+    var best = Candidate(FAR, NO_HIT, 0.0, 0.0);
+    for (var i = 0u; i < params.num_unbounded; i++) {
+        best = closer(best, i, ray);
+    }
+    if (params.use_bvh == 0u) {
+        for (var i = params.num_unbounded; i < params.num_primitives; i++) {
+            best = closer(best, i, ray);
+        }
+        return best;
+    }
+    if (params.num_primitives == params.num_unbounded) {
+        return best;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    var stack_node: array<u32, BVH_STACK_SIZE>;
+    var stack_t: array<f32, BVH_STACK_SIZE>;
+    var sp = 0u;
+    var node = 0u;
+    var t_node = intersect_aabb(bvh[0].lo, bvh[0].hi, ray.origin, inv_dir, best.t);
+    loop {
+        if (t_node < best.t) {
+            let n = bvh[node];
+            if (n.count == 0u) {
+                let t0 = intersect_aabb(bvh[node + 1u].lo, bvh[node + 1u].hi, ray.origin, inv_dir, best.t);
+                let t1 = intersect_aabb(bvh[n.offset].lo, bvh[n.offset].hi, ray.origin, inv_dir, best.t);
+                let first_near = t0 <= t1;
+                let near = select(n.offset, node + 1u, first_near);
+                let far = select(node + 1u, n.offset, first_near);
+                let t_near = min(t0, t1);
+                let t_far = max(t0, t1);
+                if (t_far < FAR) {
+                    stack_node[sp] = far;
+                    stack_t[sp] = t_far;
+                    sp++;
+                }
+                if (t_near < FAR) {
+                    node = near;
+                    t_node = t_near;
+                    continue;
+                }
+            } else {
+                for (var k = 0u; k < n.count; k++) {
+                    best = closer(best, n.offset + k, ray);
+                }
+            }
+        }
+        if (sp == 0u) {
+            break;
+        }
+        sp--;
+        node = stack_node[sp];
+        t_node = stack_t[sp];
+    }
+    return best;
+}
+
+// A hit in a primitive's own space.
+struct Surface {
+    p: vec3<f32>,
+    ng: vec3<f32>,
+    ns: vec3<f32>,
+    uv: vec2<f32>,
+    err: f32,
+}
+
+// Angle of q about the unit axis n, in the onb_tangents frame, as a fraction in [0, 1].
+fn angle_uv(q: vec3<f32>, n: vec3<f32>) -> f32 {
+    let tb = onb_tangents(n);
+    return atan2(dot(q, tb[1]), dot(q, tb[0])) * (0.5 / PI) + 0.5;
+}
+
+// Hit point, normals, uv and error bound of a candidate, in the primitive's own space. The
+// point is recomputed from the primitive (re-projected onto spheres, cylinders, planes and
+// disks, barycentric on triangles, snapped to the face on boxes), which keeps it on the
+// surface to within a few ulps of the primitive's own magnitudes whatever the distance
+// travelled; err bounds that (16 ulps, 8 for triangles).
+fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
+    var s = Surface(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.0), 0.0);
     switch prim.tag {
         case PRIM_SPHERE: {
             let center = prim.a.xyz;
             let radius = prim.a.w;
-            ng = normalize(ray.origin + cand.t * ray.dir - center);
-            p = center + radius * ng;
-            err = (max_abs(center) + radius) * (1.0 / 1048576.0);
+            let n = normalize(ray.origin + cand.t * ray.dir - center);
+            s.p = center + radius * n;
+            s.ng = n;
+            s.ns = n;
+            // longitude from atan2(-z, x), latitude from the south pole (v = 0) up
+            s.uv = vec2<f32>(atan2(-n.z, n.x) * (0.5 / PI) + 0.5, acos(clamp(-n.y, -1.0, 1.0)) / PI);
+            s.err = (max_abs(center) + radius) * (1.0 / 1048576.0);
         }
         case PRIM_TRIANGLE: {
             let v0 = prim.a.xyz;
             let v1 = prim.b.xyz;
             let v2 = prim.c.xyz;
-            p = (1.0 - cand.u - cand.v) * v0 + cand.u * v1 + cand.v * v2;
-            ng = normalize(cross(v1 - v0, v2 - v0));
-            err = max(max_abs(v0), max(max_abs(v1), max_abs(v2))) * (1.0 / 2097152.0);
+            let w = vec3<f32>(1.0 - cand.u - cand.v, cand.u, cand.v);
+            s.p = w.x * v0 + w.y * v1 + w.z * v2;
+            s.ng = normalize(cross(v1 - v0, v2 - v0));
+            s.ns = s.ng;
+            // default vertex uvs (0, 0), (1, 0), (0, 1)
+            s.uv = vec2<f32>(cand.u, cand.v);
+            s.err = max(max_abs(v0), max(max_abs(v1), max_abs(v2))) * (1.0 / 2097152.0);
+            if ((prim.flags & PRIM_FLAG_ATTRIBUTES) != 0u) {
+                let a0 = shape_data[prim.data];
+                let a1 = shape_data[prim.data + 1u];
+                let a2 = shape_data[prim.data + 2u];
+                let a3 = shape_data[prim.data + 3u];
+                s.uv = w.x * vec2<f32>(a0.w, a3.x) + w.y * vec2<f32>(a1.w, a3.y) + w.z * vec2<f32>(a2.w, a3.z);
+                if ((prim.flags & PRIM_FLAG_SHADING_NORMALS) != 0u) {
+                    let n = w.x * a0.xyz + w.y * a1.xyz + w.z * a2.xyz;
+                    let len = length(n);
+                    if (len > 0.0) {
+                        // on the side of ng whatever the file's winding
+                        s.ns = n * (select(-1.0, 1.0, dot(n, s.ng) >= 0.0) / len);
+                    }
+                }
+            }
+        }
+        case PRIM_PLANE: {
+            let point = prim.a.xyz;
+            let n = prim.b.xyz;
+            let q = ray.origin + cand.t * ray.dir - point;
+            let qp = q - dot(q, n) * n;
+            s.p = point + qp;
+            s.ng = n;
+            s.ns = n;
+            let tb = onb_tangents(n);
+            s.uv = prim.a.w * vec2<f32>(dot(qp, tb[0]), dot(qp, tb[1]));
+            s.err = (max_abs(point) + max_abs(qp)) * (1.0 / 1048576.0);
+        }
+        case PRIM_BOX: {
+            let lo = prim.a.xyz;
+            let hi = prim.b.xyz;
+            let axis = u32(cand.u);
+            var p = ray.origin + cand.t * ray.dir;
+            let upper = p[axis] > 0.5 * (lo[axis] + hi[axis]);
+            p[axis] = select(lo[axis], hi[axis], upper);
+            var n = vec3<f32>(0.0);
+            n[axis] = select(-1.0, 1.0, upper);
+            let i = (axis + 1u) % 3u;
+            let j = (axis + 2u) % 3u;
+            s.p = p;
+            s.ng = n;
+            s.ns = n;
+            s.uv = vec2<f32>((p[i] - lo[i]) / (hi[i] - lo[i]), (p[j] - lo[j]) / (hi[j] - lo[j]));
+            // the face coordinate is exact; the others only move the point along the face
+            s.err = max(max_abs(lo), max_abs(hi)) * (1.0 / 1048576.0);
+        }
+        case PRIM_CYLINDER: {
+            let base = prim.a.xyz;
+            let top = prim.b.xyz;
+            let radius = prim.a.w;
+            let axis = top - base;
+            let h = length(axis);
+            let ax = axis / h;
+            let q = ray.origin + cand.t * ray.dir - base;
+            let q_ax = dot(q, ax);
+            let radial = q - q_ax * ax;
+            if (cand.u == 0.0) {
+                let n = normalize(radial);
+                let height = clamp(q_ax, 0.0, h);
+                s.p = base + height * ax + radius * n;
+                s.ng = n;
+                s.uv = vec2<f32>(angle_uv(n, ax), height / h);
+            } else {
+                let top_cap = cand.u == 2.0;
+                s.p = select(base, top, top_cap) + radial;
+                s.ng = select(-ax, ax, top_cap);
+                s.uv = vec2<f32>(angle_uv(radial, ax), length(radial) / radius);
+            }
+            s.ns = s.ng;
+            s.err = (max(max_abs(base), max_abs(top)) + radius) * (1.0 / 1048576.0);
+        }
+        case PRIM_DISK: {
+            let center = prim.a.xyz;
+            let radius = prim.a.w;
+            let n = prim.b.xyz;
+            let q = ray.origin + cand.t * ray.dir - center;
+            let qp = q - dot(q, n) * n;
+            s.p = center + qp;
+            s.ng = n;
+            s.ns = n;
+            s.uv = vec2<f32>(angle_uv(qp, n), length(qp) / radius);
+            s.err = (max_abs(center) + radius) * (1.0 / 1048576.0);
         }
         default: {}
     }
-    return Hit(p, ng, dot(ray.dir, ng) < 0.0, prim.material, err);
+    return s;
+}
+
+// Shading record of a candidate hit, in world space.
+fn surface_at(ray: Ray, cand: Candidate) -> Hit {
+    let prim = primitives[cand.prim];
+    var s: Surface;
+    if ((prim.flags & PRIM_FLAG_TRANSFORM) != 0u) {
+        let r = ray_to_object(prim.data, ray);
+        let scale = length(r.dir);
+        let local = Candidate(cand.t * scale, cand.prim, cand.u, cand.v);
+        s = surface_local(prim, Ray(r.origin, r.dir / scale), local);
+        let p_obj = s.p;
+        s.p = point_to_world(prim.data, p_obj);
+        s.ng = normal_to_world(prim.data, s.ng);
+        s.ns = s.ng;
+        s.err = transform_error(prim.data, p_obj, s.err);
+    } else {
+        s = surface_local(prim, ray, cand);
+    }
+    return Hit(s.p, s.ng, s.ns, s.uv, dot(ray.dir, s.ng) < 0.0, prim.material, s.err);
 }

@@ -18,11 +18,16 @@ fn emitted(mat: Material, hit: Hit) -> vec3<f32> {
     return vec3<f32>(0.0);
 }
 
-// Lambertian: cosine-weighted about the normal on the side the ray came from, so either side
-// of a surface scatters; weight = albedo exactly.
+// Lambertian: cosine-weighted about the shading normal on the side the ray came from, so
+// either side of a surface scatters; weight = albedo exactly. A direction that an
+// interpolated normal tilts under the geometric surface ends the path.
 fn scatter_lambertian(mat: Material, hit: Hit, u: vec2<f32>) -> Scatter {
-    let n = select(-hit.ng, hit.ng, hit.front_face);
-    return Scatter(true, sample_cosine_hemisphere(n, u), mat.albedo.rgb);
+    let side = select(-1.0, 1.0, hit.front_face);
+    let dir = sample_cosine_hemisphere(side * hit.ns, u);
+    if (side * dot(dir, hit.ng) <= 0.0) {
+        return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    return Scatter(true, dir, mat.albedo.rgb);
 }
 
 fn scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {

@@ -6,6 +6,23 @@
 // Primitive tags (switch in intersect.wgsl).
 const PRIM_SPHERE: u32 = 0u;
 const PRIM_TRIANGLE: u32 = 1u;
+const PRIM_PLANE: u32 = 2u;
+const PRIM_BOX: u32 = 3u;
+const PRIM_CYLINDER: u32 = 4u;
+const PRIM_DISK: u32 = 5u;
+
+// Primitive flags.
+// `data` indexes a world-to-object transform in shape_data (6 entries: w2o rows, o2w rows).
+const PRIM_FLAG_TRANSFORM: u32 = 1u;
+// `data` indexes triangle vertex attributes (4 entries: (n0, u0), (n1, u1), (n2, u2), (v0, v1, v2, 0)).
+const PRIM_FLAG_ATTRIBUTES: u32 = 2u;
+// The vertex normals of the attributes are meaningful (smooth shading).
+const PRIM_FLAG_SHADING_NORMALS: u32 = 4u;
+// Cylinders: closed by two cap disks.
+const PRIM_FLAG_CAPS: u32 = 8u;
+
+// Size of the BVH traversal stack; the host builder keeps every leaf within this depth.
+const BVH_STACK_SIZE: u32 = 32u;
 
 // Material tags (switch in materials.wgsl).
 const MAT_LAMBERTIAN: u32 = 0u;
@@ -19,17 +36,29 @@ const NO_HIT: u32 = 0xffffffffu;
 // Largest finite f32: "no intersection" and "unbounded" without relying on infinities.
 const FAR: f32 = 3.40282347e+38;
 
+// In object space when PRIM_FLAG_TRANSFORM is set.
 struct Primitive {
     tag: u32,
     material: u32,
     flags: u32,
-    pad: u32,
-    // sphere: center.xyz, radius | triangle: vertex 0
+    // first shape_data entry of the transform or of the vertex attributes
+    data: u32,
+    // sphere: center, radius | triangle: vertex 0 | plane: point, uv scale | box: min
+    // cylinder: base center, radius | disk: center, radius
     a: vec4<f32>,
-    // triangle: vertex 1
+    // triangle: vertex 1 | plane, disk: unit normal | box: max | cylinder: top center
     b: vec4<f32>,
     // triangle: vertex 2
     c: vec4<f32>,
+}
+
+// Flattened BVH node, depth-first. Interior (count = 0): children are the next node and
+// nodes[offset]. Leaf: primitives offset .. offset + count.
+struct BvhNode {
+    lo: vec3<f32>,
+    offset: u32,
+    hi: vec3<f32>,
+    count: u32,
 }
 
 struct Material {
@@ -73,7 +102,13 @@ struct Params {
     tile_y: u32,
     tile_width: u32,
     tile_height: u32,
-    pad: u32,
+    // primitives 0 .. num_unbounded (planes) are tested on every ray, the rest via the BVH
+    num_unbounded: u32,
+    // 1: traverse the BVH, 0: test every primitive
+    use_bvh: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 struct Ray {
@@ -82,7 +117,8 @@ struct Ray {
 }
 
 // What the closest-hit search reports: distance, primitive, and the primitive's own
-// parameters of the hit (barycentrics for triangles).
+// parameters of the hit: barycentrics of v1 and v2 for triangles, the slab axis for boxes,
+// the part (0 side, 1 base cap, 2 top cap) for cylinders.
 struct Candidate {
     t: f32,
     prim: u32,
@@ -94,8 +130,13 @@ struct Candidate {
 struct Hit {
     // hit point, computed from the primitive (not origin + t * dir)
     p: vec3<f32>,
-    // geometric normal on the front side (outward for spheres, right-hand rule for triangles)
+    // geometric normal on the front side (outward for closed shapes, right-hand rule for
+    // triangles, the given normal for planes and disks)
     ng: vec3<f32>,
+    // shading normal, on the same side as ng (interpolated vertex normals, else ng)
+    ns: vec3<f32>,
+    // surface coordinates for textures
+    uv: vec2<f32>,
     // true when the ray arrives on the front side
     front_face: bool,
     material: u32,

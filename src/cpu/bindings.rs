@@ -1,6 +1,6 @@
 //! Mirrors `shaders/shared/bindings.wgsl`: what one dispatch reads.
 
-use crate::scene::records::{Emitter, Material, Params, Primitive};
+use crate::scene::records::{BvhNode, Emitter, Material, Params, Primitive};
 use crate::scene::FlatScene;
 
 /// The resources of one dispatch, borrowed from the flattened scene.
@@ -10,6 +10,8 @@ pub struct Bindings<'a> {
     pub primitives: &'a [Primitive],
     pub materials: &'a [Material],
     pub emitters: &'a [Emitter],
+    pub bvh: &'a [BvhNode],
+    pub shape_data: &'a [[f32; 4]],
 }
 
 impl<'a> Bindings<'a> {
@@ -19,6 +21,8 @@ impl<'a> Bindings<'a> {
             primitives: &scene.primitives,
             materials: &scene.materials,
             emitters: &scene.emitters,
+            bvh: &scene.bvh,
+            shape_data: &scene.shape_data,
         }
     }
 }

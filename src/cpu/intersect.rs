@@ -1,11 +1,16 @@
-//! Mirrors `shaders/shared/intersect.wgsl`.
+//! Mirrors `shaders/shared/intersect.wgsl`: the same functions, in the same order, with the
+//! same operations, so both backends find the same hits.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 
 use super::bindings::Bindings;
-use super::sampling::max_abs;
+use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
-use crate::scene::records::{Primitive, PRIM_SPHERE, PRIM_TRIANGLE};
+use crate::scene::records::{
+    Primitive, BVH_STACK_SIZE, PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES,
+    PRIM_FLAG_CAPS, PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TRANSFORM, PRIM_PLANE, PRIM_SPHERE,
+    PRIM_TRIANGLE,
+};
 
 /// Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `ray.dir` is unit length.
 /// Returns the nearest root in (0, t_max), else FAR.
@@ -64,74 +69,491 @@ pub fn intersect_triangle(v0: Vec3, v1: Vec3, v2: Vec3, ray: &Ray, t_max: f32) -
     Vec3::new(t, b1, b2)
 }
 
-/// Closest hit along the ray among all primitives.
+/// Plane through `point` with unit normal n; a ray parallel to it is a miss, t is finite.
+pub fn intersect_plane(point: Vec3, n: Vec3, ray: &Ray, t_max: f32) -> f32 {
+    let denom = ray.dir.dot(n);
+    let num = -(ray.origin - point).dot(n);
+    if num * denom > 0.0 && num.abs() < t_max * denom.abs() {
+        return num / denom;
+    }
+    FAR
+}
+
+/// Disk: the plane of unit normal n through `center`, within `radius` of the center.
+pub fn intersect_disk(center: Vec3, n: Vec3, radius: f32, ray: &Ray, t_max: f32) -> f32 {
+    let t = intersect_plane(center, n, ray, t_max);
+    if t < FAR {
+        let q = ray.origin + t * ray.dir - center;
+        if q.dot(q) <= radius * radius {
+            return t;
+        }
+    }
+    FAR
+}
+
+/// 1 / d with zero and tiny components first replaced by +-1e-30 (zero taken as +).
+pub fn safe_inverse(d: Vec3) -> Vec3 {
+    let tiny = Vec3::select(d.cmplt(Vec3::ZERO), Vec3::splat(-1e-30), Vec3::splat(1e-30));
+    Vec3::ONE / Vec3::select(d.abs().cmplt(Vec3::splat(1e-30)), tiny, d)
+}
+
+/// Index of the largest component (the first of equals).
+pub fn argmax3(v: Vec3) -> u32 {
+    if v.x >= v.y && v.x >= v.z {
+        return 0;
+    }
+    if v.y >= v.z {
+        1
+    } else {
+        2
+    }
+}
+
+/// Index of the smallest component (the first of equals).
+pub fn argmin3(v: Vec3) -> u32 {
+    if v.x <= v.y && v.x <= v.z {
+        return 0;
+    }
+    if v.y <= v.z {
+        1
+    } else {
+        2
+    }
+}
+
+/// Axis-aligned box, slab method. Returns (t, axis of the face); t = FAR on a miss.
+pub fn intersect_box(lo: Vec3, hi: Vec3, ray: &Ray, t_max: f32) -> Vec2 {
+    let inv = safe_inverse(ray.dir);
+    let t0 = (lo - ray.origin) * inv;
+    let t1 = (hi - ray.origin) * inv;
+    let t_min = t0.min(t1);
+    let t_max3 = t0.max(t1);
+    let t_near = t_min.x.max(t_min.y.max(t_min.z));
+    let t_far = t_max3.x.min(t_max3.y.min(t_max3.z));
+    if t_near <= t_far {
+        if t_near > 0.0 && t_near < t_max {
+            return Vec2::new(t_near, argmax3(t_min) as f32);
+        }
+        if t_far > 0.0 && t_far < t_max {
+            return Vec2::new(t_far, argmin3(t_max3) as f32);
+        }
+    }
+    Vec2::new(FAR, 0.0)
+}
+
+/// Finite cylinder from `base` to `top`, stable quadratic for the side, optional caps.
+/// Returns (t, part): 0 side, 1 base cap, 2 top cap; t = FAR on a miss.
+pub fn intersect_cylinder(
+    base: Vec3,
+    top: Vec3,
+    radius: f32,
+    caps: bool,
+    ray: &Ray,
+    t_max: f32,
+) -> Vec2 {
+    let axis = top - base;
+    let h = axis.length();
+    let ax = axis / h;
+    let oc = ray.origin - base;
+    let o_ax = oc.dot(ax);
+    let d_ax = ray.dir.dot(ax);
+    let op = oc - o_ax * ax;
+    let dp = ray.dir - d_ax * ax;
+    let mut best = Vec2::new(FAR, 0.0);
+    let mut t_lim = t_max;
+    let a = dp.dot(dp);
+    if a > 1e-20 {
+        let b = op.dot(dp);
+        let perp = op - (b / a) * dp;
+        let r2 = radius * radius;
+        let disc = r2 - perp.dot(perp);
+        if disc >= 0.0 {
+            let c = op.dot(op) - r2;
+            let q = -b - (if b >= 0.0 { 1.0 } else { -1.0 }) * (a * disc).sqrt();
+            if q != 0.0 {
+                let t0 = (q / a).min(c / q);
+                let t1 = (q / a).max(c / q);
+                let s0 = o_ax + t0 * d_ax;
+                let s1 = o_ax + t1 * d_ax;
+                if t0 > 0.0 && t0 < t_lim && s0 >= 0.0 && s0 <= h {
+                    best = Vec2::new(t0, 0.0);
+                    t_lim = t0;
+                } else if t1 > 0.0 && t1 < t_lim && s1 >= 0.0 && s1 <= h {
+                    best = Vec2::new(t1, 0.0);
+                    t_lim = t1;
+                }
+            }
+        }
+    }
+    if caps {
+        let t_base = intersect_disk(base, ax, radius, ray, t_lim);
+        if t_base < t_lim {
+            best = Vec2::new(t_base, 1.0);
+            t_lim = t_base;
+        }
+        let t_top = intersect_disk(top, ax, radius, ray, t_lim);
+        if t_top < t_lim {
+            best = Vec2::new(t_top, 2.0);
+        }
+    }
+    best
+}
+
+fn row(b: &Bindings, i: u32) -> Vec4 {
+    Vec4::from_array(b.shape_data[i as usize])
+}
+
+/// The world-to-object transform applied to a ray (direction not normalized).
+pub fn ray_to_object(b: &Bindings, data: u32, ray: &Ray) -> Ray {
+    let (r0, r1, r2) = (row(b, data), row(b, data + 1), row(b, data + 2));
+    let o = ray.origin.extend(1.0);
+    Ray {
+        origin: Vec3::new(r0.dot(o), r1.dot(o), r2.dot(o)),
+        dir: Vec3::new(
+            r0.truncate().dot(ray.dir),
+            r1.truncate().dot(ray.dir),
+            r2.truncate().dot(ray.dir),
+        ),
+    }
+}
+
+/// An object-space point in world space.
+pub fn point_to_world(b: &Bindings, data: u32, p: Vec3) -> Vec3 {
+    let o = p.extend(1.0);
+    Vec3::new(
+        row(b, data + 3).dot(o),
+        row(b, data + 4).dot(o),
+        row(b, data + 5).dot(o),
+    )
+}
+
+/// An object-space normal in world space (transpose of the world-to-object linear part).
+pub fn normal_to_world(b: &Bindings, data: u32, n: Vec3) -> Vec3 {
+    (row(b, data).truncate() * n.x
+        + row(b, data + 1).truncate() * n.y
+        + row(b, data + 2).truncate() * n.z)
+        .normalize()
+}
+
+/// Error bound of a point mapped to world space.
+pub fn transform_error(b: &Bindings, data: u32, p: Vec3, err: f32) -> f32 {
+    let mut e = 0.0f32;
+    for k in 0..3 {
+        let r = row(b, data + 3 + k);
+        let m = r.truncate().abs();
+        e = e.max((m.x + m.y + m.z) * err + (m.dot(p.abs()) + r.w.abs()) * (1.0 / 2097152.0));
+    }
+    e
+}
+
+/// One primitive in its own space: (t, u, v) as in Candidate.
+pub fn intersect_local(prim: &Primitive, ray: &Ray, t_max: f32) -> Vec3 {
+    let (a, b) = (xyz(prim.a), xyz(prim.b));
+    match prim.tag {
+        PRIM_SPHERE => Vec3::new(intersect_sphere(a, prim.a[3], ray, t_max), 0.0, 0.0),
+        PRIM_TRIANGLE => intersect_triangle(a, b, xyz(prim.c), ray, t_max),
+        PRIM_PLANE => Vec3::new(intersect_plane(a, b, ray, t_max), 0.0, 0.0),
+        PRIM_BOX => intersect_box(a, b, ray, t_max).extend(0.0),
+        PRIM_CYLINDER => {
+            let caps = prim.flags & PRIM_FLAG_CAPS != 0;
+            intersect_cylinder(a, b, prim.a[3], caps, ray, t_max).extend(0.0)
+        }
+        PRIM_DISK => Vec3::new(intersect_disk(a, b, prim.a[3], ray, t_max), 0.0, 0.0),
+        _ => Vec3::new(FAR, 0.0, 0.0),
+    }
+}
+
+/// Primitive i in world space; transformed primitives in object space with a unit direction.
+pub fn intersect_primitive(b: &Bindings, i: u32, ray: &Ray, t_max: f32) -> Vec3 {
+    let prim = &b.primitives[i as usize];
+    if prim.flags & PRIM_FLAG_TRANSFORM == 0 {
+        return intersect_local(prim, ray, t_max);
+    }
+    let r = ray_to_object(b, prim.data, ray);
+    let scale = r.dir.length();
+    let t_lim = t_max.min(FAR / scale.max(1.0)) * scale;
+    let local = Ray {
+        origin: r.origin,
+        dir: r.dir / scale,
+    };
+    let h = intersect_local(prim, &local, t_lim);
+    if h.x < FAR {
+        return Vec3::new(h.x / scale, h.y, h.z);
+    }
+    h
+}
+
+/// Primitive i tested against the closest hit so far; the closer of the two.
+pub fn closer(b: &Bindings, best: Candidate, i: u32, ray: &Ray) -> Candidate {
+    let h = intersect_primitive(b, i, ray, best.t);
+    if h.x < best.t {
+        return Candidate {
+            t: h.x,
+            prim: i,
+            u: h.y,
+            v: h.z,
+        };
+    }
+    best
+}
+
+/// 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps) with eps = 2^-24.
+pub const BOX_WIDEN: f32 = 1.0 + 3.0 * f32::EPSILON;
+
+/// Entry distance into a BVH node's box (clamped to 0), or FAR.
+pub fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let t_min = t0.min(t1);
+    let t_max3 = t0.max(t1);
+    let t_near = t_min.x.max(t_min.y.max(t_min.z)).max(0.0);
+    let t_far = t_max3.x.min(t_max3.y.min(t_max3.z)) * BOX_WIDEN;
+    if t_near <= t_far && t_near < t_max {
+        return t_near;
+    }
+    FAR
+}
+
+/// Closest hit along the ray: planes, then the BVH in order (or every primitive).
 pub fn intersect_scene(b: &Bindings, ray: &Ray) -> Candidate {
+    let p = &b.params;
     let mut best = Candidate {
         t: FAR,
         prim: NO_HIT,
         u: 0.0,
         v: 0.0,
     };
-    for (i, prim) in b.primitives[..b.params.num_primitives as usize]
-        .iter()
-        .enumerate()
-    {
-        match prim.tag {
-            PRIM_SPHERE => {
-                let t = intersect_sphere(xyz(prim.a), prim.a[3], ray, best.t);
-                if t < best.t {
-                    best = Candidate {
-                        t,
-                        prim: i as u32,
-                        u: 0.0,
-                        v: 0.0,
-                    };
-                }
-            }
-            PRIM_TRIANGLE => {
-                let h = intersect_triangle(xyz(prim.a), xyz(prim.b), xyz(prim.c), ray, best.t);
-                if h.x < best.t {
-                    best = Candidate {
-                        t: h.x,
-                        prim: i as u32,
-                        u: h.y,
-                        v: h.z,
-                    };
-                }
-            }
-            _ => {}
+    for i in 0..p.num_unbounded {
+        best = closer(b, best, i, ray);
+    }
+    if p.use_bvh == 0 {
+        for i in p.num_unbounded..p.num_primitives {
+            best = closer(b, best, i, ray);
         }
+        return best;
+    }
+    if p.num_primitives == p.num_unbounded {
+        return best;
+    }
+    let nodes = b.bvh;
+    let inv_dir = safe_inverse(ray.dir);
+    let mut stack_node = [0u32; BVH_STACK_SIZE as usize];
+    let mut stack_t = [0f32; BVH_STACK_SIZE as usize];
+    let mut sp = 0usize;
+    let mut node = 0u32;
+    let mut t_node = intersect_aabb(
+        Vec3::from(nodes[0].lo),
+        Vec3::from(nodes[0].hi),
+        ray.origin,
+        inv_dir,
+        best.t,
+    );
+    loop {
+        if t_node < best.t {
+            let n = nodes[node as usize];
+            if n.count == 0 {
+                let (c0, c1) = (&nodes[node as usize + 1], &nodes[n.offset as usize]);
+                let t0 = intersect_aabb(c0.lo.into(), c0.hi.into(), ray.origin, inv_dir, best.t);
+                let t1 = intersect_aabb(c1.lo.into(), c1.hi.into(), ray.origin, inv_dir, best.t);
+                let first_near = t0 <= t1;
+                let near = if first_near { node + 1 } else { n.offset };
+                let far = if first_near { n.offset } else { node + 1 };
+                let t_near = t0.min(t1);
+                let t_far = t0.max(t1);
+                if t_far < FAR {
+                    stack_node[sp] = far;
+                    stack_t[sp] = t_far;
+                    sp += 1;
+                }
+                if t_near < FAR {
+                    node = near;
+                    t_node = t_near;
+                    continue;
+                }
+            } else {
+                for k in 0..n.count {
+                    best = closer(b, best, n.offset + k, ray);
+                }
+            }
+        }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        node = stack_node[sp];
+        t_node = stack_t[sp];
     }
     best
 }
 
-/// Shading record of a candidate hit, with the point recomputed from the primitive.
-pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
-    let prim: &Primitive = &b.primitives[cand.prim as usize];
-    let mut p = Vec3::ZERO;
-    let mut ng = Vec3::Z;
-    let mut err = 0.0;
+/// A hit in a primitive's own space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    pub p: Vec3,
+    pub ng: Vec3,
+    pub ns: Vec3,
+    pub uv: Vec2,
+    pub err: f32,
+}
+
+/// Angle of q about the unit axis n, as a fraction in [0, 1].
+pub fn angle_uv(q: Vec3, n: Vec3) -> f32 {
+    let tb = onb_tangents(n);
+    q.dot(tb[1]).atan2(q.dot(tb[0])) * (0.5 / PI) + 0.5
+}
+
+/// Hit point, normals, uv and error bound in the primitive's own space.
+pub fn surface_local(b: &Bindings, prim: &Primitive, ray: &Ray, cand: &Candidate) -> Surface {
+    let mut s = Surface {
+        p: Vec3::ZERO,
+        ng: Vec3::Z,
+        ns: Vec3::Z,
+        uv: Vec2::ZERO,
+        err: 0.0,
+    };
     match prim.tag {
         PRIM_SPHERE => {
             let center = xyz(prim.a);
             let radius = prim.a[3];
-            ng = (ray.origin + cand.t * ray.dir - center).normalize();
-            p = center + radius * ng;
-            err = (max_abs(center) + radius) * (1.0 / 1048576.0);
+            let n = (ray.origin + cand.t * ray.dir - center).normalize();
+            s.p = center + radius * n;
+            s.ng = n;
+            s.ns = n;
+            s.uv = Vec2::new(
+                (-n.z).atan2(n.x) * (0.5 / PI) + 0.5,
+                (-n.y).clamp(-1.0, 1.0).acos() / PI,
+            );
+            s.err = (max_abs(center) + radius) * (1.0 / 1048576.0);
         }
         PRIM_TRIANGLE => {
             let (v0, v1, v2) = (xyz(prim.a), xyz(prim.b), xyz(prim.c));
-            p = (1.0 - cand.u - cand.v) * v0 + cand.u * v1 + cand.v * v2;
-            ng = (v1 - v0).cross(v2 - v0).normalize();
-            err = max_abs(v0).max(max_abs(v1).max(max_abs(v2))) * (1.0 / 2097152.0);
+            let w = Vec3::new(1.0 - cand.u - cand.v, cand.u, cand.v);
+            s.p = w.x * v0 + w.y * v1 + w.z * v2;
+            s.ng = (v1 - v0).cross(v2 - v0).normalize();
+            s.ns = s.ng;
+            s.uv = Vec2::new(cand.u, cand.v);
+            s.err = max_abs(v0).max(max_abs(v1).max(max_abs(v2))) * (1.0 / 2097152.0);
+            if prim.flags & PRIM_FLAG_ATTRIBUTES != 0 {
+                let (a0, a1) = (row(b, prim.data), row(b, prim.data + 1));
+                let (a2, a3) = (row(b, prim.data + 2), row(b, prim.data + 3));
+                s.uv = w.x * Vec2::new(a0.w, a3.x)
+                    + w.y * Vec2::new(a1.w, a3.y)
+                    + w.z * Vec2::new(a2.w, a3.z);
+                if prim.flags & PRIM_FLAG_SHADING_NORMALS != 0 {
+                    let n = w.x * a0.truncate() + w.y * a1.truncate() + w.z * a2.truncate();
+                    let len = n.length();
+                    if len > 0.0 {
+                        let sign = if n.dot(s.ng) >= 0.0 { 1.0 } else { -1.0 };
+                        s.ns = n * (sign / len);
+                    }
+                }
+            }
+        }
+        PRIM_PLANE => {
+            let point = xyz(prim.a);
+            let n = xyz(prim.b);
+            let q = ray.origin + cand.t * ray.dir - point;
+            let qp = q - q.dot(n) * n;
+            s.p = point + qp;
+            s.ng = n;
+            s.ns = n;
+            let tb = onb_tangents(n);
+            s.uv = prim.a[3] * Vec2::new(qp.dot(tb[0]), qp.dot(tb[1]));
+            s.err = (max_abs(point) + max_abs(qp)) * (1.0 / 1048576.0);
+        }
+        PRIM_BOX => {
+            let lo = xyz(prim.a);
+            let hi = xyz(prim.b);
+            let axis = cand.u as usize;
+            let mut p = ray.origin + cand.t * ray.dir;
+            let upper = p[axis] > 0.5 * (lo[axis] + hi[axis]);
+            p[axis] = if upper { hi[axis] } else { lo[axis] };
+            let mut n = Vec3::ZERO;
+            n[axis] = if upper { 1.0 } else { -1.0 };
+            let i = (axis + 1) % 3;
+            let j = (axis + 2) % 3;
+            s.p = p;
+            s.ng = n;
+            s.ns = n;
+            s.uv = Vec2::new(
+                (p[i] - lo[i]) / (hi[i] - lo[i]),
+                (p[j] - lo[j]) / (hi[j] - lo[j]),
+            );
+            s.err = max_abs(lo).max(max_abs(hi)) * (1.0 / 1048576.0);
+        }
+        PRIM_CYLINDER => {
+            let base = xyz(prim.a);
+            let top = xyz(prim.b);
+            let radius = prim.a[3];
+            let axis = top - base;
+            let h = axis.length();
+            let ax = axis / h;
+            let q = ray.origin + cand.t * ray.dir - base;
+            let q_ax = q.dot(ax);
+            let radial = q - q_ax * ax;
+            if cand.u == 0.0 {
+                let n = radial.normalize();
+                let height = q_ax.clamp(0.0, h);
+                s.p = base + height * ax + radius * n;
+                s.ng = n;
+                s.uv = Vec2::new(angle_uv(n, ax), height / h);
+            } else {
+                let top_cap = cand.u == 2.0;
+                s.p = (if top_cap { top } else { base }) + radial;
+                s.ng = if top_cap { ax } else { -ax };
+                s.uv = Vec2::new(angle_uv(radial, ax), radial.length() / radius);
+            }
+            s.ns = s.ng;
+            s.err = (max_abs(base).max(max_abs(top)) + radius) * (1.0 / 1048576.0);
+        }
+        PRIM_DISK => {
+            let center = xyz(prim.a);
+            let radius = prim.a[3];
+            let n = xyz(prim.b);
+            let q = ray.origin + cand.t * ray.dir - center;
+            let qp = q - q.dot(n) * n;
+            s.p = center + qp;
+            s.ng = n;
+            s.ns = n;
+            s.uv = Vec2::new(angle_uv(qp, n), qp.length() / radius);
+            s.err = (max_abs(center) + radius) * (1.0 / 1048576.0);
         }
         _ => {}
     }
+    s
+}
+
+/// Shading record of a candidate hit, in world space.
+pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
+    let prim = &b.primitives[cand.prim as usize];
+    let s = if prim.flags & PRIM_FLAG_TRANSFORM != 0 {
+        let r = ray_to_object(b, prim.data, ray);
+        let scale = r.dir.length();
+        let local = Candidate {
+            t: cand.t * scale,
+            ..*cand
+        };
+        let local_ray = Ray {
+            origin: r.origin,
+            dir: r.dir / scale,
+        };
+        let mut s = surface_local(b, prim, &local_ray, &local);
+        let p_obj = s.p;
+        s.p = point_to_world(b, prim.data, p_obj);
+        s.ng = normal_to_world(b, prim.data, s.ng);
+        s.ns = s.ng;
+        s.err = transform_error(b, prim.data, p_obj, s.err);
+        s
+    } else {
+        surface_local(b, prim, ray, cand)
+    };
     Hit {
-        p,
-        ng,
-        front_face: ray.dir.dot(ng) < 0.0,
+        p: s.p,
+        ng: s.ng,
+        ns: s.ns,
+        uv: s.uv,
+        front_face: ray.dir.dot(s.ng) < 0.0,
         material: prim.material,
-        err,
+        err: s.err,
     }
 }

@@ -24,24 +24,32 @@ pub fn emitted(mat: &Material, hit: &Hit) -> Vec3 {
     }
 }
 
-/// Lambertian: cosine-weighted about the normal on the side the ray came from.
+/// Lambertian: cosine-weighted about the shading normal on the side the ray came from; a
+/// direction under the geometric surface ends the path.
 pub fn scatter_lambertian(mat: &Material, hit: &Hit, u: [f32; 2]) -> Scatter {
-    let n = if hit.front_face { hit.ng } else { -hit.ng };
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    let dir = sample_cosine_hemisphere(side * hit.ns, u);
+    if side * dir.dot(hit.ng) <= 0.0 {
+        return ABSORBED;
+    }
     Scatter {
         ok: true,
-        dir: sample_cosine_hemisphere(n, u),
+        dir,
         weight: xyz(mat.albedo),
     }
 }
+
+/// The path ends here.
+const ABSORBED: Scatter = Scatter {
+    ok: false,
+    dir: Vec3::ZERO,
+    weight: Vec3::ZERO,
+};
 
 pub fn scatter(mat: &Material, _ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
     match mat.tag {
         MAT_LAMBERTIAN => scatter_lambertian(mat, hit, u),
         // emissive and unknown materials absorb
-        _ => Scatter {
-            ok: false,
-            dir: Vec3::ZERO,
-            weight: Vec3::ZERO,
-        },
+        _ => ABSORBED,
     }
 }

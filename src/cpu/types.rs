@@ -1,6 +1,6 @@
 //! Mirrors the non-record structs of `shaders/shared/types.wgsl`.
 
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 pub use crate::scene::records::{FAR, NO_HIT};
 
@@ -29,7 +29,11 @@ pub struct Candidate {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Hit {
     pub p: Vec3,
+    /// Geometric normal on the front side.
     pub ng: Vec3,
+    /// Shading normal, on the same side as `ng`.
+    pub ns: Vec3,
+    pub uv: Vec2,
     pub front_face: bool,
     pub material: u32,
     /// Bound on the absolute error of each coordinate of p.

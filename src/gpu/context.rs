@@ -24,6 +24,21 @@ pub enum GpuError {
         needed_mib: u64,
         limit_mib: u64,
     },
+    #[error(
+        "the scene's {what} buffer needs {needed_mib} MiB, more than this adapter's \
+         {limit_mib} MiB per storage binding; use fewer triangles or --backend cpu"
+    )]
+    SceneTooLarge {
+        what: &'static str,
+        needed_mib: u64,
+        limit_mib: u64,
+    },
+    #[error(
+        "testing every primitive on every ray (--no-bvh) would run {iterations} loop \
+         iterations per path, more than the {limit} that llvmpipe (lavapipe) runs before it \
+         silently stops a shader's loops; use the BVH or --backend cpu"
+    )]
+    LoopLimit { iterations: u64, limit: u64 },
     #[error(transparent)]
     Shader(#[from] super::shader::ShaderError),
 }

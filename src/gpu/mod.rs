@@ -1,6 +1,7 @@
 //! The GPU backend: wgpu on Vulkan. Reads `scene::records`; never imports the CPU backend.
 
 pub mod context;
+pub mod kernel;
 pub mod render;
 pub mod shader;
 

@@ -18,12 +18,14 @@ pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
 const WORKGROUP: u32 = 8;
 
 /// Binding numbers of `shaders/shared/bindings.wgsl`, in order.
-const BINDINGS: [(u32, wgpu::BufferBindingType); 5] = [
+const BINDINGS: [(u32, wgpu::BufferBindingType); 7] = [
     (0, wgpu::BufferBindingType::Uniform),
     (1, wgpu::BufferBindingType::Storage { read_only: true }),
     (2, wgpu::BufferBindingType::Storage { read_only: true }),
     (3, wgpu::BufferBindingType::Storage { read_only: true }),
     (4, wgpu::BufferBindingType::Storage { read_only: false }),
+    (5, wgpu::BufferBindingType::Storage { read_only: true }),
+    (6, wgpu::BufferBindingType::Storage { read_only: true }),
 ];
 
 pub struct GpuRenderer {
@@ -84,28 +86,14 @@ impl GpuRenderer {
                 limit_mib: limit >> 20,
             });
         }
+        check_scene_fits(device, scene)?;
+        check_loop_limit(&ctx, scene, true)?;
         let wgsl = shader::trace_shader()?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(wgsl.into()),
         });
-        let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = BINDINGS
-            .iter()
-            .map(|&(binding, ty)| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty,
-                    has_dynamic_offset: false,
-                    min_binding_size: None,
-                },
-                count: None,
-            })
-            .collect();
-        let bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("trace bindings"),
-            entries: &layout_entries,
-        });
+        let bgl = scene_layout(device);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("trace layout"),
             bind_group_layouts: &[Some(&bgl)],
@@ -120,15 +108,6 @@ impl GpuRenderer {
             cache: None,
         });
 
-        let params = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("params"),
-            size: std::mem::size_of::<Params>() as u64,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let primitives = storage_buffer(device, "primitives", &scene.primitives);
-        let materials = storage_buffer(device, "materials", &scene.materials);
-        let emitters = storage_buffer(device, "emitters", &scene.emitters);
         let accum = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulation"),
             size: accum_size,
@@ -141,20 +120,10 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let buffers = [&params, &primitives, &materials, &emitters, &accum];
-        let entries: Vec<wgpu::BindGroupEntry> = BINDINGS
-            .iter()
-            .zip(buffers)
-            .map(|(&(binding, _), buf)| wgpu::BindGroupEntry {
-                binding,
-                resource: buf.as_entire_binding(),
-            })
-            .collect();
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("trace bind group"),
-            layout: &bgl,
-            entries: &entries,
-        });
+        let SceneBindings {
+            params,
+            group: bind_group,
+        } = scene_bindings(device, &bgl, scene, &accum);
         Ok(Self {
             tiles: tiles(scene.width, scene.height),
             scene: scene.clone(),
@@ -224,24 +193,149 @@ impl GpuRenderer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         encoder.copy_buffer_to_buffer(&self.accum, 0, &self.readback, 0, self.accum.size());
         self.ctx.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        self.readback
-            .slice(..)
-            .map_async(wgpu::MapMode::Read, move |r| {
-                let _ = tx.send(r);
-            });
-        self.wait()?;
-        rx.recv()
-            .map_err(|e| GpuError::Readback(e.to_string()))?
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        let data = {
-            let view = self
-                .readback
-                .get_mapped_range(..)
-                .map_err(|e| GpuError::Readback(e.to_string()))?;
-            bytemuck::cast_slice::<u8, [f32; 4]>(&view).to_vec()
-        };
-        self.readback.unmap();
-        Ok(data)
+        read_mapped(&self.ctx.device, &self.readback)
     }
+}
+
+/// Loop iterations llvmpipe runs per shader invocation, counted over all loops together,
+/// before it ends them silently (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`).
+pub const LLVMPIPE_LOOP_LIMIT: u64 = 65535;
+
+/// Refuses work that llvmpipe would cut short: without the BVH, a path runs about
+/// max_depth x primitives loop iterations.
+pub(crate) fn check_loop_limit(
+    ctx: &GpuContext,
+    scene: &FlatScene,
+    paths: bool,
+) -> Result<(), GpuError> {
+    if scene.use_bvh || !ctx.info.name.contains("llvmpipe") {
+        return Ok(());
+    }
+    let rays = if paths { scene.max_depth as u64 } else { 1 };
+    let iterations = rays * (scene.primitives.len() as u64 + 1);
+    if iterations > LLVMPIPE_LOOP_LIMIT {
+        return Err(GpuError::LoopLimit {
+            iterations,
+            limit: LLVMPIPE_LOOP_LIMIT,
+        });
+    }
+    Ok(())
+}
+
+/// Refuses a scene whose buffers exceed the adapter's storage binding limit (wgpu's default
+/// error handler would panic).
+pub(crate) fn check_scene_fits(device: &wgpu::Device, scene: &FlatScene) -> Result<(), GpuError> {
+    let limits = device.limits();
+    let limit = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    for (what, bytes) in [
+        ("primitives", std::mem::size_of_val(&scene.primitives[..])),
+        ("bvh", std::mem::size_of_val(&scene.bvh[..])),
+        ("shape_data", std::mem::size_of_val(&scene.shape_data[..])),
+    ] {
+        if bytes as u64 > limit {
+            return Err(GpuError::SceneTooLarge {
+                what,
+                needed_mib: (bytes as u64).div_ceil(1 << 20),
+                limit_mib: limit >> 20,
+            });
+        }
+    }
+    Ok(())
+}
+
+/// The layout of group 0, `shaders/shared/bindings.wgsl`, shared by every pipeline.
+pub(crate) fn scene_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = BINDINGS
+        .iter()
+        .map(|&(binding, ty)| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty,
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+        .collect();
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("trace bindings"),
+        entries: &layout_entries,
+    })
+}
+
+/// Group 0 bound to a scene's buffers; `params` is written before each dispatch.
+pub(crate) struct SceneBindings {
+    pub params: wgpu::Buffer,
+    pub group: wgpu::BindGroup,
+}
+
+/// Uploads a scene's records and binds them, with `accum` as the accumulation buffer.
+pub(crate) fn scene_bindings(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    scene: &FlatScene,
+    accum: &wgpu::Buffer,
+) -> SceneBindings {
+    let params = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("params"),
+        size: std::mem::size_of::<Params>() as u64,
+        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let primitives = storage_buffer(device, "primitives", &scene.primitives);
+    let materials = storage_buffer(device, "materials", &scene.materials);
+    let emitters = storage_buffer(device, "emitters", &scene.emitters);
+    let bvh = storage_buffer(device, "bvh", &scene.bvh);
+    let shape_data = storage_buffer(device, "shape_data", &scene.shape_data);
+    let buffers = [
+        &params,
+        &primitives,
+        &materials,
+        &emitters,
+        accum,
+        &bvh,
+        &shape_data,
+    ];
+    let entries: Vec<wgpu::BindGroupEntry> = BINDINGS
+        .iter()
+        .zip(buffers)
+        .map(|(&(binding, _), buf)| wgpu::BindGroupEntry {
+            binding,
+            resource: buf.as_entire_binding(),
+        })
+        .collect();
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene bind group"),
+        layout,
+        entries: &entries,
+    });
+    SceneBindings { params, group }
+}
+
+/// Maps a MAP_READ buffer whose copy has been submitted, waits, and returns its contents.
+pub(crate) fn read_mapped<T: bytemuck::Pod>(
+    device: &wgpu::Device,
+    buffer: &wgpu::Buffer,
+) -> Result<Vec<T>, GpuError> {
+    let (tx, rx) = std::sync::mpsc::channel();
+    buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        let _ = tx.send(r);
+    });
+    device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| GpuError::Readback(e.to_string()))?
+        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    let data = {
+        let view = buffer
+            .get_mapped_range(..)
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        bytemuck::cast_slice::<u8, T>(&view).to_vec()
+    };
+    buffer.unmap();
+    Ok(data)
 }

@@ -10,6 +10,7 @@ use std::collections::BTreeSet;
 /// Every shader file, by the name `#import` uses; embedded so the binary runs from anywhere.
 pub const SHADER_FILES: &[(&str, &str)] = &[
     ("trace", include_str!("../../shaders/trace.wgsl")),
+    ("kernel", include_str!("../../shaders/kernel.wgsl")),
     (
         "shared/bindings",
         include_str!("../../shaders/shared/bindings.wgsl"),
@@ -34,7 +35,7 @@ pub const SHADER_FILES: &[(&str, &str)] = &[
 ];
 
 /// Entry-point files: each is assembled into one shader module.
-pub const ENTRY_SHADERS: &[&str] = &["trace"];
+pub const ENTRY_SHADERS: &[&str] = &["trace", "kernel"];
 
 #[derive(Debug, thiserror::Error)]
 pub enum ShaderError {
@@ -151,4 +152,9 @@ pub fn validate(name: &str, wgsl: &str) -> Result<naga::Module, ShaderError> {
 /// The trace shader for a scene.
 pub fn trace_shader() -> Result<String, ShaderError> {
     preprocess("trace", &BTreeSet::new())
+}
+
+/// The intersection kernel used by tests (`shaders/kernel.wgsl`), assembled.
+pub fn kernel_shader() -> Result<String, ShaderError> {
+    preprocess("kernel", &BTreeSet::new())
 }

@@ -94,7 +94,38 @@ pub enum MaterialDesc {
     },
 }
 
-/// `[[objects]]` entries, selected by `type`.
+/// `transform = { scale, rotate, translate }`: scale, then rotate about X, Y, Z (degrees),
+/// then translate, all about the origin.
+#[derive(Debug, Clone, Copy, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TransformDesc {
+    #[serde(default)]
+    pub scale: Option<ScaleDesc>,
+    #[serde(default)]
+    pub rotate: [f32; 3],
+    #[serde(default)]
+    pub translate: [f32; 3],
+}
+
+/// A uniform scale factor or one per axis.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(untagged)]
+pub enum ScaleDesc {
+    Uniform(f32),
+    Axes([f32; 3]),
+}
+
+impl ScaleDesc {
+    pub fn axes(self) -> [f32; 3] {
+        match self {
+            ScaleDesc::Uniform(s) => [s; 3],
+            ScaleDesc::Axes(a) => a,
+        }
+    }
+}
+
+/// `[[objects]]` entries, selected by `type`. Every object names a `material` and may carry
+/// a `transform`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum ObjectDesc {
@@ -102,17 +133,77 @@ pub enum ObjectDesc {
         center: [f32; 3],
         radius: f32,
         material: String,
+        transform: Option<TransformDesc>,
     },
-    /// Front side: right-hand-rule normal of the vertex order.
+    /// Front side: right-hand-rule normal of the vertex order. `uvs` default to (0, 0),
+    /// (1, 0), (0, 1).
     Triangle {
         vertices: [[f32; 3]; 3],
+        uvs: Option<[[f32; 2]; 3]>,
         material: String,
+        transform: Option<TransformDesc>,
     },
     /// Planar and convex; split into a triangle fan. Front side as for triangles.
     Polygon {
         vertices: Vec<[f32; 3]>,
         material: String,
+        transform: Option<TransformDesc>,
     },
+    /// Four vertices; four triangles facing outward.
+    Tetrahedron {
+        vertices: [[f32; 3]; 4],
+        material: String,
+        transform: Option<TransformDesc>,
+    },
+    /// Infinite plane through `point`; front side along `normal`. uv = `uv_scale` x the
+    /// coordinates in a tangent frame.
+    Plane {
+        point: [f32; 3],
+        normal: [f32; 3],
+        #[serde(default = "one")]
+        uv_scale: f32,
+        material: String,
+        transform: Option<TransformDesc>,
+    },
+    /// Axis-aligned box from `min` to `max` (before its transform).
+    Box {
+        min: [f32; 3],
+        max: [f32; 3],
+        material: String,
+        transform: Option<TransformDesc>,
+    },
+    /// Finite cylinder between the centers of its end disks.
+    Cylinder {
+        base: [f32; 3],
+        top: [f32; 3],
+        radius: f32,
+        #[serde(default = "yes")]
+        caps: bool,
+        material: String,
+        transform: Option<TransformDesc>,
+    },
+    /// Disk; front side along `normal`.
+    Disk {
+        center: [f32; 3],
+        normal: [f32; 3],
+        radius: f32,
+        material: String,
+        transform: Option<TransformDesc>,
+    },
+    /// A Wavefront OBJ file, `path` relative to the scene file.
+    Mesh {
+        path: String,
+        material: String,
+        transform: Option<TransformDesc>,
+    },
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+fn yes() -> bool {
+    true
 }
 
 impl ObjectDesc {
@@ -122,6 +213,12 @@ impl ObjectDesc {
             ObjectDesc::Sphere { .. } => "sphere",
             ObjectDesc::Triangle { .. } => "triangle",
             ObjectDesc::Polygon { .. } => "polygon",
+            ObjectDesc::Tetrahedron { .. } => "tetrahedron",
+            ObjectDesc::Plane { .. } => "plane",
+            ObjectDesc::Box { .. } => "box",
+            ObjectDesc::Cylinder { .. } => "cylinder",
+            ObjectDesc::Disk { .. } => "disk",
+            ObjectDesc::Mesh { .. } => "mesh",
         }
     }
 
@@ -129,7 +226,27 @@ impl ObjectDesc {
         match self {
             ObjectDesc::Sphere { material, .. }
             | ObjectDesc::Triangle { material, .. }
-            | ObjectDesc::Polygon { material, .. } => material,
+            | ObjectDesc::Polygon { material, .. }
+            | ObjectDesc::Tetrahedron { material, .. }
+            | ObjectDesc::Plane { material, .. }
+            | ObjectDesc::Box { material, .. }
+            | ObjectDesc::Cylinder { material, .. }
+            | ObjectDesc::Disk { material, .. }
+            | ObjectDesc::Mesh { material, .. } => material,
+        }
+    }
+
+    pub fn transform(&self) -> Option<TransformDesc> {
+        match self {
+            ObjectDesc::Sphere { transform, .. }
+            | ObjectDesc::Triangle { transform, .. }
+            | ObjectDesc::Polygon { transform, .. }
+            | ObjectDesc::Tetrahedron { transform, .. }
+            | ObjectDesc::Plane { transform, .. }
+            | ObjectDesc::Box { transform, .. }
+            | ObjectDesc::Cylinder { transform, .. }
+            | ObjectDesc::Disk { transform, .. }
+            | ObjectDesc::Mesh { transform, .. } => *transform,
         }
     }
 }

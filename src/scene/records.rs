@@ -9,6 +9,32 @@ use bytemuck::{Pod, Zeroable};
 /// Primitive tags: the cases of the `switch` in `intersect.wgsl`.
 pub const PRIM_SPHERE: u32 = 0;
 pub const PRIM_TRIANGLE: u32 = 1;
+pub const PRIM_PLANE: u32 = 2;
+pub const PRIM_BOX: u32 = 3;
+pub const PRIM_CYLINDER: u32 = 4;
+pub const PRIM_DISK: u32 = 5;
+
+/// Primitive flag: `data` indexes a world-to-object transform in `shape_data` (analytic
+/// shapes whose transform cannot be baked exactly).
+pub const PRIM_FLAG_TRANSFORM: u32 = 1;
+/// Primitive flag (triangles): `data` indexes per-vertex attributes in `shape_data`.
+pub const PRIM_FLAG_ATTRIBUTES: u32 = 2;
+/// Primitive flag (triangles with attributes): the vertex normals are meaningful.
+pub const PRIM_FLAG_SHADING_NORMALS: u32 = 4;
+/// Primitive flag (cylinders): closed by two cap disks.
+pub const PRIM_FLAG_CAPS: u32 = 8;
+
+/// `shape_data` entries of one transform: world-to-object rows, then object-to-world rows.
+pub const TRANSFORM_ENTRIES: u32 = 6;
+/// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
+/// (v0, v1, v2, 0).
+pub const ATTRIBUTE_ENTRIES: u32 = 4;
+/// `Primitive::data` of a primitive with no extra data.
+pub const NO_DATA: u32 = u32::MAX;
+
+/// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
+/// within this depth.
+pub const BVH_STACK_SIZE: u32 = 32;
 
 /// Material tags: the cases of the `switch` in `materials.wgsl`.
 pub const MAT_LAMBERTIAN: u32 = 0;
@@ -22,14 +48,21 @@ pub const NO_HIT: u32 = u32::MAX;
 /// Largest finite f32: "no intersection" without relying on infinities.
 pub const FAR: f32 = f32::MAX;
 
-/// A tagged primitive. Sphere: `a` = (center, radius). Triangle: vertices `a`, `b`, `c`.
+/// A tagged primitive (object space when `PRIM_FLAG_TRANSFORM` is set):
+/// - sphere: `a` = (center, radius)
+/// - triangle: vertices `a`, `b`, `c`
+/// - plane: `a` = (point, uv scale), `b` = (unit normal, 0)
+/// - box: `a` = (min, 0), `b` = (max, 0)
+/// - cylinder: `a` = (base center, radius), `b` = (top center, 0)
+/// - disk: `a` = (center, radius), `b` = (unit normal, 0)
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Primitive {
     pub tag: u32,
     pub material: u32,
     pub flags: u32,
-    pub pad: u32,
+    /// First `shape_data` entry of the transform or the vertex attributes, else `NO_DATA`.
+    pub data: u32,
     pub a: [f32; 4],
     pub b: [f32; 4],
     pub c: [f32; 4],
@@ -84,7 +117,50 @@ pub struct Params {
     pub tile_y: u32,
     pub tile_width: u32,
     pub tile_height: u32,
+    /// Primitives `0..num_unbounded` (planes) are tested on every ray; the rest sit in the BVH.
+    pub num_unbounded: u32,
+    /// 1: traverse the BVH; 0: test every primitive (for benchmarks and tests).
+    pub use_bvh: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+}
+
+/// One node of the flattened BVH, in depth-first order. Interior (`count` = 0): the first
+/// child is the next node, the second is `nodes[offset]`. Leaf: primitives
+/// `offset..offset + count`. The vec3/u32 pairs pack into 16 bytes on both sides.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub lo: [f32; 3],
+    pub offset: u32,
+    pub hi: [f32; 3],
+    pub count: u32,
+}
+
+/// One ray of the intersection kernel (`shaders/kernel.wgsl`); `.w` unused.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct KernelRay {
+    pub origin: [f32; 4],
+    pub dir: [f32; 4],
+}
+
+/// What the intersection kernel reports for one ray: the closest-hit search and the
+/// shading record (`prim` = `NO_HIT` on a miss, the rest then zero).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct KernelHit {
+    pub t: f32,
+    pub prim: u32,
+    pub front_face: u32,
     pub pad: u32,
+    /// Hit point, `.w` = error bound.
+    pub p: [f32; 4],
+    pub ng: [f32; 4],
+    pub ns: [f32; 4],
+    /// uv in `.xy`, the candidate's own (u, v) in `.zw`.
+    pub uv: [f32; 4],
 }
 
 /// Size and field offsets of one record, for the layout test against naga.
@@ -113,7 +189,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             tag,
             material,
             flags,
-            pad,
+            data,
             a,
             b,
             c
@@ -150,7 +226,28 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             tile_y,
             tile_width,
             tile_height,
-            pad
+            num_unbounded,
+            use_bvh,
+            pad0,
+            pad1,
+            pad2
+        }),
+        layout!(KernelRay { origin, dir }),
+        layout!(KernelHit {
+            t,
+            prim,
+            front_face,
+            pad,
+            p,
+            ng,
+            ns,
+            uv
+        }),
+        layout!(BvhNode {
+            lo,
+            offset,
+            hi,
+            count
         }),
     ]
 }

@@ -17,6 +17,12 @@ pub fn gpu_engine(scene: &FlatScene) -> Engine {
     }
 }
 
+/// Opens the first Vulkan adapter or fails the test.
+pub fn gpu_context() -> wgtrace::gpu::GpuContext {
+    wgtrace::gpu::GpuContext::new(0)
+        .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter: {e}"))
+}
+
 /// Renders all passes of `scene` on `engine` and returns the accumulation.
 pub fn render(mut engine: Engine, scene: &FlatScene) -> Accumulation {
     render_progressive(&mut engine, scene, |_, _| {
@@ -38,6 +44,38 @@ pub fn render_cpu(scene: &FlatScene) -> Accumulation {
 pub fn scene_from_str(src: &str) -> FlatScene {
     wgtrace::load_scene_str(src, Path::new("test.toml"), &Overrides::default())
         .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Parses scene text with every primitive tested on every ray (no BVH).
+pub fn scene_without_bvh(src: &str) -> FlatScene {
+    let o = Overrides {
+        no_bvh: true,
+        ..Default::default()
+    };
+    wgtrace::load_scene_str(src, Path::new("test.toml"), &o).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Parses scene text as if it were the file `rel` of the repository (mesh paths resolve
+/// against its folder).
+pub fn scene_from_file_str(src: &str, rel: &str) -> FlatScene {
+    wgtrace::load_scene_str(src, &repo_path(rel), &Overrides::default())
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// A uniform f32 in [0, 1) from a xorshift state (tests need no rand crate).
+pub fn random_f32(state: &mut u32) -> f32 {
+    *state ^= *state << 13;
+    *state ^= *state >> 17;
+    *state ^= *state << 5;
+    (*state >> 8) as f32 / (1u32 << 24) as f32
+}
+
+/// A uniform direction on the unit sphere.
+pub fn random_unit(state: &mut u32) -> glam::Vec3 {
+    let z = 2.0 * random_f32(state) - 1.0;
+    let phi = 2.0 * std::f32::consts::PI * random_f32(state);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    glam::Vec3::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 pub fn repo_path(rel: &str) -> PathBuf {

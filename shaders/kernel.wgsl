@@ -1,0 +1,47 @@
+// Intersection kernel for tests: one ray per invocation through the closest-hit search and
+// surface_at, reporting everything the CPU reference computes for the same ray. Group 0 is
+// the scene, as in trace.wgsl; group 1 holds the rays and the results.
+#import shared/bindings
+#import shared/intersect
+#import shared/types
+
+struct KernelRay {
+    origin: vec4<f32>,
+    dir: vec4<f32>,
+}
+
+struct KernelHit {
+    t: f32,
+    prim: u32,
+    front_face: u32,
+    pad: u32,
+    // hit point, .w = error bound
+    p: vec4<f32>,
+    ng: vec4<f32>,
+    ns: vec4<f32>,
+    // uv in .xy, the candidate's (u, v) in .zw
+    uv: vec4<f32>,
+}
+
+@group(1) @binding(0) var<storage, read> rays: array<KernelRay>;
+@group(1) @binding(1) var<storage, read_write> hits: array<KernelHit>;
+
+@compute @workgroup_size(64, 1, 1)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= arrayLength(&rays)) {
+        return;
+    }
+    let ray = Ray(rays[i].origin.xyz, rays[i].dir.xyz);
+    let cand = intersect_scene(ray);
+    var out = KernelHit(cand.t, cand.prim, 0u, 0u, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    if (cand.prim != NO_HIT) {
+        let h = surface_at(ray, cand);
+        out.front_face = select(0u, 1u, h.front_face);
+        out.p = vec4<f32>(h.p, h.err);
+        out.ng = vec4<f32>(h.ng, 0.0);
+        out.ns = vec4<f32>(h.ns, 0.0);
+        out.uv = vec4<f32>(h.uv, cand.u, cand.v);
+    }
+    hits[i] = out;
+}

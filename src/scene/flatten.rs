@@ -1,0 +1,531 @@
+//! Flattening: a validated scene into the records both backends read. Polygonal shapes and
+//! similarity transforms are baked into world space; analytic shapes under other transforms
+//! keep an object-space record and a transform in `shape_data`. Bounded primitives are
+//! ordered by the BVH built over them; planes come first and stay outside it.
+
+use glam::{Affine3A, Mat3, Vec2, Vec3};
+
+use super::bvh::{self, Aabb};
+use super::format::{MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::mesh::MeshData;
+use super::records::{self, BvhNode, Emitter, Material, Primitive, NO_DATA};
+use super::{CameraFrame, FlatScene};
+
+fn material_record(m: &MaterialDesc) -> Material {
+    match *m {
+        MaterialDesc::Lambertian { albedo } => Material {
+            tag: records::MAT_LAMBERTIAN,
+            albedo: [albedo[0], albedo[1], albedo[2], 0.0],
+            ..Default::default()
+        },
+        MaterialDesc::Emissive {
+            radiance,
+            two_sided,
+        } => Material {
+            tag: records::MAT_EMISSIVE,
+            flags: if two_sided {
+                records::MAT_FLAG_TWO_SIDED
+            } else {
+                0
+            },
+            emission: [radiance[0], radiance[1], radiance[2], 0.0],
+            ..Default::default()
+        },
+    }
+}
+
+/// Object-to-world matrix of a transform: translate * Rz * Ry * Rx * scale.
+pub fn transform_matrix(t: &TransformDesc) -> Affine3A {
+    let s = t.scale.map_or([1.0; 3], |s| s.axes());
+    let [rx, ry, rz] = t.rotate.map(f32::to_radians);
+    let rotation =
+        Mat3::from_rotation_z(rz) * Mat3::from_rotation_y(ry) * Mat3::from_rotation_x(rx);
+    Affine3A::from_mat3_translation(
+        rotation * Mat3::from_diagonal(Vec3::from(s)),
+        t.translate.into(),
+    )
+}
+
+/// A transform and what can be baked exactly under it.
+struct Placement {
+    m: Affine3A,
+    /// Inverse transpose of the linear part: maps normals.
+    normal_m: Mat3,
+    /// |scale| when the scale is uniform (a similarity: spheres stay spheres).
+    uniform: Option<f32>,
+    /// No rotation: axis-aligned boxes stay axis-aligned.
+    axis_aligned: bool,
+    /// Orientation reversed (negative determinant): triangle windings are swapped to keep
+    /// the front side outward.
+    mirrored: bool,
+}
+
+impl Placement {
+    fn new(t: Option<TransformDesc>) -> Self {
+        let t = t.unwrap_or_default();
+        let m = transform_matrix(&t);
+        let s = t.scale.map_or([1.0; 3], |s| s.axes()).map(f32::abs);
+        let linear = Mat3::from(m.matrix3);
+        Placement {
+            m,
+            normal_m: linear.inverse().transpose(),
+            uniform: (s[0] == s[1] && s[1] == s[2]).then_some(s[0]),
+            axis_aligned: t.rotate == [0.0; 3],
+            mirrored: linear.determinant() < 0.0,
+        }
+    }
+
+    fn point(&self, p: [f32; 3]) -> Vec3 {
+        self.m.transform_point3(p.into())
+    }
+
+    fn normal(&self, n: [f32; 3]) -> Vec3 {
+        (self.normal_m * Vec3::from(n)).normalize()
+    }
+}
+
+fn v4(v: Vec3, w: f32) -> [f32; 4] {
+    v.extend(w).to_array()
+}
+
+/// Collects primitives (planes apart) and their shape data.
+#[derive(Default)]
+struct Builder {
+    unbounded: Vec<Primitive>,
+    bounded: Vec<Primitive>,
+    shape_data: Vec<[f32; 4]>,
+}
+
+impl Builder {
+    /// An analytic primitive in object space with its transform (PRIM_FLAG_TRANSFORM).
+    fn push_transformed(&mut self, mut prim: Primitive, at: &Placement) {
+        let w2o = at.m.inverse();
+        prim.flags |= records::PRIM_FLAG_TRANSFORM;
+        prim.data = self.shape_data.len() as u32;
+        for m in [w2o, at.m] {
+            let (l, t) = (Mat3::from(m.matrix3), Vec3::from(m.translation));
+            for r in 0..3 {
+                self.shape_data.push(v4(l.row(r), t[r]));
+            }
+        }
+        self.bounded.push(prim);
+    }
+
+    /// A triangle; `attributes` = per-vertex (normal, uv) when it has any.
+    fn push_triangle(
+        &mut self,
+        v: [Vec3; 3],
+        attributes: Option<([Vec3; 3], [Vec2; 3])>,
+        smooth: bool,
+        material: u32,
+    ) {
+        let mut prim = Primitive {
+            tag: records::PRIM_TRIANGLE,
+            material,
+            data: NO_DATA,
+            a: v4(v[0], 0.0),
+            b: v4(v[1], 0.0),
+            c: v4(v[2], 0.0),
+            ..Default::default()
+        };
+        if let Some((n, uv)) = attributes {
+            prim.flags |= records::PRIM_FLAG_ATTRIBUTES;
+            if smooth {
+                prim.flags |= records::PRIM_FLAG_SHADING_NORMALS;
+            }
+            prim.data = self.shape_data.len() as u32;
+            for k in 0..3 {
+                self.shape_data.push(v4(n[k], uv[k].x));
+            }
+            self.shape_data.push([uv[0].y, uv[1].y, uv[2].y, 0.0]);
+        }
+        self.bounded.push(prim);
+    }
+
+    /// A triangle given in object space, baked into world space. A mirroring transform swaps
+    /// two corners so the front side stays the mirror image of the original front.
+    fn push_placed_triangle(
+        &mut self,
+        at: &Placement,
+        mut v: [Vec3; 3],
+        mut attributes: Option<([Vec3; 3], [Vec2; 3])>,
+        smooth: bool,
+        material: u32,
+    ) {
+        v = v.map(|p| at.m.transform_point3(p));
+        if let Some((n, _)) = attributes.as_mut() {
+            for k in n.iter_mut() {
+                let m = at.normal_m * *k;
+                *k = if m.length_squared() > 0.0 {
+                    m.normalize()
+                } else {
+                    m
+                };
+            }
+        }
+        if at.mirrored {
+            v.swap(1, 2);
+            if let Some((n, uv)) = attributes.as_mut() {
+                n.swap(1, 2);
+                uv.swap(1, 2);
+            }
+        }
+        self.push_triangle(v, attributes, smooth, material);
+    }
+
+    fn push_object(&mut self, o: &ObjectDesc, mesh: Option<&MeshData>, material: u32) {
+        let at = Placement::new(o.transform());
+        let base = Primitive {
+            material,
+            data: NO_DATA,
+            ..Default::default()
+        };
+        match o {
+            ObjectDesc::Sphere { center, radius, .. } => {
+                let mut prim = Primitive {
+                    tag: records::PRIM_SPHERE,
+                    ..base
+                };
+                if let Some(s) = at.uniform {
+                    prim.a = v4(at.point(*center), radius * s);
+                    self.bounded.push(prim);
+                } else {
+                    prim.a = v4((*center).into(), *radius);
+                    self.push_transformed(prim, &at);
+                }
+            }
+            ObjectDesc::Triangle { vertices, uvs, .. } => {
+                let v = vertices.map(Vec3::from);
+                let attributes = uvs.map(|uv| ([Vec3::ZERO; 3], uv.map(Vec2::from)));
+                self.push_placed_triangle(&at, v, attributes, false, material);
+            }
+            ObjectDesc::Polygon { vertices, .. } => {
+                // planar uvs: coordinates from vertex 0 along the first edge and across it
+                let pts: Vec<Vec3> = vertices.iter().map(|&p| Vec3::from(p)).collect();
+                let n = super::validate::polygon_normal(&pts).normalize();
+                let t = (pts[1] - pts[0]).normalize();
+                let b = n.cross(t);
+                let uv = |p: Vec3| Vec2::new((p - pts[0]).dot(t), (p - pts[0]).dot(b));
+                for i in 1..pts.len() - 1 {
+                    let v = [pts[0], pts[i], pts[i + 1]];
+                    let attributes = Some(([Vec3::ZERO; 3], v.map(uv)));
+                    self.push_placed_triangle(&at, v, attributes, false, material);
+                }
+            }
+            ObjectDesc::Tetrahedron { vertices, .. } => {
+                let p = vertices.map(Vec3::from);
+                for k in 0..4 {
+                    // the face opposite vertex k, wound so its normal points away from it
+                    let mut f = [p[(k + 1) % 4], p[(k + 2) % 4], p[(k + 3) % 4]];
+                    if (f[1] - f[0]).cross(f[2] - f[0]).dot(p[k] - f[0]) > 0.0 {
+                        f.swap(1, 2);
+                    }
+                    self.push_placed_triangle(&at, f, None, false, material);
+                }
+            }
+            ObjectDesc::Plane {
+                point,
+                normal,
+                uv_scale,
+                ..
+            } => self.unbounded.push(Primitive {
+                tag: records::PRIM_PLANE,
+                a: v4(at.point(*point), *uv_scale),
+                b: v4(at.normal(*normal), 0.0),
+                ..base
+            }),
+            ObjectDesc::Box { min, max, .. } => {
+                let mut prim = Primitive {
+                    tag: records::PRIM_BOX,
+                    ..base
+                };
+                if at.axis_aligned {
+                    let (p, q) = (at.point(*min), at.point(*max));
+                    prim.a = v4(p.min(q), 0.0);
+                    prim.b = v4(p.max(q), 0.0);
+                    self.bounded.push(prim);
+                } else {
+                    prim.a = v4((*min).into(), 0.0);
+                    prim.b = v4((*max).into(), 0.0);
+                    self.push_transformed(prim, &at);
+                }
+            }
+            ObjectDesc::Cylinder {
+                base: b,
+                top,
+                radius,
+                caps,
+                ..
+            } => {
+                let mut prim = Primitive {
+                    tag: records::PRIM_CYLINDER,
+                    flags: if *caps { records::PRIM_FLAG_CAPS } else { 0 },
+                    ..base
+                };
+                if let Some(s) = at.uniform {
+                    prim.a = v4(at.point(*b), radius * s);
+                    prim.b = v4(at.point(*top), 0.0);
+                    self.bounded.push(prim);
+                } else {
+                    prim.a = v4((*b).into(), *radius);
+                    prim.b = v4((*top).into(), 0.0);
+                    self.push_transformed(prim, &at);
+                }
+            }
+            ObjectDesc::Disk {
+                center,
+                normal,
+                radius,
+                ..
+            } => {
+                let mut prim = Primitive {
+                    tag: records::PRIM_DISK,
+                    ..base
+                };
+                if let Some(s) = at.uniform {
+                    prim.a = v4(at.point(*center), radius * s);
+                    prim.b = v4(at.normal(*normal), 0.0);
+                    self.bounded.push(prim);
+                } else {
+                    prim.a = v4((*center).into(), *radius);
+                    prim.b = v4(Vec3::from(*normal).normalize(), 0.0);
+                    self.push_transformed(prim, &at);
+                }
+            }
+            ObjectDesc::Mesh { .. } => {
+                let mesh = mesh.expect("meshes are loaded before flattening");
+                let smooth = !mesh.normals.is_empty();
+                let has_attributes = smooth || !mesh.uvs.is_empty();
+                self.bounded.reserve(mesh.triangles.len());
+                for t in &mesh.triangles {
+                    let v = t.map(|i| mesh.positions[i as usize]);
+                    let attributes = has_attributes.then(|| {
+                        let n = if smooth {
+                            t.map(|i| mesh.normals[i as usize])
+                        } else {
+                            [Vec3::ZERO; 3]
+                        };
+                        let uv = if mesh.uvs.is_empty() {
+                            [Vec2::ZERO, Vec2::X, Vec2::Y]
+                        } else {
+                            t.map(|i| mesh.uvs[i as usize])
+                        };
+                        (n, uv)
+                    });
+                    self.push_placed_triangle(&at, v, attributes, smooth, material);
+                }
+            }
+        }
+    }
+}
+
+/// Half-extent along each world axis of a disk of radius r with unit normal n.
+fn disk_extent(n: Vec3, r: f32) -> Vec3 {
+    r * (Vec3::ONE - n * n).max(Vec3::ZERO).powf(0.5)
+}
+
+/// Object-space bounds of a bounded primitive.
+fn local_bounds(p: &Primitive) -> Aabb {
+    let (a, b, c) = (
+        Vec3::from_slice(&p.a),
+        Vec3::from_slice(&p.b),
+        Vec3::from_slice(&p.c),
+    );
+    let r = p.a[3];
+    let (lo, hi) = match p.tag {
+        records::PRIM_SPHERE => (a - r, a + r),
+        records::PRIM_TRIANGLE => (a.min(b).min(c), a.max(b).max(c)),
+        records::PRIM_BOX => (a, b),
+        records::PRIM_CYLINDER => {
+            let e = disk_extent((b - a).normalize(), r);
+            (a.min(b) - e, a.max(b) + e)
+        }
+        records::PRIM_DISK => {
+            let e = disk_extent(b, r);
+            (a - e, a + e)
+        }
+        _ => (Vec3::ZERO, Vec3::ZERO),
+    };
+    Aabb { lo, hi }
+}
+
+/// World-space bounds: transformed primitives bound the eight corners of their object box.
+fn world_bounds(p: &Primitive, shape_data: &[[f32; 4]]) -> Aabb {
+    let local = local_bounds(p);
+    if p.flags & records::PRIM_FLAG_TRANSFORM == 0 {
+        return local;
+    }
+    let d = p.data as usize + 3;
+    let rows = [0, 1, 2].map(|r| glam::Vec4::from_array(shape_data[d + r]));
+    let mut out = Aabb {
+        lo: Vec3::splat(f32::MAX),
+        hi: Vec3::splat(f32::MIN),
+    };
+    for k in 0..8 {
+        let corner = Vec3::select(
+            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+            local.hi,
+            local.lo,
+        )
+        .extend(1.0);
+        let q = Vec3::new(
+            rows[0].dot(corner),
+            rows[1].dot(corner),
+            rows[2].dot(corner),
+        );
+        out.lo = out.lo.min(q);
+        out.hi = out.hi.max(q);
+    }
+    out
+}
+
+/// Surface area of a primitive in world space (planes: 0, they are never emitters). A
+/// transformed primitive's area is its object-space area times |det|^(2/3), exact for
+/// similarities and an estimate otherwise.
+pub fn primitive_area(p: &Primitive, shape_data: &[[f32; 4]]) -> f32 {
+    use std::f32::consts::PI;
+    let (a, b, c) = (
+        Vec3::from_slice(&p.a),
+        Vec3::from_slice(&p.b),
+        Vec3::from_slice(&p.c),
+    );
+    let r = p.a[3];
+    let local = match p.tag {
+        records::PRIM_SPHERE => 4.0 * PI * r * r,
+        records::PRIM_TRIANGLE => 0.5 * (b - a).cross(c - a).length(),
+        records::PRIM_BOX => {
+            let e = b - a;
+            2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+        }
+        records::PRIM_CYLINDER => {
+            let caps = if p.flags & records::PRIM_FLAG_CAPS != 0 {
+                2.0 * PI * r * r
+            } else {
+                0.0
+            };
+            2.0 * PI * r * (b - a).length() + caps
+        }
+        records::PRIM_DISK => PI * r * r,
+        _ => 0.0,
+    };
+    if p.flags & records::PRIM_FLAG_TRANSFORM == 0 {
+        return local;
+    }
+    let d = p.data as usize + 3;
+    let m = Mat3::from_cols(
+        Vec3::from_slice(&shape_data[d]),
+        Vec3::from_slice(&shape_data[d + 1]),
+        Vec3::from_slice(&shape_data[d + 2]),
+    );
+    local * m.determinant().abs().powf(2.0 / 3.0)
+}
+
+fn luminance(c: [f32; 4]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// Flattens a validated scene into records; `meshes[i]` holds object i's mesh when it is one.
+pub fn flatten(file: &SceneFile, meshes: &[Option<MeshData>], use_bvh: bool) -> FlatScene {
+    let material_names: Vec<String> = file.materials.keys().cloned().collect();
+    let materials: Vec<Material> = file
+        .materials
+        .values()
+        .map(|m| material_record(m.get_ref()))
+        .collect();
+    let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
+
+    let mut builder = Builder::default();
+    for (obj, mesh) in file.objects.iter().zip(meshes) {
+        let o = obj.get_ref();
+        builder.push_object(o, mesh.as_ref(), material_index(o.material()));
+    }
+    let Builder {
+        unbounded,
+        bounded,
+        shape_data,
+    } = builder;
+
+    let boxes: Vec<Aabb> = bounded
+        .iter()
+        .map(|p| world_bounds(p, &shape_data))
+        .collect();
+    let tree = bvh::build(&boxes);
+    let num_unbounded = unbounded.len() as u32;
+    let mut primitives = unbounded;
+    primitives.extend(tree.order.iter().map(|&i| bounded[i as usize]));
+    let bvh: Vec<BvhNode> = tree
+        .nodes
+        .iter()
+        .map(|n| BvhNode {
+            offset: if n.count > 0 {
+                n.offset + num_unbounded
+            } else {
+                n.offset
+            },
+            ..*n
+        })
+        .collect();
+
+    let emitters = primitives
+        .iter()
+        .enumerate()
+        .skip(num_unbounded as usize)
+        .filter_map(|(i, p)| {
+            let mat = &materials[p.material as usize];
+            let sides = if mat.flags & records::MAT_FLAG_TWO_SIDED != 0 {
+                2.0
+            } else {
+                1.0
+            };
+            let area = primitive_area(p, &shape_data);
+            let power = luminance(mat.emission) * area * std::f32::consts::PI * sides;
+            (power > 0.0).then_some(Emitter {
+                primitive: i as u32,
+                material: p.material,
+                area,
+                power,
+            })
+        })
+        .collect();
+
+    let r = &file.render;
+    FlatScene {
+        width: r.width,
+        height: r.height,
+        spp: r.spp,
+        max_depth: r.max_depth,
+        seed: r.seed,
+        camera: camera_frame(file, r.width as f32 / r.height as f32),
+        background: file.background.color,
+        primitives,
+        materials,
+        emitters,
+        material_names,
+        bvh,
+        bvh_depth: tree.depth,
+        shape_data,
+        num_unbounded,
+        use_bvh,
+    }
+}
+
+fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
+    let c = &file.camera;
+    let origin = Vec3::from(c.look_from);
+    let to_target = Vec3::from(c.look_at) - origin;
+    let forward = to_target.normalize();
+    let right = forward.cross(Vec3::from(c.up)).normalize();
+    let up = right.cross(forward);
+    let focus_distance = c.focus_distance.unwrap_or(to_target.length());
+    let half_height = (c.vfov.to_radians() * 0.5).tan() * focus_distance;
+    CameraFrame {
+        origin,
+        right,
+        up,
+        forward,
+        half_width: half_height * aspect,
+        half_height,
+        focus_distance,
+        lens_radius: c.aperture * 0.5,
+    }
+}

@@ -1,0 +1,314 @@
+//! Validation: every problem of a parsed scene, each with its line, column and key.
+
+use glam::Vec3;
+
+use super::error::{self, Problem};
+use super::format::{MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE};
+
+/// Collects every problem of a parsed scene (not only the first).
+pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
+    let mut v = Validator {
+        src,
+        problems: Vec::new(),
+    };
+    let r = &file.render;
+    v.range_u32("render.width", r.width, 1, MAX_IMAGE_SIDE, 0);
+    v.range_u32("render.height", r.height, 1, MAX_IMAGE_SIDE, 0);
+    v.range_u32("render.spp", r.spp, 1, u32::MAX, 0);
+    v.range_u32("render.max_depth", r.max_depth, 1, MAX_DEPTH_LIMIT, 0);
+
+    let c = &file.camera;
+    v.finite3("camera.look_from", c.look_from, 0);
+    v.finite3("camera.look_at", c.look_at, 0);
+    v.finite3("camera.up", c.up, 0);
+    let forward = Vec3::from(c.look_at) - Vec3::from(c.look_from);
+    if forward.length_squared() == 0.0 {
+        v.push(0, "camera.look_at", "must differ from look_from".into());
+    } else if forward.cross(Vec3::from(c.up)).length_squared() <= 1e-12 * forward.length_squared() {
+        v.push(
+            0,
+            "camera.up",
+            "must not be parallel to the view direction".into(),
+        );
+    }
+    if !(c.vfov > 0.0 && c.vfov < 180.0) {
+        v.push(
+            0,
+            "camera.vfov",
+            format!("must be in (0, 180) degrees, got {}", c.vfov),
+        );
+    }
+    if !(c.aperture >= 0.0 && c.aperture.is_finite()) {
+        v.push(
+            0,
+            "camera.aperture",
+            format!("must be >= 0, got {}", c.aperture),
+        );
+    }
+    if let Some(fd) = c.focus_distance {
+        if !(fd > 0.0 && fd.is_finite()) {
+            v.push(0, "camera.focus_distance", format!("must be > 0, got {fd}"));
+        }
+    }
+    v.nonnegative3("background.color", file.background.color, 0);
+
+    for (name, m) in &file.materials {
+        let at = m.span().start;
+        let key = format!("materials.{name}");
+        match m.get_ref() {
+            MaterialDesc::Lambertian { albedo } => {
+                v.nonnegative3(&format!("{key}.albedo"), *albedo, at);
+                if albedo.iter().any(|&a| a > 1.0) {
+                    v.push(
+                        at,
+                        &format!("{key}.albedo"),
+                        "components must be <= 1".into(),
+                    );
+                }
+            }
+            MaterialDesc::Emissive { radiance, .. } => {
+                v.nonnegative3(&format!("{key}.radiance"), *radiance, at);
+            }
+        }
+    }
+
+    for (i, obj) in file.objects.iter().enumerate() {
+        let at = obj.span().start;
+        let key = format!("objects[{i}]");
+        let o = obj.get_ref();
+        if !file.materials.contains_key(o.material()) {
+            let known: Vec<&str> = file.materials.keys().map(String::as_str).collect();
+            v.push(
+                at,
+                &format!("{key}.material"),
+                format!(
+                    "unknown material \"{}\" (defined: {})",
+                    o.material(),
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
+                ),
+            );
+        }
+        if let Some(t) = o.transform() {
+            v.transform(&format!("{key}.transform"), &t, at);
+        }
+        match o {
+            ObjectDesc::Sphere { center, radius, .. } => {
+                v.finite3(&format!("{key}.center"), *center, at);
+                v.positive(&format!("{key}.radius"), *radius, at);
+            }
+            ObjectDesc::Triangle { vertices, uvs, .. } => {
+                v.polygon(&key, vertices, at);
+                if let Some(uvs) = uvs {
+                    if !uvs.iter().flatten().all(|x| x.is_finite()) {
+                        v.push(at, &format!("{key}.uvs"), "must be finite".into());
+                    }
+                }
+            }
+            ObjectDesc::Polygon { vertices, .. } => {
+                v.polygon(&key, vertices, at);
+            }
+            ObjectDesc::Tetrahedron { vertices, .. } => {
+                v.tetrahedron(&key, vertices, at);
+            }
+            ObjectDesc::Plane {
+                point,
+                normal,
+                uv_scale,
+                ..
+            } => {
+                v.finite3(&format!("{key}.point"), *point, at);
+                v.direction(&format!("{key}.normal"), *normal, at);
+                if !(uv_scale.is_finite() && *uv_scale != 0.0) {
+                    v.push(
+                        at,
+                        &format!("{key}.uv_scale"),
+                        format!("must be finite and non-zero, got {uv_scale}"),
+                    );
+                }
+            }
+            ObjectDesc::Box { min, max, .. } => {
+                let ok = v.finite3(&format!("{key}.min"), *min, at)
+                    & v.finite3(&format!("{key}.max"), *max, at);
+                if ok && (0..3).any(|i| min[i] >= max[i]) {
+                    v.push(
+                        at,
+                        &format!("{key}.max"),
+                        format!("must exceed min on every axis, got min {min:?}, max {max:?}"),
+                    );
+                }
+            }
+            ObjectDesc::Cylinder {
+                base, top, radius, ..
+            } => {
+                let ok = v.finite3(&format!("{key}.base"), *base, at)
+                    & v.finite3(&format!("{key}.top"), *top, at);
+                if ok && base == top {
+                    v.push(at, &format!("{key}.top"), "must differ from base".into());
+                }
+                v.positive(&format!("{key}.radius"), *radius, at);
+            }
+            ObjectDesc::Disk {
+                center,
+                normal,
+                radius,
+                ..
+            } => {
+                v.finite3(&format!("{key}.center"), *center, at);
+                v.direction(&format!("{key}.normal"), *normal, at);
+                v.positive(&format!("{key}.radius"), *radius, at);
+            }
+            ObjectDesc::Mesh { path, .. } => {
+                if path.is_empty() {
+                    v.push(at, &format!("{key}.path"), "must name an OBJ file".into());
+                }
+            }
+        }
+    }
+    v.problems
+}
+
+struct Validator<'a> {
+    src: &'a str,
+    problems: Vec<Problem>,
+}
+
+impl Validator<'_> {
+    fn push(&mut self, offset: usize, key: &str, message: String) {
+        let (line, column) = if offset == 0 {
+            (0, 0)
+        } else {
+            error::line_col(self.src, offset)
+        };
+        self.problems.push(Problem {
+            line,
+            column,
+            key: key.to_string(),
+            message,
+        });
+    }
+
+    fn range_u32(&mut self, key: &str, value: u32, lo: u32, hi: u32, at: usize) {
+        if value < lo || value > hi {
+            let range = if hi == u32::MAX {
+                format!(">= {lo}")
+            } else {
+                format!("in {lo}..={hi}")
+            };
+            self.push(at, key, format!("must be {range}, got {value}"));
+        }
+    }
+
+    fn finite3(&mut self, key: &str, v: [f32; 3], at: usize) -> bool {
+        let ok = v.iter().all(|x| x.is_finite());
+        if !ok {
+            self.push(at, key, format!("must be finite, got {v:?}"));
+        }
+        ok
+    }
+
+    fn nonnegative3(&mut self, key: &str, v: [f32; 3], at: usize) {
+        if self.finite3(key, v, at) && v.iter().any(|&x| x < 0.0) {
+            self.push(at, key, format!("must be >= 0, got {v:?}"));
+        }
+    }
+
+    fn positive(&mut self, key: &str, x: f32, at: usize) {
+        if !(x > 0.0 && x.is_finite()) {
+            self.push(at, key, format!("must be > 0, got {x}"));
+        }
+    }
+
+    /// A finite, non-zero vector (normalized when flattened).
+    fn direction(&mut self, key: &str, d: [f32; 3], at: usize) {
+        if self.finite3(key, d, at) && Vec3::from(d).length_squared() == 0.0 {
+            self.push(at, key, "must be non-zero".into());
+        }
+    }
+
+    fn transform(&mut self, key: &str, t: &TransformDesc, at: usize) {
+        if let Some(scale) = t.scale {
+            let s = scale.axes();
+            if !s.iter().all(|x| x.is_finite() && *x != 0.0) {
+                self.push(
+                    at,
+                    &format!("{key}.scale"),
+                    format!("must be finite and non-zero, got {s:?}"),
+                );
+            }
+        }
+        self.finite3(&format!("{key}.rotate"), t.rotate, at);
+        self.finite3(&format!("{key}.translate"), t.translate, at);
+    }
+
+    /// Four finite vertices spanning a volume.
+    fn tetrahedron(&mut self, key: &str, vertices: &[[f32; 3]; 4], at: usize) {
+        let vkey = format!("{key}.vertices");
+        if !vertices.iter().flatten().all(|x| x.is_finite()) {
+            self.push(at, &vkey, "must be finite".into());
+            return;
+        }
+        let p: Vec<Vec3> = vertices.iter().map(|&v| Vec3::from(v)).collect();
+        let (a, b, c) = (p[1] - p[0], p[2] - p[0], p[3] - p[0]);
+        let scale = a.length().max(b.length()).max(c.length());
+        if a.cross(b).dot(c).abs() <= 1e-6 * scale * scale * scale {
+            self.push(at, &vkey, "are coplanar (zero volume)".into());
+        }
+    }
+
+    /// Triangles and polygons: finite, at least 3 vertices, non-degenerate, planar, convex.
+    fn polygon(&mut self, key: &str, vertices: &[[f32; 3]], at: usize) {
+        let vkey = format!("{key}.vertices");
+        if vertices.len() < 3 {
+            self.push(
+                at,
+                &vkey,
+                format!("needs at least 3 vertices, got {}", vertices.len()),
+            );
+            return;
+        }
+        if !vertices.iter().all(|p| p.iter().all(|x| x.is_finite())) {
+            self.push(at, &vkey, "must be finite".into());
+            return;
+        }
+        let pts: Vec<Vec3> = vertices.iter().map(|&p| Vec3::from(p)).collect();
+        let normal = polygon_normal(&pts);
+        let scale = pts
+            .iter()
+            .fold(0.0f32, |m, p| m.max((*p - pts[0]).length()));
+        if normal.length() <= 1e-7 * scale * scale || scale == 0.0 {
+            self.push(at, &vkey, "is degenerate (zero area)".into());
+            return;
+        }
+        let n = normal.normalize();
+        if pts
+            .iter()
+            .any(|p| (*p - pts[0]).dot(n).abs() > 1e-4 * scale)
+        {
+            self.push(at, &vkey, "are not coplanar".into());
+            return;
+        }
+        let k = pts.len();
+        for i in 0..k {
+            let e0 = pts[(i + 1) % k] - pts[i];
+            let e1 = pts[(i + 2) % k] - pts[(i + 1) % k];
+            if e0.cross(e1).dot(n) < -1e-6 * scale * scale {
+                self.push(at, &vkey, "must form a convex polygon".into());
+                return;
+            }
+        }
+    }
+}
+
+/// Area-weighted normal of a planar polygon (Newell's method): length = 2 x area.
+pub fn polygon_normal(pts: &[Vec3]) -> Vec3 {
+    let mut n = Vec3::ZERO;
+    for i in 1..pts.len() - 1 {
+        n += (pts[i] - pts[0]).cross(pts[i + 1] - pts[0]);
+    }
+    n
+}
