@@ -432,10 +432,25 @@ fn transformed_analytic_shapes_are_exact() {
         Vec3::Z,
         true,
     );
-    // a uniformly scaled sphere is baked: no transform record
-    let s = scene("[[objects]]\ntype = \"sphere\"\ncenter = [1, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { scale = 2, rotate = [10, 20, 30] }\n");
+    // a uniformly scaled, unrotated sphere is baked: no transform record
+    let s = scene("[[objects]]\ntype = \"sphere\"\ncenter = [1, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { scale = 2, translate = [0, 1, 0] }\n");
     assert_eq!(s.primitives[0].flags, 0);
+    assert_eq!(s.primitives[0].a, [2.0, 1.0, 0.0, 2.0]);
     assert!(s.shape_data.is_empty());
+    // a rotated one keeps its transform so that uv turns with it: +X (u = v = 0.5) now faces -Z
+    let s = scene("[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { rotate = [0, 90, 0] }\n");
+    let h = assert_hit(
+        &s,
+        ray([0.0, 0.0, -5.0], [0.0, 0.0, 1.0]),
+        4.0,
+        -Vec3::Z,
+        true,
+    );
+    assert!(
+        (h.uv - Vec2::splat(0.5)).abs().max_element() < 1e-5,
+        "uv {}",
+        h.uv
+    );
 }
 
 #[test]
@@ -448,6 +463,57 @@ fn mirrored_polygonal_shapes_keep_their_front_side_outward() {
         let (_, h) = trace(&s, ray(centroid + 5.0 * d, -d)).expect("hits");
         assert!(h.front_face && h.ng.dot(h.p - centroid) > 0.0);
     }
+}
+
+#[test]
+fn a_mirrored_triangle_keeps_its_default_uvs_on_the_same_corners() {
+    let s = scene("[[objects]]\ntype = \"triangle\"\nvertices = [[0, 0, 0], [2, 0, 0], [0, 2, 0]]\nmaterial = \"m\"\ntransform = { scale = [-1, 1, 1] }\n");
+    // near the mirror image of vertex 1, whose uv is (1, 0)
+    let (_, h) = trace(&s, ray([-1.9, 0.05, 5.0], [0.0, 0.0, -1.0])).expect("hits");
+    assert!(
+        (h.uv - Vec2::new(0.95, 0.025)).abs().max_element() < 1e-5,
+        "uv {}",
+        h.uv
+    );
+}
+
+#[test]
+fn degenerate_input_is_refused_or_left_out_never_a_nan() {
+    let dir = std::env::temp_dir().join(format!("wgtrace-degenerate-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // one good triangle and two of zero area
+    std::fs::write(
+        dir.join("m.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 2 2\nf 1 2 3\nf 1 1 2\nf 4 4 4\n",
+    )
+    .unwrap();
+    let src = format!("{HEADER}[[objects]]\ntype = \"mesh\"\npath = \"m.obj\"\nmaterial = \"m\"\n");
+    let s = wgtrace::load_scene_str(&src, &dir.join("s.toml"), &Default::default()).unwrap();
+    assert_eq!(
+        s.primitives.len(),
+        1,
+        "zero-area mesh triangles are left out"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+    let err = |obj: &str| {
+        wgtrace::load_scene_str(
+            &format!("{HEADER}{obj}"),
+            std::path::Path::new("bad.toml"),
+            &Default::default(),
+        )
+        .unwrap_err()
+        .to_string()
+    };
+    // valid as written, degenerate in f32: an axis that underflows, a scale that does
+    let e = err("[[objects]]\ntype = \"cylinder\"\nbase = [0, 0, 0]\ntop = [1e-23, 0, 0]\nradius = 1\nmaterial = \"m\"\n");
+    assert!(
+        e.contains("bad.toml:6:") && e.contains("objects[0]: degenerates in f32"),
+        "{e}"
+    );
+    let e = err("[[objects]]\ntype = \"disk\"\ncenter = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { scale = [1e-40, 1, 1] }\n");
+    assert!(e.contains("objects[0]: degenerates in f32"), "{e}");
+    let e = err("[[objects]]\ntype = \"polygon\"\nvertices = [[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0]]\nmaterial = \"m\"\n");
+    assert!(e.contains("objects[0].vertices: repeat a vertex"), "{e}");
 }
 
 #[test]

@@ -51,7 +51,9 @@ struct Placement {
     m: Affine3A,
     /// Inverse transpose of the linear part: maps normals.
     normal_m: Mat3,
-    /// |scale| when the scale is uniform (a similarity: spheres stay spheres).
+    /// |scale| when the scale is uniform and there is no rotation: spheres, cylinders and
+    /// disks bake into the same shape with the same uv frame. (A rotation is kept as a
+    /// transform so that uv, and textures, turn with the object.)
     uniform: Option<f32>,
     /// No rotation: axis-aligned boxes stay axis-aligned.
     axis_aligned: bool,
@@ -69,7 +71,7 @@ impl Placement {
         Placement {
             m,
             normal_m: linear.inverse().transpose(),
-            uniform: (s[0] == s[1] && s[1] == s[2]).then_some(s[0]),
+            uniform: (s[0] == s[1] && s[1] == s[2] && t.rotate == [0.0; 3]).then_some(s[0]),
             axis_aligned: t.rotate == [0.0; 3],
             mirrored: linear.determinant() < 0.0,
         }
@@ -119,6 +121,12 @@ impl Builder {
         smooth: bool,
         material: u32,
     ) {
+        // Zero-area triangles (common in OBJ files) can never be hit reliably and have no
+        // normal: leave them out.
+        let n = (v[1] - v[0]).cross(v[2] - v[0]);
+        if !(n.length_squared() > 0.0 && n.is_finite()) {
+            return;
+        }
         let mut prim = Primitive {
             tag: records::PRIM_TRIANGLE,
             material,
@@ -153,6 +161,10 @@ impl Builder {
         material: u32,
     ) {
         v = v.map(|p| at.m.transform_point3(p));
+        if at.mirrored && attributes.is_none() {
+            // the default uvs must follow the corners being swapped below
+            attributes = Some(([Vec3::ZERO; 3], [Vec2::ZERO, Vec2::X, Vec2::Y]));
+        }
         if let Some((n, _)) = attributes.as_mut() {
             for k in n.iter_mut() {
                 let m = at.normal_m * *k;
@@ -424,8 +436,40 @@ fn luminance(c: [f32; 4]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
+/// Whether a primitive's record, and its transform and bounds, are usable in f32: finite,
+/// with non-zero sizes and unit normals. A valid scene can still fail this under an extreme
+/// transform (a scale that underflows or overflows f32, a matrix that is singular in f32).
+fn record_ok(p: &Primitive, shape_data: &[[f32; 4]]) -> bool {
+    let (a, b) = (Vec3::from_slice(&p.a), Vec3::from_slice(&p.b));
+    let unit = |n: Vec3| (n.length() - 1.0).abs() < 1e-3;
+    let finite = [p.a, p.b, p.c].iter().flatten().all(|x| x.is_finite());
+    let shape = match p.tag {
+        records::PRIM_SPHERE => p.a[3] > 0.0,
+        records::PRIM_PLANE => unit(b),
+        records::PRIM_DISK => unit(b) && p.a[3] > 0.0,
+        records::PRIM_BOX => a.cmplt(b).all(),
+        records::PRIM_CYLINDER => (b - a).length().is_normal() && p.a[3] > 0.0,
+        _ => true,
+    };
+    let transform = p.flags & records::PRIM_FLAG_TRANSFORM == 0
+        || shape_data[p.data as usize..][..records::TRANSFORM_ENTRIES as usize]
+            .iter()
+            .flatten()
+            .all(|x| x.is_finite());
+    let bounded = p.tag == records::PRIM_PLANE || {
+        let bb = world_bounds(p, shape_data);
+        bb.lo.is_finite() && bb.hi.is_finite()
+    };
+    finite && shape && transform && bounded
+}
+
 /// Flattens a validated scene into records; `meshes[i]` holds object i's mesh when it is one.
-pub fn flatten(file: &SceneFile, meshes: &[Option<MeshData>], use_bvh: bool) -> FlatScene {
+/// Errors with the indices of objects whose records degenerate in f32 (see `record_ok`).
+pub fn flatten(
+    file: &SceneFile,
+    meshes: &[Option<MeshData>],
+    use_bvh: bool,
+) -> Result<FlatScene, Vec<usize>> {
     let material_names: Vec<String> = file.materials.keys().cloned().collect();
     let materials: Vec<Material> = file
         .materials
@@ -435,9 +479,18 @@ pub fn flatten(file: &SceneFile, meshes: &[Option<MeshData>], use_bvh: bool) -> 
     let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
 
     let mut builder = Builder::default();
-    for (obj, mesh) in file.objects.iter().zip(meshes) {
+    let mut degenerate = Vec::new();
+    for (i, (obj, mesh)) in file.objects.iter().zip(meshes).enumerate() {
         let o = obj.get_ref();
+        let (u, b) = (builder.unbounded.len(), builder.bounded.len());
         builder.push_object(o, mesh.as_ref(), material_index(o.material()));
+        let added = builder.unbounded[u..].iter().chain(&builder.bounded[b..]);
+        if !added.clone().all(|p| record_ok(p, &builder.shape_data)) {
+            degenerate.push(i);
+        }
+    }
+    if !degenerate.is_empty() {
+        return Err(degenerate);
     }
     let Builder {
         unbounded,
@@ -489,7 +542,7 @@ pub fn flatten(file: &SceneFile, meshes: &[Option<MeshData>], use_bvh: bool) -> 
         .collect();
 
     let r = &file.render;
-    FlatScene {
+    Ok(FlatScene {
         width: r.width,
         height: r.height,
         spp: r.spp,
@@ -506,7 +559,7 @@ pub fn flatten(file: &SceneFile, meshes: &[Option<MeshData>], use_bvh: bool) -> 
         shape_data,
         num_unbounded,
         use_bvh,
-    }
+    })
 }
 
 fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {

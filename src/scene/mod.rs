@@ -166,7 +166,24 @@ pub fn load_scene_str(
     if !problems.is_empty() {
         return Err(invalid(problems));
     }
-    Ok(flatten::flatten(&file, &meshes, !overrides.no_bvh))
+    flatten::flatten(&file, &meshes, !overrides.no_bvh).map_err(|objects| {
+        invalid(
+            objects
+                .into_iter()
+                .map(|i| {
+                    let (line, column) = error::line_col(src, file.objects[i].span().start);
+                    Problem {
+                        line,
+                        column,
+                        key: format!("objects[{i}]"),
+                        message: "degenerates in f32 under its transform (a size, normal or \
+                                  matrix becomes zero, infinite or NaN)"
+                            .into(),
+                    }
+                })
+                .collect(),
+        )
+    })
 }
 
 /// Reads every mesh object's OBJ file (relative to the scene file); a file that cannot be

@@ -293,6 +293,10 @@ impl Validator<'_> {
             return;
         }
         let k = pts.len();
+        if (0..k).any(|i| pts[i] == pts[(i + 1) % k]) {
+            self.push(at, &vkey, "repeat a vertex (an edge of zero length)".into());
+            return;
+        }
         for i in 0..k {
             let e0 = pts[(i + 1) % k] - pts[i];
             let e1 = pts[(i + 2) % k] - pts[(i + 1) % k];
