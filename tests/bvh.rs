@@ -2,11 +2,9 @@
 //! through a generic ordered traversal (the same loop as `intersect_scene`, over a closure)
 //! against brute force.
 //!
-//! Run with `cargo test --release`; the 1e6-primitive timings are `#[ignore]`d:
-//! `cargo test --release -- --ignored --nocapture`.
+//! Build times are measured by `cargo bench --bench bvh` (docs/bench/bvh.md), not here.
 
 use glam::Vec3;
-use std::time::Instant;
 use wgtrace::cpu::intersect::{intersect_aabb, safe_inverse as finite_inv_dir};
 use wgtrace::cpu::types::FAR;
 use wgtrace::scene::bvh::{build, Aabb, Bvh, BVH_MAX_DEPTH, BVH_MAX_LEAF_DEPTH, BVH_MAX_LEAF_SIZE};
@@ -769,75 +767,6 @@ fn depth_limit_adversarial() {
         assert_eq!(tested, boxes.len(), "{name}: not every leaf visited");
     }
     assert_eq!(BVH_MAX_LEAF_DEPTH, BVH_MAX_DEPTH - 1);
-}
-
-// ---------------------------------------------------------------- (5) timing
-
-fn stats(name: &str, bvh: &Bvh, secs: f64) {
-    let leaves: Vec<u32> = bvh
-        .nodes
-        .iter()
-        .filter(|n| n.count > 0)
-        .map(|n| n.count)
-        .collect();
-    let max_leaf = leaves.iter().copied().max().unwrap_or(0);
-    let mean = bvh.order.len() as f64 / leaves.len().max(1) as f64;
-    // SAH cost of the tree relative to the root (C_trav = C_isect = 1).
-    let area = |n: &BvhNode| node_box(n).surface_area() as f64;
-    let root = area(&bvh.nodes[0]);
-    let cost: f64 = bvh
-        .nodes
-        .iter()
-        .map(|n| {
-            if n.count > 0 {
-                area(n) * n.count as f64
-            } else {
-                area(n)
-            }
-        })
-        .sum::<f64>()
-        / root;
-    println!(
-        "{name}: build {:.1} ms, {} nodes, {} leaves (mean {mean:.2}, max {max_leaf} prims), depth {}, SAH cost {cost:.1}",
-        secs * 1e3,
-        bvh.nodes.len(),
-        leaves.len(),
-        bvh.depth
-    );
-}
-
-fn time_build(name: &str, boxes: &[Aabb]) {
-    let _ = build(&boxes[..1000]); // warm up the rayon pool
-    let mut best = f64::MAX;
-    let mut last = None;
-    for run in 0..3 {
-        let t = Instant::now();
-        let bvh = build(boxes);
-        let secs = t.elapsed().as_secs_f64();
-        println!("{name}: run {run}: {:.1} ms", secs * 1e3);
-        best = best.min(secs);
-        last = Some(bvh);
-    }
-    let bvh = last.unwrap();
-    stats(name, &bvh, best);
-    validate(&bvh, boxes);
-}
-
-#[test]
-#[ignore = "timing; run with --ignored --nocapture in release"]
-fn timing_1m_random_boxes() {
-    let mut rng = Rng(10);
-    let tris = random_triangles(&mut rng, 1_000_000, 50.0, 0.5);
-    let boxes: Vec<Aabb> = tris.iter().map(tri_box).collect();
-    time_build("1e6 random triangle boxes", &boxes);
-}
-
-#[test]
-#[ignore = "timing; run with --ignored --nocapture in release"]
-fn timing_icosphere() {
-    let tris = icosphere(8, 1.0); // 1,310,720 triangles
-    let boxes: Vec<Aabb> = tris.iter().map(tri_box).collect();
-    time_build("icosphere level 8 (1.31e6 triangles)", &boxes);
 }
 
 /// Ordered closest-hit traversal over a closure `hit(position in order, t_max)`.
