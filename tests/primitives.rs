@@ -59,6 +59,15 @@ fn assert_hit(s: &FlatScene, r: Ray, t: f32, n: Vec3, front: bool) -> Hit {
     h
 }
 
+/// The error message of a scene (named `bad.toml`) holding the given objects.
+fn load_error(objects: &str) -> String {
+    let src = format!("{HEADER}{objects}");
+    match wgtrace::load_scene_str(&src, std::path::Path::new("bad.toml"), &Default::default()) {
+        Ok(_) => panic!("the scene should be refused:\n{objects}"),
+        Err(e) => e.to_string(),
+    }
+}
+
 #[track_caller]
 fn assert_miss(s: &FlatScene, r: Ray) {
     if let Some((c, _)) = trace(s, r) {
@@ -495,24 +504,15 @@ fn degenerate_input_is_refused_or_left_out_never_a_nan() {
         "zero-area mesh triangles are left out"
     );
     std::fs::remove_dir_all(&dir).ok();
-    let err = |obj: &str| {
-        wgtrace::load_scene_str(
-            &format!("{HEADER}{obj}"),
-            std::path::Path::new("bad.toml"),
-            &Default::default(),
-        )
-        .unwrap_err()
-        .to_string()
-    };
     // valid as written, degenerate in f32: an axis that underflows, a scale that does
-    let e = err("[[objects]]\ntype = \"cylinder\"\nbase = [0, 0, 0]\ntop = [1e-23, 0, 0]\nradius = 1\nmaterial = \"m\"\n");
+    let e = load_error("[[objects]]\ntype = \"cylinder\"\nbase = [0, 0, 0]\ntop = [1e-23, 0, 0]\nradius = 1\nmaterial = \"m\"\n");
     assert!(
         e.contains("bad.toml:6:") && e.contains("objects[0]: degenerates in f32"),
         "{e}"
     );
-    let e = err("[[objects]]\ntype = \"disk\"\ncenter = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { scale = [1e-40, 1, 1] }\n");
+    let e = load_error("[[objects]]\ntype = \"disk\"\ncenter = [0, 0, 0]\nnormal = [0, 1, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { scale = [1e-40, 1, 1] }\n");
     assert!(e.contains("objects[0]: degenerates in f32"), "{e}");
-    let e = err("[[objects]]\ntype = \"polygon\"\nvertices = [[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0]]\nmaterial = \"m\"\n");
+    let e = load_error("[[objects]]\ntype = \"polygon\"\nvertices = [[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0]]\nmaterial = \"m\"\n");
     assert!(e.contains("objects[0].vertices: repeat a vertex"), "{e}");
 }
 
@@ -585,40 +585,32 @@ fn bvh_finds_the_same_closest_hit_as_brute_force() {
 
 #[test]
 fn shape_errors_name_the_object_and_field() {
-    let err = |obj: &str| {
-        wgtrace::load_scene_str(
-            &format!("{HEADER}{obj}"),
-            std::path::Path::new("bad.toml"),
-            &Default::default(),
-        )
-        .unwrap_err()
-        .to_string()
-    };
-    let e =
-        err("[[objects]]\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [1, 0, 1]\nmaterial = \"m\"\n");
+    let e = load_error(
+        "[[objects]]\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [1, 0, 1]\nmaterial = \"m\"\n",
+    );
     assert!(
         e.contains("bad.toml:6:") && e.contains("objects[0].max: must exceed min"),
         "{e}"
     );
-    let e = err("[[objects]]\ntype = \"cylinder\"\nbase = [0, 0, 0]\ntop = [0, 0, 0]\nradius = -1\nmaterial = \"m\"\n");
+    let e = load_error("[[objects]]\ntype = \"cylinder\"\nbase = [0, 0, 0]\ntop = [0, 0, 0]\nradius = -1\nmaterial = \"m\"\n");
     assert!(
         e.contains("objects[0].top: must differ") && e.contains("objects[0].radius: must be > 0"),
         "{e}"
     );
-    let e = err("[[objects]]\ntype = \"tetrahedron\"\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]\nmaterial = \"m\"\n");
+    let e = load_error("[[objects]]\ntype = \"tetrahedron\"\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]]\nmaterial = \"m\"\n");
     assert!(e.contains("objects[0].vertices: are coplanar"), "{e}");
-    let e = err("[[objects]]\ntype = \"disk\"\ncenter = [0, 0, 0]\nnormal = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n");
+    let e = load_error("[[objects]]\ntype = \"disk\"\ncenter = [0, 0, 0]\nnormal = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\n");
     assert!(e.contains("objects[0].normal: must be non-zero"), "{e}");
-    let e = err("[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { scale = [1, 0, 1] }\n");
+    let e = load_error("[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"\ntransform = { scale = [1, 0, 1] }\n");
     assert!(
         e.contains("objects[0].transform.scale: must be finite and non-zero"),
         "{e}"
     );
-    let e = err("[[objects]]\ntype = \"mesh\"\npath = \"missing.obj\"\nmaterial = \"m\"\n");
+    let e = load_error("[[objects]]\ntype = \"mesh\"\npath = \"missing.obj\"\nmaterial = \"m\"\n");
     assert!(
         e.contains("bad.toml:6:") && e.contains("objects[0].path") && e.contains("missing.obj"),
         "{e}"
     );
-    let e = err("[[objects]]\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nmaterial = \"m\"\ntransform = { rotate = [0, 0] }\n");
+    let e = load_error("[[objects]]\ntype = \"box\"\nmin = [0, 0, 0]\nmax = [1, 1, 1]\nmaterial = \"m\"\ntransform = { rotate = [0, 0] }\n");
     assert!(e.contains("bad.toml:"), "{e}");
 }
