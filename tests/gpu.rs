@@ -161,6 +161,80 @@ fn tiny_and_huge_spheres_render_without_holes_or_speckles() {
     }
 }
 
+/// White furnace per material: albedo 1 under a uniform background of radiance 1. Every
+/// sample of a lossless material (Lambertian, mirror metal, clear glass, which splits light
+/// between reflection and refraction) returns exactly 1; no material ever returns more than
+/// 1 (each sample's weight is at most 1, so the mean of squares cannot exceed the mean); a
+/// fuzzy metal loses what its fuzz sends under the surface.
+#[test]
+fn white_furnace_returns_one_for_lossless_materials_and_never_more() {
+    let template = r#"
+[render]
+width = 24
+height = 24
+spp = 16
+max_depth = 64
+[camera]
+look_from = [0, 0, 3]
+look_at = [0, 0, 0]
+vfov = 45
+[background]
+color = [1, 1, 1]
+[materials]
+m = MATERIAL
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "m"
+"#;
+    for (name, material, lossless) in [
+        (
+            "lambertian",
+            r#"{ type = "lambertian", albedo = [1, 1, 1] }"#,
+            true,
+        ),
+        ("mirror", r#"{ type = "metal", albedo = [1, 1, 1] }"#, true),
+        (
+            "fuzzy metal",
+            r#"{ type = "metal", albedo = [1, 1, 1], fuzz = 0.7 }"#,
+            false,
+        ),
+        ("glass", r#"{ type = "dielectric", ior = 1.5 }"#, true),
+    ] {
+        let s = scene_from_str(&template.replace("MATERIAL", material));
+        for (backend, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+            let mut total = 0.0f64;
+            for i in 0..img.pixel_count() {
+                let (m, var) = (img.mean(i), img.variance(i));
+                let n = img.samples(i);
+                for c in 0..3 {
+                    let mean_sq = var[c] * (n - 1.0) / n + m[c] * m[c];
+                    assert!(
+                        m[c] <= 1.0 + 1e-5 && mean_sq <= m[c] + 1e-4,
+                        "{name} on {backend}, pixel {i}: mean {}, mean of squares {mean_sq}",
+                        m[c]
+                    );
+                }
+                total += m[0] as f64;
+            }
+            let mean = total / img.pixel_count() as f64;
+            if lossless {
+                // glass: a path still inside the sphere after 63 reflections is cut off
+                assert!(
+                    mean >= 1.0 - 1e-4,
+                    "{name} on {backend}: furnace mean {mean}"
+                );
+            } else {
+                assert!(
+                    mean < 0.999,
+                    "{name} on {backend}: fuzz should lose some light, mean {mean}"
+                );
+            }
+        }
+    }
+}
+
 /// With max_depth = 1 only emitters and the background are visible, exactly: a front-facing
 /// light shows its radiance, a back-facing one-sided light is black, a back-facing
 /// two-sided light shows its radiance, everything else shows the background. The camera's

@@ -22,6 +22,14 @@ fn sample_disk(u: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(r * cos(phi), r * sin(phi));
 }
 
+// Uniform direction on the unit sphere.
+fn sample_sphere(u: vec2<f32>) -> vec3<f32> {
+    let z = 1.0 - 2.0 * u.x;
+    let r = sqrt(max(0.0, 1.0 - z * z));
+    let phi = 2.0 * PI * u.y;
+    return vec3<f32>(r * cos(phi), r * sin(phi), z);
+}
+
 // Cosine-weighted direction about unit n (Malley's method): pdf = cos(theta) / pi.
 fn sample_cosine_hemisphere(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
     let d = sample_disk(u);

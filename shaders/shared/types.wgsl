@@ -27,6 +27,8 @@ const BVH_STACK_SIZE: u32 = 32u;
 // Material tags (switch in materials.wgsl).
 const MAT_LAMBERTIAN: u32 = 0u;
 const MAT_EMISSIVE: u32 = 1u;
+const MAT_METAL: u32 = 2u;
+const MAT_DIELECTRIC: u32 = 3u;
 
 // Material flags.
 const MAT_FLAG_TWO_SIDED: u32 = 1u;
@@ -66,10 +68,14 @@ struct Material {
     flags: u32,
     pad0: u32,
     pad1: u32,
+    // lambertian, metal: reflectance | dielectric: tint
     albedo: vec4<f32>,
     // radiance emitted from the front side (both sides with MAT_FLAG_TWO_SIDED)
     emission: vec4<f32>,
+    // metal: .x = fuzz | dielectric: .x = index of refraction
     params: vec4<f32>,
+    // dielectric: absorption per unit length (Beer-Lambert)
+    extra: vec4<f32>,
 }
 
 struct Emitter {

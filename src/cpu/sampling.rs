@@ -23,6 +23,15 @@ pub fn sample_disk(u: [f32; 2]) -> Vec2 {
     Vec2::new(r * phi.cos(), r * phi.sin())
 }
 
+/// Uniform direction on the unit sphere.
+#[inline]
+pub fn sample_sphere(u: [f32; 2]) -> Vec3 {
+    let z = 1.0 - 2.0 * u[0];
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 /// Cosine-weighted direction about unit n (Malley's method): pdf = cos(theta) / pi.
 #[inline]
 pub fn sample_cosine_hemisphere(n: Vec3, u: [f32; 2]) -> Vec3 {

@@ -12,10 +12,36 @@ use super::records::{self, BvhNode, Emitter, Material, Primitive, NO_DATA};
 use super::{CameraFrame, FlatScene};
 
 fn material_record(m: &MaterialDesc) -> Material {
+    let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
     match *m {
-        MaterialDesc::Lambertian { albedo } => Material {
+        MaterialDesc::Lambertian { albedo, emission } => Material {
             tag: records::MAT_LAMBERTIAN,
-            albedo: [albedo[0], albedo[1], albedo[2], 0.0],
+            albedo: rgb(albedo),
+            emission: rgb(emission),
+            ..Default::default()
+        },
+        MaterialDesc::Metal {
+            albedo,
+            fuzz,
+            emission,
+        } => Material {
+            tag: records::MAT_METAL,
+            albedo: rgb(albedo),
+            emission: rgb(emission),
+            params: [fuzz, 0.0, 0.0, 0.0],
+            ..Default::default()
+        },
+        MaterialDesc::Dielectric {
+            ior,
+            tint,
+            absorption,
+            emission,
+        } => Material {
+            tag: records::MAT_DIELECTRIC,
+            albedo: rgb(tint),
+            emission: rgb(emission),
+            params: [ior, 0.0, 0.0, 0.0],
+            extra: rgb(absorption),
             ..Default::default()
         },
         MaterialDesc::Emissive {
@@ -28,7 +54,7 @@ fn material_record(m: &MaterialDesc) -> Material {
             } else {
                 0
             },
-            emission: [radiance[0], radiance[1], radiance[2], 0.0],
+            emission: rgb(radiance),
             ..Default::default()
         },
     }

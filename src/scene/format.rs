@@ -80,18 +80,46 @@ pub struct BackgroundDesc {
     pub color: [f32; 3],
 }
 
-/// `[materials]` entries, selected by `type`.
+/// `[materials]` entries, selected by `type`. Every type but `emissive` may also carry
+/// `emission = [r, g, b]`: radiance emitted from its front side, which makes it a light too.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
 pub enum MaterialDesc {
     /// Ideal diffuse reflector; scatters on whichever side the ray hits.
-    Lambertian { albedo: [f32; 3] },
+    Lambertian {
+        albedo: [f32; 3],
+        #[serde(default)]
+        emission: [f32; 3],
+    },
+    /// Mirror reflection, the direction perturbed by up to `fuzz` (0 = perfect mirror).
+    Metal {
+        albedo: [f32; 3],
+        #[serde(default)]
+        fuzz: f32,
+        #[serde(default)]
+        emission: [f32; 3],
+    },
+    /// Glass-like: reflection or refraction chosen by Schlick's Fresnel; `tint` multiplies
+    /// every scattering, `absorption` (per unit length, Beer-Lambert) acts inside.
+    Dielectric {
+        ior: f32,
+        #[serde(default = "white")]
+        tint: [f32; 3],
+        #[serde(default)]
+        absorption: [f32; 3],
+        #[serde(default)]
+        emission: [f32; 3],
+    },
     /// A light: emits `radiance` from its front side, or both with `two_sided`; absorbs.
     Emissive {
         radiance: [f32; 3],
         #[serde(default)]
         two_sided: bool,
     },
+}
+
+fn white() -> [f32; 3] {
+    [1.0; 3]
 }
 
 /// `transform = { scale, rotate, translate }`: scale, then rotate about X, Y, Z (degrees),

@@ -39,6 +39,8 @@ pub const BVH_STACK_SIZE: u32 = 32;
 /// Material tags: the cases of the `switch` in `materials.wgsl`.
 pub const MAT_LAMBERTIAN: u32 = 0;
 pub const MAT_EMISSIVE: u32 = 1;
+pub const MAT_METAL: u32 = 2;
+pub const MAT_DIELECTRIC: u32 = 3;
 
 /// Material flag: emits from both sides.
 pub const MAT_FLAG_TWO_SIDED: u32 = 1;
@@ -69,7 +71,9 @@ pub struct Primitive {
 }
 
 /// A tagged material. `emission` is the radiance leaving the front side (both sides with
-/// [`MAT_FLAG_TWO_SIDED`]); `params` holds per-type scalars.
+/// [`MAT_FLAG_TWO_SIDED`]); `params` holds per-type scalars (metal: fuzz; dielectric: ior);
+/// `extra` a per-type colour (dielectric: absorption per unit length). `albedo` is the
+/// dielectric's tint.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -80,6 +84,7 @@ pub struct Material {
     pub albedo: [f32; 4],
     pub emission: [f32; 4],
     pub params: [f32; 4],
+    pub extra: [f32; 4],
 }
 
 /// One entry of the emitter list: an emissive primitive, its area and emitted power.
@@ -201,7 +206,8 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             pad1,
             albedo,
             emission,
-            params
+            params,
+            extra
         }),
         layout!(Emitter {
             primitive,

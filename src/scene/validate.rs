@@ -57,15 +57,37 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
         let at = m.span().start;
         let key = format!("materials.{name}");
         match m.get_ref() {
-            MaterialDesc::Lambertian { albedo } => {
-                v.nonnegative3(&format!("{key}.albedo"), *albedo, at);
-                if albedo.iter().any(|&a| a > 1.0) {
+            MaterialDesc::Lambertian { albedo, emission } => {
+                v.reflectance(&format!("{key}.albedo"), *albedo, at);
+                v.nonnegative3(&format!("{key}.emission"), *emission, at);
+            }
+            MaterialDesc::Metal {
+                albedo,
+                fuzz,
+                emission,
+            } => {
+                v.reflectance(&format!("{key}.albedo"), *albedo, at);
+                if !(0.0..=1.0).contains(fuzz) {
                     v.push(
                         at,
-                        &format!("{key}.albedo"),
-                        "components must be <= 1".into(),
+                        &format!("{key}.fuzz"),
+                        format!("must be in [0, 1], got {fuzz}"),
                     );
                 }
+                v.nonnegative3(&format!("{key}.emission"), *emission, at);
+            }
+            MaterialDesc::Dielectric {
+                ior,
+                tint,
+                absorption,
+                emission,
+            } => {
+                if !(*ior > 0.0 && ior.is_finite()) {
+                    v.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
+                }
+                v.reflectance(&format!("{key}.tint"), *tint, at);
+                v.nonnegative3(&format!("{key}.absorption"), *absorption, at);
+                v.nonnegative3(&format!("{key}.emission"), *emission, at);
             }
             MaterialDesc::Emissive { radiance, .. } => {
                 v.nonnegative3(&format!("{key}.radiance"), *radiance, at);
@@ -214,6 +236,14 @@ impl Validator<'_> {
     fn nonnegative3(&mut self, key: &str, v: [f32; 3], at: usize) {
         if self.finite3(key, v, at) && v.iter().any(|&x| x < 0.0) {
             self.push(at, key, format!("must be >= 0, got {v:?}"));
+        }
+    }
+
+    /// A colour that scatters: each component in [0, 1].
+    fn reflectance(&mut self, key: &str, c: [f32; 3], at: usize) {
+        self.nonnegative3(key, c, at);
+        if c.iter().any(|&a| a > 1.0) {
+            self.push(at, key, "components must be <= 1".into());
         }
     }
 
