@@ -158,3 +158,189 @@ fn absorption_follows_beer_lambert_over_the_distance_inside() {
     let (ray, hit) = hit_at_origin(-Vec3::Z, Vec3::new(0.0, 0.0, 2.0));
     assert_eq!(scatter(&amber, &ray, &hit, [0.9, 0.5]).weight, Vec3::ONE);
 }
+
+// ------------------------------------------------------------------ microfacet (GGX)
+
+mod common;
+
+use wgtrace::cpu::materials::{microfacet_eval, microfacet_pdf};
+use wgtrace::scene::records::MAT_MICROFACET;
+
+fn microfacet(kd: f32, ks: f32, roughness: f32, ior: f32) -> Material {
+    Material {
+        tag: MAT_MICROFACET,
+        albedo: [kd, kd, kd, 0.0],
+        params: [roughness, ior, 0.0, 0.0],
+        extra: [ks, ks, ks, 0.0],
+        ..Default::default()
+    }
+}
+
+/// The outgoing (view) direction at `theta` degrees from the normal +Z, in the xz-plane, and
+/// the ray and hit that see the surface from it.
+fn view(theta: f32) -> (Vec3, Ray, Hit) {
+    let t = theta.to_radians();
+    let wo = Vec3::new(t.sin(), 0.0, t.cos());
+    let (ray, hit) = hit_at_origin(-wo, wo);
+    (wo, ray, hit)
+}
+
+#[test]
+fn microfacet_is_reciprocal() {
+    let mut rng = 3u32;
+    for roughness in [0.05f32, 0.3, 1.0] {
+        let m = microfacet(0.6, 0.9, roughness, 1.5);
+        for _ in 0..2000 {
+            let (a, b) = (common::random_unit(&mut rng), common::random_unit(&mut rng));
+            let (wo, wi) = (
+                Vec3::new(a.x, a.y, a.z.abs()),
+                Vec3::new(b.x, b.y, b.z.abs()),
+            );
+            // f = eval / cos_i must be symmetric
+            let f1 = microfacet_eval(&m, Vec3::Z, wo, wi) / wi.z;
+            let f2 = microfacet_eval(&m, Vec3::Z, wi, wo) / wo.z;
+            assert!(
+                (f1 - f2).abs().max_element() <= 1e-4 * f1.max_element().max(1e-3),
+                "{f1} vs {f2}"
+            );
+        }
+    }
+}
+
+#[test]
+fn white_microfacet_never_reflects_more_than_arrives() {
+    // kd = ks = 1: the naive sum of the lobes would exceed 1; the Fresnel-weighted base must not
+    let mut worst = 0.0f64;
+    for ior in [1.5f32, 3.0] {
+        for roughness in [0.0f32, 0.05, 0.2, 0.5, 1.0] {
+            let m = microfacet(1.0, 1.0, roughness, ior);
+            for theta in [0.0f32, 30.0, 60.0, 80.0, 89.0] {
+                let (_, ray, hit) = view(theta);
+                let mut rng = 17u32;
+                let n = 40_000;
+                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+                for _ in 0..n {
+                    let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+                    let s = scatter(&m, &ray, &hit, u);
+                    let w = if s.ok { s.weight.x as f64 } else { 0.0 };
+                    assert!(w.is_finite() && w >= 0.0);
+                    sum += w;
+                    sum2 += w * w;
+                }
+                let mean = sum / n as f64;
+                let sigma = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+                assert!(
+                    mean <= 1.0 + 4.0 * sigma + 1e-6,
+                    "ior {ior}, roughness {roughness}, {theta} deg: albedo {mean} +- {sigma}"
+                );
+                worst = worst.max(mean);
+            }
+        }
+    }
+    eprintln!("largest directional albedo of a white microfacet: {worst:.4}");
+}
+
+#[test]
+fn roughness_zero_is_a_mirror_without_dividing_by_zero() {
+    let m = microfacet(0.0, 1.0, 0.0, 1.5);
+    let (wo, ray, hit) = view(40.0);
+    let mirror = Vec3::new(-wo.x, -wo.y, wo.z);
+    for u in grid() {
+        let s = scatter(&m, &ray, &hit, u);
+        assert!(s.ok && s.weight.is_finite() && s.dir.is_finite());
+        assert!(
+            (s.dir - mirror).length() < 1e-6,
+            "{:?} is not the mirror direction",
+            s.dir
+        );
+        // weight = F(cos 40 degrees), the Fresnel reflectance, exactly
+        assert!((s.weight.x - schlick(40f32.to_radians().cos(), 1.5)).abs() < 1e-6);
+    }
+}
+
+/// Chi-square test of the sampled directions against microfacet_pdf, as pbrt-v4 and
+/// Mitsuba 3 test their BSDFs: the upper hemisphere in 20 (cos theta) x 40 (phi) cells,
+/// expected counts by integrating the pdf over each cell, plus a cell for the directions
+/// the sampler absorbs (under the surface); cells expecting fewer than 5 are pooled.
+#[test]
+fn microfacet_sampling_matches_its_pdf() {
+    const N: usize = 200_000;
+    const NT: usize = 20;
+    const NP: usize = 40;
+    const SUB: usize = 10;
+    for (roughness, theta) in [
+        (0.1f32, 0.0f32),
+        (0.1, 60.0),
+        (0.4, 30.0),
+        (0.4, 75.0),
+        (1.0, 45.0),
+    ] {
+        let m = microfacet(0.5, 1.0, roughness, 1.5);
+        let (wo, ray, hit) = view(theta);
+        let cell_of = |d: Vec3| {
+            let t = ((d.z * NT as f32) as usize).min(NT - 1);
+            let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
+            let p = ((phi / (2.0 * std::f32::consts::PI) * NP as f32) as usize).min(NP - 1);
+            t * NP + p
+        };
+        let mut observed = vec![0f64; NT * NP + 1];
+        let mut rng = 99u32;
+        for _ in 0..N {
+            let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+            let s = scatter(&m, &ray, &hit, u);
+            let k = if s.ok { cell_of(s.dir) } else { NT * NP };
+            observed[k] += 1.0;
+        }
+        // expected: midpoint rule on SUB x SUB points per cell (d omega = d cos d phi)
+        let mut expected = vec![0f64; NT * NP + 1];
+        let (dc, dp) = (1.0 / NT as f64, 2.0 * std::f64::consts::PI / NP as f64);
+        for t in 0..NT {
+            for p in 0..NP {
+                let mut integral = 0.0f64;
+                for i in 0..SUB {
+                    for j in 0..SUB {
+                        let c = (t as f64 + (i as f64 + 0.5) / SUB as f64) * dc;
+                        let phi = (p as f64 + (j as f64 + 0.5) / SUB as f64) * dp;
+                        let s = (1.0 - c * c).max(0.0).sqrt();
+                        let wi =
+                            Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
+                        integral += microfacet_pdf(&m, Vec3::Z, wo, wi) as f64;
+                    }
+                }
+                expected[t * NP + p] = integral * dc * dp / (SUB * SUB) as f64 * N as f64;
+            }
+        }
+        let upper: f64 = expected[..NT * NP].iter().sum::<f64>() / N as f64;
+        assert!(
+            upper <= 1.0 + 2e-3,
+            "roughness {roughness}, {theta} deg: the pdf integrates to {upper} > 1"
+        );
+        expected[NT * NP] = (1.0 - upper).max(0.0) * N as f64;
+        // pool the cells expecting fewer than 5
+        let (mut chi2, mut cells, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
+        for (e, o) in expected.iter().zip(&observed) {
+            if *e < 5.0 {
+                pool_e += e;
+                pool_o += o;
+            } else {
+                chi2 += (o - e) * (o - e) / e;
+                cells += 1;
+            }
+        }
+        if pool_e >= 5.0 {
+            chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+            cells += 1;
+        } else {
+            assert!(
+                pool_o <= 5.0 + 4.0 * pool_e.sqrt() + 5.0,
+                "samples where the pdf is ~0: {pool_o}"
+            );
+        }
+        // critical value at significance 1e-3 (Wilson-Hilferty)
+        let k = (cells - 1) as f64;
+        let z = 3.09;
+        let critical = k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3);
+        assert!(chi2 < critical, "roughness {roughness}, {theta} deg: chi2 {chi2:.1} over {cells} cells, critical {critical:.1}");
+        eprintln!("roughness {roughness}, {theta} deg: chi2 {chi2:.1} / critical {critical:.1} ({cells} cells), pdf integral {upper:.4}");
+    }
+}

@@ -82,6 +82,145 @@ fn scatter_dielectric(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
     return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), weight);
 }
 
+// Below this GGX alpha the specular lobe is a perfect mirror (a delta, as in pbrt-v4): eval
+// and pdf leave it out and scatter_microfacet samples the mirror direction itself, so
+// roughness 0 never divides by zero.
+const ALPHA_SMOOTH: f32 = 1e-3;
+
+fn luminance(c: vec3<f32>) -> f32 {
+    return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));
+}
+
+// GGX (Trowbridge-Reitz) normal distribution at cos(theta_h) = c.
+fn ggx_d(c: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let k = c * c * (a2 - 1.0) + 1.0;
+    return a2 / (PI * k * k);
+}
+
+// Smith's Lambda for GGX at cos(theta) = c > 0: (sqrt(1 + alpha^2 tan^2) - 1) / 2, written
+// without tan so that grazing directions stay finite.
+fn smith_lambda(c: f32, alpha: f32) -> f32 {
+    let c2 = c * c;
+    return 0.5 * (sqrt(c2 + alpha * alpha * (1.0 - c2)) / c - 1.0);
+}
+
+// A visible normal of GGX seen from wo (local frame, z = the normal), sampled as in Heitz,
+// "Sampling the GGX Distribution of Visible Normals" (JCGT 2018).
+fn sample_ggx_vndf(wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
+    let vh = normalize(vec3<f32>(alpha * wo.x, alpha * wo.y, wo.z));
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if (len2 > 0.0) {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(len2);
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
+    let nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(0.0, nh.z)));
+}
+
+// Probability of sampling the specular lobe: its share by Fresnel at the view angle and the
+// lobes' colours, kept in [0.1, 0.9] when both lobes reflect. It depends on wo only, so
+// the mixture's pdf is exact.
+fn microfacet_spec_prob(mat: Material, cos_o: f32) -> f32 {
+    let f = schlick(cos_o, mat.params.y);
+    let ws = luminance(mat.extra.rgb) * f;
+    let wd = luminance(mat.albedo.rgb) * (1.0 - f);
+    if (ws <= 0.0) {
+        return 0.0;
+    }
+    if (wd <= 0.0) {
+        return 1.0;
+    }
+    return clamp(ws / (ws + wd), 0.1, 0.9);
+}
+
+// Cook-Torrance BSDF x cos(theta_i), for unit wo and wi about the unit normal n on wo's side:
+// ks D G2 F / (4 cos_o) + kd (1 - F(cos_i)) (1 - F(cos_o)) cos_i / pi. G2 is Smith's
+// height-correlated masking-shadowing, F Schlick's from the ior. The diffuse base gets the
+// light the Fresnel of both directions lets through, which keeps the sum reciprocal and
+// within energy conservation (the white furnace test checks it).
+fn microfacet_eval(mat: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let cos_o = dot(n, wo);
+    let cos_i = dot(n, wi);
+    if (cos_o <= 0.0 || cos_i <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let alpha = mat.params.x;
+    let ior = mat.params.y;
+    let diff = (1.0 - schlick(cos_i, ior)) * (1.0 - schlick(cos_o, ior)) * cos_i / PI;
+    if (alpha < ALPHA_SMOOTH) {
+        return mat.albedo.rgb * diff;
+    }
+    let h = normalize(wo + wi);
+    let g2 = 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
+    let spec = ggx_d(dot(n, h), alpha) * g2 * schlick(dot(wi, h), ior) / (4.0 * cos_o);
+    return mat.extra.rgb * spec + mat.albedo.rgb * diff;
+}
+
+// The pdf of scatter_microfacet's directions: the visible-normal pdf mapped through the
+// reflection, G1(wo) D(h) / (4 cos_o), mixed with the cosine pdf.
+fn microfacet_pdf(mat: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let cos_o = dot(n, wo);
+    let cos_i = dot(n, wi);
+    if (cos_o <= 0.0 || cos_i <= 0.0) {
+        return 0.0;
+    }
+    let alpha = mat.params.x;
+    let p_s = microfacet_spec_prob(mat, cos_o);
+    let diff = (1.0 - p_s) * cos_i / PI;
+    if (alpha < ALPHA_SMOOTH) {
+        return diff;
+    }
+    let h = normalize(wo + wi);
+    let spec = ggx_d(dot(n, h), alpha) / ((1.0 + smith_lambda(cos_o, alpha)) * 4.0 * cos_o);
+    return p_s * spec + diff;
+}
+
+// Microfacet: the specular lobe (a visible normal, then the mirror direction about it; the
+// mirror direction itself when smooth) or the diffuse one (cosine), chosen by
+// microfacet_spec_prob with u.x reused; weight = eval / pdf of the whole mixture. A
+// direction under the geometric surface is absorbed.
+fn scatter_microfacet(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
+    let side = select(-1.0, 1.0, hit.front_face);
+    let n = side * hit.ns;
+    let wo = -ray.dir;
+    let cos_o = dot(n, wo);
+    if (cos_o <= 0.0) {
+        return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    let p_s = microfacet_spec_prob(mat, cos_o);
+    let is_smooth = mat.params.x < ALPHA_SMOOTH;
+    if (is_smooth && u.x < p_s) {
+        // the mirror lobe: weight = ks F(cos_o) / p_s
+        let wi = reflect_dir(ray.dir, n);
+        if (side * dot(wi, hit.ng) <= 0.0) {
+            return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        }
+        return Scatter(true, wi, mat.extra.rgb * (schlick(cos_o, mat.params.y) / p_s));
+    }
+    var wi: vec3<f32>;
+    if (u.x < p_s) {
+        let tb = onb_tangents(n);
+        let local = vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o);
+        let h_l = sample_ggx_vndf(local, mat.params.x, vec2<f32>(u.x / p_s, u.y));
+        let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
+        wi = normalize(2.0 * dot(wo, h) * h - wo);
+    } else {
+        wi = sample_cosine_hemisphere(n, vec2<f32>((u.x - p_s) / (1.0 - p_s), u.y));
+    }
+    let pdf = microfacet_pdf(mat, n, wo, wi);
+    if (!(pdf > 0.0) || side * dot(wi, hit.ng) <= 0.0) {
+        return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+    }
+    return Scatter(true, wi, microfacet_eval(mat, n, wo, wi) / pdf);
+}
+
 fn scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     switch mat.tag {
         case MAT_LAMBERTIAN: {
@@ -92,6 +231,9 @@ fn scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
         }
         case MAT_DIELECTRIC: {
             return scatter_dielectric(mat, ray, hit, u);
+        }
+        case MAT_MICROFACET: {
+            return scatter_microfacet(mat, ray, hit, u);
         }
         default: {
             // emissive and unknown materials absorb

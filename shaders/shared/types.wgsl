@@ -29,6 +29,7 @@ const MAT_LAMBERTIAN: u32 = 0u;
 const MAT_EMISSIVE: u32 = 1u;
 const MAT_METAL: u32 = 2u;
 const MAT_DIELECTRIC: u32 = 3u;
+const MAT_MICROFACET: u32 = 4u;
 
 // Material flags.
 const MAT_FLAG_TWO_SIDED: u32 = 1u;
@@ -68,13 +69,14 @@ struct Material {
     flags: u32,
     pad0: u32,
     pad1: u32,
-    // lambertian, metal: reflectance | dielectric: tint
+    // lambertian, metal: reflectance | dielectric: tint | microfacet: diffuse colour
     albedo: vec4<f32>,
     // radiance emitted from the front side (both sides with MAT_FLAG_TWO_SIDED)
     emission: vec4<f32>,
     // metal: .x = fuzz | dielectric: .x = index of refraction
+    // microfacet: .x = roughness (GGX alpha), .y = index of refraction
     params: vec4<f32>,
-    // dielectric: absorption per unit length (Beer-Lambert)
+    // dielectric: absorption per unit length (Beer-Lambert) | microfacet: specular colour
     extra: vec4<f32>,
 }
 

@@ -2,10 +2,10 @@
 
 use glam::Vec3;
 
-use super::sampling::{sample_cosine_hemisphere, sample_sphere};
+use super::sampling::{onb_tangents, sample_cosine_hemisphere, sample_sphere, PI};
 use super::types::{xyz, Hit, Ray};
 use crate::scene::records::{
-    Material, MAT_DIELECTRIC, MAT_FLAG_TWO_SIDED, MAT_LAMBERTIAN, MAT_METAL,
+    Material, MAT_DIELECTRIC, MAT_FLAG_TWO_SIDED, MAT_LAMBERTIAN, MAT_METAL, MAT_MICROFACET,
 };
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -115,11 +115,148 @@ pub fn scatter_dielectric(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
     }
 }
 
+/// Below this GGX alpha the specular lobe is a perfect mirror (a delta, as in pbrt-v4).
+pub const ALPHA_SMOOTH: f32 = 1e-3;
+
+#[inline]
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// GGX normal distribution at cos(theta_h) = c.
+#[inline]
+pub fn ggx_d(c: f32, alpha: f32) -> f32 {
+    let a2 = alpha * alpha;
+    let k = c * c * (a2 - 1.0) + 1.0;
+    a2 / (PI * k * k)
+}
+
+/// Smith's Lambda for GGX at cos(theta) = c > 0.
+#[inline]
+pub fn smith_lambda(c: f32, alpha: f32) -> f32 {
+    let c2 = c * c;
+    0.5 * ((c2 + alpha * alpha * (1.0 - c2)).sqrt() / c - 1.0)
+}
+
+/// A visible normal of GGX seen from wo (local frame, z = normal), Heitz 2018.
+pub fn sample_ggx_vndf(wo: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
+    let vh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    let mut t1 = Vec3::X;
+    if len2 > 0.0 {
+        t1 = Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt();
+    }
+    let t2 = vh.cross(t1);
+    let r = u[0].sqrt();
+    let phi = 2.0 * PI * u[1];
+    let p1 = r * phi.cos();
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+    let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
+    Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize()
+}
+
+/// Probability of sampling the specular lobe (depends on wo only).
+pub fn microfacet_spec_prob(mat: &Material, cos_o: f32) -> f32 {
+    let f = schlick(cos_o, mat.params[1]);
+    let ws = luminance(xyz(mat.extra)) * f;
+    let wd = luminance(xyz(mat.albedo)) * (1.0 - f);
+    if ws <= 0.0 {
+        return 0.0;
+    }
+    if wd <= 0.0 {
+        return 1.0;
+    }
+    (ws / (ws + wd)).clamp(0.1, 0.9)
+}
+
+/// Cook-Torrance BSDF x cos(theta_i).
+pub fn microfacet_eval(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+    let cos_o = n.dot(wo);
+    let cos_i = n.dot(wi);
+    if cos_o <= 0.0 || cos_i <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let alpha = mat.params[0];
+    let ior = mat.params[1];
+    let diff = (1.0 - schlick(cos_i, ior)) * (1.0 - schlick(cos_o, ior)) * cos_i / PI;
+    if alpha < ALPHA_SMOOTH {
+        return xyz(mat.albedo) * diff;
+    }
+    let h = (wo + wi).normalize();
+    let g2 = 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
+    let spec = ggx_d(n.dot(h), alpha) * g2 * schlick(wi.dot(h), ior) / (4.0 * cos_o);
+    xyz(mat.extra) * spec + xyz(mat.albedo) * diff
+}
+
+/// The pdf of scatter_microfacet's directions.
+pub fn microfacet_pdf(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    let cos_o = n.dot(wo);
+    let cos_i = n.dot(wi);
+    if cos_o <= 0.0 || cos_i <= 0.0 {
+        return 0.0;
+    }
+    let alpha = mat.params[0];
+    let p_s = microfacet_spec_prob(mat, cos_o);
+    let diff = (1.0 - p_s) * cos_i / PI;
+    if alpha < ALPHA_SMOOTH {
+        return diff;
+    }
+    let h = (wo + wi).normalize();
+    let spec = ggx_d(n.dot(h), alpha) / ((1.0 + smith_lambda(cos_o, alpha)) * 4.0 * cos_o);
+    p_s * spec + diff
+}
+
+/// Microfacet: specular (visible normal) or diffuse (cosine) lobe; weight = eval / pdf.
+pub fn scatter_microfacet(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    let n = side * hit.ns;
+    let wo = -ray.dir;
+    let cos_o = n.dot(wo);
+    if cos_o <= 0.0 {
+        return ABSORBED;
+    }
+    let p_s = microfacet_spec_prob(mat, cos_o);
+    let is_smooth = mat.params[0] < ALPHA_SMOOTH;
+    if is_smooth && u[0] < p_s {
+        let wi = reflect_dir(ray.dir, n);
+        if side * wi.dot(hit.ng) <= 0.0 {
+            return ABSORBED;
+        }
+        return Scatter {
+            ok: true,
+            dir: wi,
+            weight: xyz(mat.extra) * (schlick(cos_o, mat.params[1]) / p_s),
+        };
+    }
+    let wi = if u[0] < p_s {
+        let tb = onb_tangents(n);
+        let local = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);
+        let h_l = sample_ggx_vndf(local, mat.params[0], [u[0] / p_s, u[1]]);
+        let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
+        (2.0 * wo.dot(h) * h - wo).normalize()
+    } else {
+        sample_cosine_hemisphere(n, [(u[0] - p_s) / (1.0 - p_s), u[1]])
+    };
+    let pdf = microfacet_pdf(mat, n, wo, wi);
+    // Written as in WGSL, so a NaN pdf takes the same branch on both backends.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(pdf > 0.0) || side * wi.dot(hit.ng) <= 0.0 {
+        return ABSORBED;
+    }
+    Scatter {
+        ok: true,
+        dir: wi,
+        weight: microfacet_eval(mat, n, wo, wi) / pdf,
+    }
+}
+
 pub fn scatter(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
     match mat.tag {
         MAT_LAMBERTIAN => scatter_lambertian(mat, hit, u),
         MAT_METAL => scatter_metal(mat, ray, hit, u),
         MAT_DIELECTRIC => scatter_dielectric(mat, ray, hit, u),
+        MAT_MICROFACET => scatter_microfacet(mat, ray, hit, u),
         // emissive and unknown materials absorb
         _ => ABSORBED,
     }

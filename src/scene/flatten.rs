@@ -44,6 +44,20 @@ fn material_record(m: &MaterialDesc) -> Material {
             extra: rgb(absorption),
             ..Default::default()
         },
+        MaterialDesc::Microfacet {
+            albedo,
+            specular,
+            roughness,
+            ior,
+            emission,
+        } => Material {
+            tag: records::MAT_MICROFACET,
+            albedo: rgb(albedo),
+            emission: rgb(emission),
+            params: [roughness, ior, 0.0, 0.0],
+            extra: rgb(specular.unwrap_or(albedo)),
+            ..Default::default()
+        },
         MaterialDesc::Emissive {
             radiance,
             two_sided,

@@ -110,12 +110,28 @@ pub enum MaterialDesc {
         #[serde(default)]
         emission: [f32; 3],
     },
+    /// Cook-Torrance: a GGX specular lobe (`roughness` = alpha in [0, 1], Schlick's Fresnel
+    /// from `ior`, colour `specular`, default `albedo`) over a Lambertian base (`albedo`)
+    /// that receives what the specular lobe does not reflect.
+    Microfacet {
+        albedo: [f32; 3],
+        specular: Option<[f32; 3]>,
+        roughness: f32,
+        #[serde(default = "glass_ior")]
+        ior: f32,
+        #[serde(default)]
+        emission: [f32; 3],
+    },
     /// A light: emits `radiance` from its front side, or both with `two_sided`; absorbs.
     Emissive {
         radiance: [f32; 3],
         #[serde(default)]
         two_sided: bool,
     },
+}
+
+fn glass_ior() -> f32 {
+    1.5
 }
 
 fn white() -> [f32; 3] {

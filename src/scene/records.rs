@@ -41,6 +41,7 @@ pub const MAT_LAMBERTIAN: u32 = 0;
 pub const MAT_EMISSIVE: u32 = 1;
 pub const MAT_METAL: u32 = 2;
 pub const MAT_DIELECTRIC: u32 = 3;
+pub const MAT_MICROFACET: u32 = 4;
 
 /// Material flag: emits from both sides.
 pub const MAT_FLAG_TWO_SIDED: u32 = 1;
@@ -71,9 +72,10 @@ pub struct Primitive {
 }
 
 /// A tagged material. `emission` is the radiance leaving the front side (both sides with
-/// [`MAT_FLAG_TWO_SIDED`]); `params` holds per-type scalars (metal: fuzz; dielectric: ior);
-/// `extra` a per-type colour (dielectric: absorption per unit length). `albedo` is the
-/// dielectric's tint.
+/// [`MAT_FLAG_TWO_SIDED`]); `params` holds per-type scalars (metal: fuzz; dielectric: ior;
+/// microfacet: roughness, ior); `extra` a per-type colour (dielectric: absorption per unit
+/// length; microfacet: specular colour). `albedo` is the dielectric's tint and the
+/// microfacet's diffuse colour.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Material {

@@ -89,6 +89,29 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                 v.nonnegative3(&format!("{key}.absorption"), *absorption, at);
                 v.nonnegative3(&format!("{key}.emission"), *emission, at);
             }
+            MaterialDesc::Microfacet {
+                albedo,
+                specular,
+                roughness,
+                ior,
+                emission,
+            } => {
+                v.reflectance(&format!("{key}.albedo"), *albedo, at);
+                if let Some(ks) = specular {
+                    v.reflectance(&format!("{key}.specular"), *ks, at);
+                }
+                if !(0.0..=1.0).contains(roughness) {
+                    v.push(
+                        at,
+                        &format!("{key}.roughness"),
+                        format!("must be in [0, 1], got {roughness}"),
+                    );
+                }
+                if !(*ior > 0.0 && ior.is_finite()) {
+                    v.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
+                }
+                v.nonnegative3(&format!("{key}.emission"), *emission, at);
+            }
             MaterialDesc::Emissive { radiance, .. } => {
                 v.nonnegative3(&format!("{key}.radiance"), *radiance, at);
             }
