@@ -1,8 +1,10 @@
-// Intersection kernel for tests: one ray per invocation through the closest-hit search and
-// surface_at, reporting everything the CPU reference computes for the same ray. Group 0 is
-// the scene, as in trace.wgsl; group 1 holds the rays and the results.
+// Kernels for tests. `main`: one ray per invocation through the closest-hit search and
+// surface_at, reporting everything the CPU reference computes for the same ray.
+// `textures_main`: one texture look-up per invocation. Group 0 is the scene, as in
+// trace.wgsl; group 1 holds each kernel's inputs and results.
 #import shared/bindings
 #import shared/intersect
+#import shared/textures
 #import shared/types
 
 struct KernelRay {
@@ -44,4 +46,25 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         out.uv = vec4<f32>(h.uv, cand.u, cand.v);
     }
     hits[i] = out;
+}
+
+// Texture look-ups for tests: texture `index` at (uv, p), one per invocation.
+struct TextureLookup {
+    // uv in .xy, texture index in .z (as a float)
+    uv: vec4<f32>,
+    p: vec4<f32>,
+}
+
+
+@group(1) @binding(2) var<storage, read> lookups: array<TextureLookup>;
+@group(1) @binding(3) var<storage, read_write> colors: array<vec4<f32>>;
+
+@compute @workgroup_size(64, 1, 1)
+fn textures_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= arrayLength(&lookups)) {
+        return;
+    }
+    let l = lookups[i];
+    colors[i] = vec4<f32>(texture_value(u32(l.uv.z), l.uv.xy, l.p.xyz), 0.0);
 }

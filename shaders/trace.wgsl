@@ -5,6 +5,7 @@
 #import shared/materials
 #import shared/rng
 #import shared/sampling
+#import shared/textures
 #import shared/types
 
 // Dimension pairs drawn from the RNG at each bounce.
@@ -41,7 +42,7 @@ fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
             break;
         }
         let hit = surface_at(ray, cand);
-        let mat = materials[hit.material];
+        let mat = material_at(materials[hit.material], hit);
         radiance += throughput * emitted(mat, hit);
         if (depth + 1u >= params.max_depth) {
             break;

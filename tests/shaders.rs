@@ -3,14 +3,24 @@
 
 use std::collections::BTreeSet;
 
-use wgtrace::gpu::shader::{preprocess, validate, ENTRY_SHADERS, SHADER_FILES};
+use wgtrace::gpu::shader::{preprocess, validate, ENTRY_SHADERS, FEATURE_DEFINES, SHADER_FILES};
 use wgtrace::scene::records::record_layouts;
 
 #[test]
 fn every_entry_shader_validates_with_naga() {
+    // with no feature define, with each alone, and with all of them
+    let mut sets: Vec<BTreeSet<String>> = vec![BTreeSet::new()];
+    sets.extend(
+        FEATURE_DEFINES
+            .iter()
+            .map(|d| BTreeSet::from([d.to_string()])),
+    );
+    sets.push(FEATURE_DEFINES.iter().map(|d| d.to_string()).collect());
     for entry in ENTRY_SHADERS {
-        let src = preprocess(entry, &BTreeSet::new()).unwrap();
-        validate(entry, &src).unwrap_or_else(|e| panic!("{e}"));
+        for defines in &sets {
+            let src = preprocess(entry, defines).unwrap();
+            validate(entry, &src).unwrap_or_else(|e| panic!("{defines:?}: {e}"));
+        }
     }
 }
 

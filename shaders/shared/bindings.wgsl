@@ -11,3 +11,6 @@
 @group(0) @binding(5) var<storage, read> bvh: array<BvhNode>;
 // Transforms and triangle vertex attributes, indexed by Primitive.data.
 @group(0) @binding(6) var<storage, read> shape_data: array<vec4<f32>>;
+@group(0) @binding(7) var<storage, read> textures: array<Texture>;
+// Image texels (linear RGB) and the Perlin noise tables.
+@group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;

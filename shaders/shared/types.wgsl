@@ -31,6 +31,18 @@ const MAT_METAL: u32 = 2u;
 const MAT_DIELECTRIC: u32 = 3u;
 const MAT_MICROFACET: u32 = 4u;
 
+// Texture tags (switch in textures.wgsl) and flags.
+const TEX_CONSTANT: u32 = 0u;
+const TEX_CHECKER: u32 = 1u;
+const TEX_IMAGE: u32 = 2u;
+const TEX_NOISE: u32 = 3u;
+// checker cells in space rather than in uv
+const TEX_FLAG_SOLID: u32 = 4u;
+// image: wrap mode (0 repeat, 1 clamp, 2 mirror) | noise: kind (0 Perlin, 1 turbulence, 2 marble)
+const TEX_MODE_MASK: u32 = 3u;
+// a colour with no texture
+const NO_TEXTURE: u32 = 0xffffffffu;
+
 // Material flags.
 const MAT_FLAG_TWO_SIDED: u32 = 1u;
 
@@ -67,8 +79,9 @@ struct BvhNode {
 struct Material {
     tag: u32,
     flags: u32,
-    pad0: u32,
-    pad1: u32,
+    // textures of albedo and emission, or NO_TEXTURE
+    tex_albedo: u32,
+    tex_emission: u32,
     // lambertian, metal: reflectance | dielectric: tint | microfacet: diffuse colour
     albedo: vec4<f32>,
     // radiance emitted from the front side (both sides with MAT_FLAG_TWO_SIDED)
@@ -78,6 +91,29 @@ struct Material {
     params: vec4<f32>,
     // dielectric: absorption per unit length (Beer-Lambert) | microfacet: specular colour
     extra: vec4<f32>,
+    // texture of extra (microfacet specular), or NO_TEXTURE
+    tex_extra: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+}
+
+// Constant: color0 | checker: cells of textures even / odd (color0 / color1 where
+// NO_TEXTURE), params.x cells per unit | image: width x height linear texels from
+// texels[offset], row 0 at the top | noise: color0 x Perlin noise of params.x x p, tables at
+// texels[offset].
+struct Texture {
+    tag: u32,
+    flags: u32,
+    even: u32,
+    odd: u32,
+    width: u32,
+    height: u32,
+    offset: u32,
+    pad: u32,
+    color0: vec4<f32>,
+    color1: vec4<f32>,
+    params: vec4<f32>,
 }
 
 struct Emitter {

@@ -1,6 +1,6 @@
 //! Mirrors `shaders/shared/bindings.wgsl`: what one dispatch reads.
 
-use crate::scene::records::{BvhNode, Emitter, Material, Params, Primitive};
+use crate::scene::records::{BvhNode, Emitter, Material, Params, Primitive, Texture};
 use crate::scene::FlatScene;
 
 /// The resources of one dispatch, borrowed from the flattened scene.
@@ -12,6 +12,8 @@ pub struct Bindings<'a> {
     pub emitters: &'a [Emitter],
     pub bvh: &'a [BvhNode],
     pub shape_data: &'a [[f32; 4]],
+    pub textures: &'a [Texture],
+    pub texels: &'a [[f32; 4]],
 }
 
 impl<'a> Bindings<'a> {
@@ -23,6 +25,8 @@ impl<'a> Bindings<'a> {
             emitters: &scene.emitters,
             bvh: &scene.bvh,
             shape_data: &scene.shape_data,
+            textures: &scene.textures,
+            texels: &scene.texels,
         }
     }
 }

@@ -11,6 +11,7 @@ pub mod intersect;
 pub mod materials;
 pub mod rng;
 pub mod sampling;
+pub mod textures;
 pub mod trace;
 pub mod types;
 

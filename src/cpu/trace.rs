@@ -8,6 +8,7 @@ use super::intersect::{intersect_scene, surface_at};
 use super::materials::{emitted, scatter};
 use super::rng::rand_2d;
 use super::sampling::{offset_ray, sample_disk};
+use super::textures::material_at;
 use super::types::{xyz, Ray, NO_HIT};
 use crate::scene::FlatScene;
 
@@ -47,7 +48,7 @@ pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
             break;
         }
         let hit = surface_at(b, &ray, &cand);
-        let mat = &b.materials[hit.material as usize];
+        let mat = &material_at(b, &b.materials[hit.material as usize], &hit);
         radiance += throughput * emitted(mat, &hit);
         if depth + 1 >= p.max_depth {
             break;

@@ -1,6 +1,6 @@
-//! The intersection kernel (`shaders/kernel.wgsl`): a batch of rays through the GPU's
-//! closest-hit search and `surface_at`, for tests that compare the GPU with the CPU
-//! reference ray by ray.
+//! The test kernels (`shaders/kernel.wgsl`): a batch of rays through the GPU's closest-hit
+//! search and `surface_at`, or of texture look-ups, for tests that compare the GPU with the
+//! CPU reference one by one.
 
 use wgpu::util::DeviceExt;
 
@@ -9,7 +9,7 @@ use super::render::{
     check_loop_limit, check_scene_fits, read_mapped, scene_bindings, scene_layout,
 };
 use super::shader;
-use crate::scene::records::{KernelHit, KernelRay};
+use crate::scene::records::{KernelHit, KernelRay, TextureLookup};
 use crate::scene::FlatScene;
 
 /// Workgroup size of `kernel.wgsl`'s entry point.
@@ -21,15 +21,38 @@ pub fn intersect_rays(
     scene: &FlatScene,
     rays: &[KernelRay],
 ) -> Result<Vec<KernelHit>, GpuError> {
-    if rays.is_empty() {
+    check_loop_limit(ctx, scene, false)?;
+    run_kernel(ctx, scene, "main", [0, 1], rays)
+}
+
+/// Looks textures up on the GPU (`texture_value`); one linear RGB colour (`.w` = 0) each.
+pub fn lookup_textures(
+    ctx: &GpuContext,
+    scene: &FlatScene,
+    lookups: &[TextureLookup],
+) -> Result<Vec<[f32; 4]>, GpuError> {
+    run_kernel(ctx, scene, "textures_main", [2, 3], lookups)
+}
+
+/// Dispatches one invocation per input of entry point `entry` of `kernel.wgsl`, with the
+/// scene in group 0 and the inputs and outputs at `bindings` of group 1.
+fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
+    ctx: &GpuContext,
+    scene: &FlatScene,
+    entry: &str,
+    bindings: [u32; 2],
+    inputs: &[I],
+) -> Result<Vec<O>, GpuError> {
+    if inputs.is_empty() {
         return Ok(Vec::new());
     }
     let device = &ctx.device;
     check_scene_fits(device, scene)?;
-    check_loop_limit(ctx, scene, false)?;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("kernel.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(shader::kernel_shader()?.into()),
+        source: wgpu::ShaderSource::Wgsl(
+            shader::kernel_shader(&shader::scene_defines(scene))?.into(),
+        ),
     });
     let scene_bgl = scene_layout(device);
     let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
@@ -44,7 +67,7 @@ pub fn intersect_rays(
     };
     let io_bgl = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("kernel io"),
-        entries: &[storage(0, true), storage(1, false)],
+        entries: &[storage(bindings[0], true), storage(bindings[1], false)],
     });
     let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("kernel layout"),
@@ -55,12 +78,12 @@ pub fn intersect_rays(
         label: Some("kernel"),
         layout: Some(&layout),
         module: &module,
-        entry_point: Some("main"),
+        entry_point: Some(entry),
         compilation_options: Default::default(),
         cache: None,
     });
 
-    // The kernel never touches the accumulation buffer; one element keeps the group valid.
+    // The kernels never touch the accumulation buffer; one element keeps the group valid.
     let accum = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("unused accumulation"),
         size: 32,
@@ -72,21 +95,21 @@ pub fn intersect_rays(
     ctx.queue
         .write_buffer(&scene_group.params, 0, bytemuck::bytes_of(&params));
 
-    let ray_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("rays"),
-        contents: bytemuck::cast_slice(rays),
+    let input_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("kernel inputs"),
+        contents: bytemuck::cast_slice(inputs),
         usage: wgpu::BufferUsages::STORAGE,
     });
-    let hits_size = (rays.len() * std::mem::size_of::<KernelHit>()) as u64;
-    let hit_buf = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("hits"),
-        size: hits_size,
+    let out_size = (inputs.len() * std::mem::size_of::<O>()) as u64;
+    let out_buf = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("kernel outputs"),
+        size: out_size,
         usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         mapped_at_creation: false,
     });
     let readback = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("hits readback"),
-        size: hits_size,
+        label: Some("kernel readback"),
+        size: out_size,
         usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -95,12 +118,12 @@ pub fn intersect_rays(
         layout: &io_bgl,
         entries: &[
             wgpu::BindGroupEntry {
-                binding: 0,
-                resource: ray_buf.as_entire_binding(),
+                binding: bindings[0],
+                resource: input_buf.as_entire_binding(),
             },
             wgpu::BindGroupEntry {
-                binding: 1,
-                resource: hit_buf.as_entire_binding(),
+                binding: bindings[1],
+                resource: out_buf.as_entire_binding(),
             },
         ],
     });
@@ -115,9 +138,9 @@ pub fn intersect_rays(
         pass.set_pipeline(&pipeline);
         pass.set_bind_group(0, &scene_group.group, &[]);
         pass.set_bind_group(1, &io_group, &[]);
-        pass.dispatch_workgroups((rays.len() as u32).div_ceil(WORKGROUP), 1, 1);
+        pass.dispatch_workgroups((inputs.len() as u32).div_ceil(WORKGROUP), 1, 1);
     }
-    encoder.copy_buffer_to_buffer(&hit_buf, 0, &readback, 0, hits_size);
+    encoder.copy_buffer_to_buffer(&out_buf, 0, &readback, 0, out_size);
     ctx.queue.submit([encoder.finish()]);
     read_mapped(device, &readback)
 }

@@ -18,7 +18,7 @@ pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
 const WORKGROUP: u32 = 8;
 
 /// Binding numbers of `shaders/shared/bindings.wgsl`, in order.
-const BINDINGS: [(u32, wgpu::BufferBindingType); 7] = [
+const BINDINGS: [(u32, wgpu::BufferBindingType); 9] = [
     (0, wgpu::BufferBindingType::Uniform),
     (1, wgpu::BufferBindingType::Storage { read_only: true }),
     (2, wgpu::BufferBindingType::Storage { read_only: true }),
@@ -26,6 +26,8 @@ const BINDINGS: [(u32, wgpu::BufferBindingType); 7] = [
     (4, wgpu::BufferBindingType::Storage { read_only: false }),
     (5, wgpu::BufferBindingType::Storage { read_only: true }),
     (6, wgpu::BufferBindingType::Storage { read_only: true }),
+    (7, wgpu::BufferBindingType::Storage { read_only: true }),
+    (8, wgpu::BufferBindingType::Storage { read_only: true }),
 ];
 
 pub struct GpuRenderer {
@@ -88,7 +90,7 @@ impl GpuRenderer {
         }
         check_scene_fits(device, scene)?;
         check_loop_limit(&ctx, scene, true)?;
-        let wgsl = shader::trace_shader()?;
+        let wgsl = shader::trace_shader(&shader::scene_defines(scene))?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(wgsl.into()),
@@ -290,6 +292,8 @@ pub(crate) fn scene_bindings(
     let emitters = storage_buffer(device, "emitters", &scene.emitters);
     let bvh = storage_buffer(device, "bvh", &scene.bvh);
     let shape_data = storage_buffer(device, "shape_data", &scene.shape_data);
+    let textures = storage_buffer(device, "textures", &scene.textures);
+    let texels = storage_buffer(device, "texels", &scene.texels);
     let buffers = [
         &params,
         &primitives,
@@ -298,6 +302,8 @@ pub(crate) fn scene_bindings(
         accum,
         &bvh,
         &shape_data,
+        &textures,
+        &texels,
     ];
     let entries: Vec<wgpu::BindGroupEntry> = BINDINGS
         .iter()

@@ -29,6 +29,10 @@ pub const SHADER_FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/shared/sampling.wgsl"),
     ),
     (
+        "shared/textures",
+        include_str!("../../shaders/shared/textures.wgsl"),
+    ),
+    (
         "shared/types",
         include_str!("../../shaders/shared/types.wgsl"),
     ),
@@ -150,11 +154,24 @@ pub fn validate(name: &str, wgsl: &str) -> Result<naga::Module, ShaderError> {
 }
 
 /// The trace shader for a scene.
-pub fn trace_shader() -> Result<String, ShaderError> {
-    preprocess("trace", &BTreeSet::new())
+pub fn trace_shader(defines: &BTreeSet<String>) -> Result<String, ShaderError> {
+    preprocess("trace", defines)
 }
 
 /// The intersection kernel used by tests (`shaders/kernel.wgsl`), assembled.
-pub fn kernel_shader() -> Result<String, ShaderError> {
-    preprocess("kernel", &BTreeSet::new())
+pub fn kernel_shader(defines: &BTreeSet<String>) -> Result<String, ShaderError> {
+    preprocess("kernel", defines)
+}
+
+/// Every define a shader may be assembled with (the tests validate each).
+pub const FEATURE_DEFINES: &[&str] = &["HAS_TEXTURES"];
+
+/// The defines a scene's shaders are assembled with: code for features the scene does not
+/// use is left out.
+pub fn scene_defines(scene: &crate::scene::FlatScene) -> BTreeSet<String> {
+    let mut defines = BTreeSet::new();
+    if !scene.textures.is_empty() {
+        defines.insert("HAS_TEXTURES".to_string());
+    }
+    defines
 }

@@ -6,71 +6,89 @@
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::bvh::{self, Aabb};
-use super::format::{MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
 use super::mesh::MeshData;
-use super::records::{self, BvhNode, Emitter, Material, Primitive, NO_DATA};
+use super::records::{self, BvhNode, Emitter, Material, Primitive, NO_DATA, NO_TEXTURE};
+use super::textures::{color_slot, texture_records, ImageData};
 use super::{CameraFrame, FlatScene};
 
-fn material_record(m: &MaterialDesc) -> Material {
+fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
+    let slot = |c: &ColorDesc| color_slot(c, textures);
     let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
-    match *m {
-        MaterialDesc::Lambertian { albedo, emission } => Material {
-            tag: records::MAT_LAMBERTIAN,
-            albedo: rgb(albedo),
-            emission: rgb(emission),
-            ..Default::default()
-        },
+    let (tag, albedo, emission, params, extra) = match m {
+        MaterialDesc::Lambertian { albedo, emission } => (
+            records::MAT_LAMBERTIAN,
+            slot(albedo),
+            slot(emission),
+            [0.0; 4],
+            ([0.0; 4], NO_TEXTURE),
+        ),
         MaterialDesc::Metal {
             albedo,
             fuzz,
             emission,
-        } => Material {
-            tag: records::MAT_METAL,
-            albedo: rgb(albedo),
-            emission: rgb(emission),
-            params: [fuzz, 0.0, 0.0, 0.0],
-            ..Default::default()
-        },
+        } => (
+            records::MAT_METAL,
+            slot(albedo),
+            slot(emission),
+            [*fuzz, 0.0, 0.0, 0.0],
+            ([0.0; 4], NO_TEXTURE),
+        ),
         MaterialDesc::Dielectric {
             ior,
             tint,
             absorption,
             emission,
-        } => Material {
-            tag: records::MAT_DIELECTRIC,
-            albedo: rgb(tint),
-            emission: rgb(emission),
-            params: [ior, 0.0, 0.0, 0.0],
-            extra: rgb(absorption),
-            ..Default::default()
-        },
+        } => (
+            records::MAT_DIELECTRIC,
+            slot(tint),
+            slot(emission),
+            [*ior, 0.0, 0.0, 0.0],
+            (rgb(*absorption), NO_TEXTURE),
+        ),
         MaterialDesc::Microfacet {
             albedo,
             specular,
             roughness,
             ior,
             emission,
-        } => Material {
-            tag: records::MAT_MICROFACET,
-            albedo: rgb(albedo),
-            emission: rgb(emission),
-            params: [roughness, ior, 0.0, 0.0],
-            extra: rgb(specular.unwrap_or(albedo)),
-            ..Default::default()
-        },
+        } => (
+            records::MAT_MICROFACET,
+            slot(albedo),
+            slot(emission),
+            [*roughness, *ior, 0.0, 0.0],
+            slot(specular.as_ref().unwrap_or(albedo)),
+        ),
+        MaterialDesc::Emissive { radiance, .. } => (
+            records::MAT_EMISSIVE,
+            ([0.0; 4], NO_TEXTURE),
+            slot(radiance),
+            [0.0; 4],
+            ([0.0; 4], NO_TEXTURE),
+        ),
+    };
+    let two_sided = matches!(
+        m,
         MaterialDesc::Emissive {
-            radiance,
-            two_sided,
-        } => Material {
-            tag: records::MAT_EMISSIVE,
-            flags: if two_sided {
-                records::MAT_FLAG_TWO_SIDED
-            } else {
-                0
-            },
-            emission: rgb(radiance),
-            ..Default::default()
+            two_sided: true,
+            ..
+        }
+    );
+    Material {
+        tag,
+        flags: if two_sided {
+            records::MAT_FLAG_TWO_SIDED
+        } else {
+            0
         },
+        albedo: albedo.0,
+        tex_albedo: albedo.1,
+        emission: emission.0,
+        tex_emission: emission.1,
+        params,
+        extra: extra.0,
+        tex_extra: extra.1,
+        ..Default::default()
     }
 }
 
@@ -503,18 +521,22 @@ fn record_ok(p: &Primitive, shape_data: &[[f32; 4]]) -> bool {
     finite && shape && transform && bounded
 }
 
-/// Flattens a validated scene into records; `meshes[i]` holds object i's mesh when it is one.
+/// Flattens a validated scene into records; `meshes[i]` holds object i's mesh when it is
+/// one, `images[i]` texture i's image.
 /// Errors with the indices of objects whose records degenerate in f32 (see `record_ok`).
 pub fn flatten(
     file: &SceneFile,
     meshes: &[Option<MeshData>],
+    images: &[Option<ImageData>],
     use_bvh: bool,
 ) -> Result<FlatScene, Vec<usize>> {
+    let texture_names: Vec<String> = file.textures.keys().cloned().collect();
+    let (textures, texels) = texture_records(&file.textures, images);
     let material_names: Vec<String> = file.materials.keys().cloned().collect();
     let materials: Vec<Material> = file
         .materials
         .values()
-        .map(|m| material_record(m.get_ref()))
+        .map(|m| material_record(m.get_ref(), &texture_names))
         .collect();
     let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
 
@@ -599,6 +621,8 @@ pub fn flatten(
         shape_data,
         num_unbounded,
         use_bvh,
+        textures,
+        texels,
     })
 }
 

@@ -15,6 +15,8 @@ pub struct SceneFile {
     #[serde(default)]
     pub background: BackgroundDesc,
     #[serde(default)]
+    pub textures: BTreeMap<String, Spanned<TextureDesc>>,
+    #[serde(default)]
     pub materials: BTreeMap<String, Spanned<MaterialDesc>>,
     #[serde(default)]
     pub objects: Vec<Spanned<ObjectDesc>>,
@@ -80,6 +82,103 @@ pub struct BackgroundDesc {
     pub color: [f32; 3],
 }
 
+/// A colour parameter: `[r, g, b]`, or the name of a `[textures]` entry.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum ColorDesc {
+    Rgb([f32; 3]),
+    Texture(String),
+}
+
+impl ColorDesc {
+    /// The colour, or white where a texture gives it.
+    pub fn rgb(&self) -> [f32; 3] {
+        match self {
+            ColorDesc::Rgb(c) => *c,
+            ColorDesc::Texture(_) => [1.0; 3],
+        }
+    }
+
+    pub fn texture(&self) -> Option<&str> {
+        match self {
+            ColorDesc::Rgb(_) => None,
+            ColorDesc::Texture(name) => Some(name),
+        }
+    }
+}
+
+impl Default for ColorDesc {
+    fn default() -> Self {
+        ColorDesc::Rgb([0.0; 3])
+    }
+}
+
+/// `[textures]` entries, selected by `type`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum TextureDesc {
+    Constant {
+        color: [f32; 3],
+    },
+    /// Alternating cells of `even` and `odd` (colours or non-checker textures), `scale`
+    /// cells per unit of uv (`mapping = "uv"`) or of space (`mapping = "solid"`).
+    Checker {
+        even: ColorDesc,
+        odd: ColorDesc,
+        #[serde(default = "ten")]
+        scale: f32,
+        #[serde(default)]
+        mapping: CheckerMapping,
+    },
+    /// An image file (PNG, JPEG, HDR, EXR, PPM), `path` relative to the scene file; 8-bit
+    /// images are sRGB-decoded to linear; bilinear filtering.
+    Image {
+        path: String,
+        #[serde(default)]
+        wrap: WrapMode,
+    },
+    /// Perlin noise ("Ray Tracing: The Next Week"): `color` x 0.5 (1 + noise), turbulence,
+    /// or marble, at `scale`.
+    Noise {
+        #[serde(default = "one")]
+        scale: f32,
+        #[serde(default)]
+        kind: NoiseKind,
+        #[serde(default = "white")]
+        color: [f32; 3],
+    },
+}
+
+fn ten() -> f32 {
+    10.0
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum CheckerMapping {
+    #[default]
+    Uv,
+    Solid,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum WrapMode {
+    #[default]
+    Repeat,
+    Clamp,
+    Mirror,
+}
+
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum NoiseKind {
+    #[default]
+    Perlin,
+    Turbulence,
+    Marble,
+}
+
 /// `[materials]` entries, selected by `type`. Every type but `emissive` may also carry
 /// `emission = [r, g, b]`: radiance emitted from its front side, which makes it a light too.
 #[derive(Debug, Clone, Deserialize)]
@@ -87,44 +186,44 @@ pub struct BackgroundDesc {
 pub enum MaterialDesc {
     /// Ideal diffuse reflector; scatters on whichever side the ray hits.
     Lambertian {
-        albedo: [f32; 3],
+        albedo: ColorDesc,
         #[serde(default)]
-        emission: [f32; 3],
+        emission: ColorDesc,
     },
     /// Mirror reflection, the direction perturbed by up to `fuzz` (0 = perfect mirror).
     Metal {
-        albedo: [f32; 3],
+        albedo: ColorDesc,
         #[serde(default)]
         fuzz: f32,
         #[serde(default)]
-        emission: [f32; 3],
+        emission: ColorDesc,
     },
     /// Glass-like: reflection or refraction chosen by Schlick's Fresnel; `tint` multiplies
     /// every scattering, `absorption` (per unit length, Beer-Lambert) acts inside.
     Dielectric {
         ior: f32,
-        #[serde(default = "white")]
-        tint: [f32; 3],
+        #[serde(default = "white_color")]
+        tint: ColorDesc,
         #[serde(default)]
         absorption: [f32; 3],
         #[serde(default)]
-        emission: [f32; 3],
+        emission: ColorDesc,
     },
     /// Cook-Torrance: a GGX specular lobe (`roughness` = alpha in [0, 1], Schlick's Fresnel
     /// from `ior`, colour `specular`, default `albedo`) over a Lambertian base (`albedo`)
     /// that receives what the specular lobe does not reflect.
     Microfacet {
-        albedo: [f32; 3],
-        specular: Option<[f32; 3]>,
+        albedo: ColorDesc,
+        specular: Option<ColorDesc>,
         roughness: f32,
         #[serde(default = "glass_ior")]
         ior: f32,
         #[serde(default)]
-        emission: [f32; 3],
+        emission: ColorDesc,
     },
     /// A light: emits `radiance` from its front side, or both with `two_sided`; absorbs.
     Emissive {
-        radiance: [f32; 3],
+        radiance: ColorDesc,
         #[serde(default)]
         two_sided: bool,
     },
@@ -136,6 +235,10 @@ fn glass_ior() -> f32 {
 
 fn white() -> [f32; 3] {
     [1.0; 3]
+}
+
+fn white_color() -> ColorDesc {
+    ColorDesc::Rgb([1.0; 3])
 }
 
 /// `transform = { scale, rotate, translate }`: scale, then rotate about X, Y, Z (degrees),

@@ -9,6 +9,7 @@ pub mod flatten;
 pub mod format;
 pub mod mesh;
 pub mod records;
+pub mod textures;
 pub mod validate;
 
 use std::path::Path;
@@ -16,8 +17,9 @@ use std::path::Path;
 use glam::Vec3;
 
 pub use error::{Problem, SceneError};
+use format::TextureDesc;
 use format::{ObjectDesc, SceneFile};
-use records::{BvhNode, Emitter, Material, Params, Primitive};
+use records::{BvhNode, Emitter, Material, Params, Primitive, Texture};
 
 /// Command-line values that replace the scene's `[render]` settings.
 #[derive(Debug, Clone, Copy, Default)]
@@ -73,6 +75,10 @@ pub struct FlatScene {
     /// Primitives `0..num_unbounded` are planes, outside the BVH.
     pub num_unbounded: u32,
     pub use_bvh: bool,
+    /// Texture records, in `[textures]` name order.
+    pub textures: Vec<Texture>,
+    /// Image texels (linear RGB) and Perlin tables, indexed by `Texture::offset`.
+    pub texels: Vec<[f32; 4]>,
 }
 
 /// A rectangle of pixels rendered by one dispatch.
@@ -163,10 +169,11 @@ pub fn load_scene_str(
         return Err(invalid(problems));
     }
     let meshes = load_meshes(&file, src, path, &mut problems);
+    let images = load_images(&file, src, path, &mut problems);
     if !problems.is_empty() {
         return Err(invalid(problems));
     }
-    flatten::flatten(&file, &meshes, !overrides.no_bvh).map_err(|objects| {
+    flatten::flatten(&file, &meshes, &images, !overrides.no_bvh).map_err(|objects| {
         invalid(
             objects
                 .into_iter()
@@ -184,6 +191,37 @@ pub fn load_scene_str(
                 .collect(),
         )
     })
+}
+
+/// Reads every image texture's file (relative to the scene file); a file that cannot be
+/// read or decoded is a problem at its texture.
+fn load_images(
+    file: &SceneFile,
+    src: &str,
+    scene_path: &Path,
+    problems: &mut Vec<Problem>,
+) -> Vec<Option<textures::ImageData>> {
+    let dir = scene_path.parent().unwrap_or(Path::new(""));
+    file.textures
+        .iter()
+        .map(|(name, t)| {
+            let TextureDesc::Image { path, .. } = t.get_ref() else {
+                return None;
+            };
+            let full = dir.join(path);
+            textures::load_image(&full)
+                .map_err(|e| {
+                    let (line, column) = error::line_col(src, t.span().start);
+                    problems.push(Problem {
+                        line,
+                        column,
+                        key: format!("textures.{name}.path"),
+                        message: format!("{}: {e}", full.display()),
+                    });
+                })
+                .ok()
+        })
+        .collect()
 }
 
 /// Reads every mesh object's OBJ file (relative to the scene file); a file that cannot be

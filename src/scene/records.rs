@@ -43,6 +43,22 @@ pub const MAT_METAL: u32 = 2;
 pub const MAT_DIELECTRIC: u32 = 3;
 pub const MAT_MICROFACET: u32 = 4;
 
+/// Texture tags: the cases of the `switch` in `textures.wgsl`.
+pub const TEX_CONSTANT: u32 = 0;
+pub const TEX_CHECKER: u32 = 1;
+pub const TEX_IMAGE: u32 = 2;
+pub const TEX_NOISE: u32 = 3;
+/// Checker flag: cells in space (x, y, z) rather than in uv.
+pub const TEX_FLAG_SOLID: u32 = 4;
+/// Image textures: wrap mode in `flags & 3` (0 repeat, 1 clamp, 2 mirror). Noise textures:
+/// kind in `flags & 3` (0 Perlin, 1 turbulence, 2 marble).
+pub const TEX_MODE_MASK: u32 = 3;
+/// A material colour or checker cell with no texture.
+pub const NO_TEXTURE: u32 = u32::MAX;
+/// `texels` entries of the Perlin tables: 256 random unit vectors, then 256 rows of the
+/// three permutations (x, y, z) stored as floats.
+pub const NOISE_TABLE_ENTRIES: u32 = 512;
+
 /// Material flag: emits from both sides.
 pub const MAT_FLAG_TWO_SIDED: u32 = 1;
 
@@ -77,16 +93,80 @@ pub struct Primitive {
 /// length; microfacet: specular colour). `albedo` is the dielectric's tint and the
 /// microfacet's diffuse colour.
 #[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
     pub tag: u32,
     pub flags: u32,
-    pub pad0: u32,
-    pub pad1: u32,
+    /// Texture of `albedo` (or `NO_TEXTURE`).
+    pub tex_albedo: u32,
+    /// Texture of `emission` (or `NO_TEXTURE`).
+    pub tex_emission: u32,
     pub albedo: [f32; 4],
     pub emission: [f32; 4],
     pub params: [f32; 4],
     pub extra: [f32; 4],
+    /// Texture of `extra` (microfacet specular colour, or `NO_TEXTURE`).
+    pub tex_extra: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material {
+            tag: 0,
+            flags: 0,
+            tex_albedo: NO_TEXTURE,
+            tex_emission: NO_TEXTURE,
+            albedo: [0.0; 4],
+            emission: [0.0; 4],
+            params: [0.0; 4],
+            extra: [0.0; 4],
+            tex_extra: NO_TEXTURE,
+            pad0: 0,
+            pad1: 0,
+            pad2: 0,
+        }
+    }
+}
+
+/// A tagged texture: constant (`color0`); checker (cells of `even`/`odd` textures, or of
+/// `color0`/`color1` where those are `NO_TEXTURE`; `params.x` = cells per unit); image
+/// (`width` x `height` texels from `texels[offset]`, row 0 at the top, linear RGB); noise
+/// (`color0` x Perlin noise of `params.x` x p, tables at `texels[offset]`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Texture {
+    pub tag: u32,
+    pub flags: u32,
+    pub even: u32,
+    pub odd: u32,
+    pub width: u32,
+    pub height: u32,
+    pub offset: u32,
+    pub pad: u32,
+    pub color0: [f32; 4],
+    pub color1: [f32; 4],
+    pub params: [f32; 4],
+}
+
+impl Default for Texture {
+    fn default() -> Self {
+        Texture {
+            tag: TEX_CONSTANT,
+            flags: 0,
+            even: NO_TEXTURE,
+            odd: NO_TEXTURE,
+            width: 0,
+            height: 0,
+            offset: 0,
+            pad: 0,
+            color0: [0.0; 4],
+            color1: [0.0; 4],
+            params: [0.0; 4],
+        }
+    }
 }
 
 /// One entry of the emitter list: an emissive primitive, its area and emitted power.
@@ -170,6 +250,15 @@ pub struct KernelHit {
     pub uv: [f32; 4],
 }
 
+/// One texture look-up of the kernel's `textures_main`: uv in `.xy`, the texture index in
+/// `.z` (as a float); the point in `p.xyz`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TextureLookup {
+    pub uv: [f32; 4],
+    pub p: [f32; 4],
+}
+
 /// Size and field offsets of one record, for the layout test against naga.
 #[derive(Debug)]
 pub struct RecordLayout {
@@ -204,12 +293,29 @@ pub fn record_layouts() -> Vec<RecordLayout> {
         layout!(Material {
             tag,
             flags,
-            pad0,
-            pad1,
+            tex_albedo,
+            tex_emission,
             albedo,
             emission,
             params,
-            extra
+            extra,
+            tex_extra,
+            pad0,
+            pad1,
+            pad2
+        }),
+        layout!(Texture {
+            tag,
+            flags,
+            even,
+            odd,
+            width,
+            height,
+            offset,
+            pad,
+            color0,
+            color1,
+            params
         }),
         layout!(Emitter {
             primitive,
@@ -241,6 +347,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             pad2
         }),
         layout!(KernelRay { origin, dir }),
+        layout!(TextureLookup { uv, p }),
         layout!(KernelHit {
             t,
             prim,

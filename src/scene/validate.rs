@@ -3,7 +3,7 @@
 use glam::Vec3;
 
 use super::error::{self, Problem};
-use super::format::{MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TextureDesc, TransformDesc};
 use super::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE};
 
 /// Collects every problem of a parsed scene (not only the first).
@@ -11,6 +11,16 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
     let mut v = Validator {
         src,
         problems: Vec::new(),
+        textures: file
+            .textures
+            .iter()
+            .map(|(name, t)| {
+                (
+                    name.clone(),
+                    matches!(t.get_ref(), TextureDesc::Checker { .. }),
+                )
+            })
+            .collect(),
     };
     let r = &file.render;
     v.range_u32("render.width", r.width, 1, MAX_IMAGE_SIDE, 0);
@@ -53,20 +63,51 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
     }
     v.nonnegative3("background.color", file.background.color, 0);
 
+    for (name, t) in &file.textures {
+        let at = t.span().start;
+        let key = format!("textures.{name}");
+        match t.get_ref() {
+            TextureDesc::Constant { color } => v.nonnegative3(&format!("{key}.color"), *color, at),
+            TextureDesc::Checker {
+                even, odd, scale, ..
+            } => {
+                for (cell, c) in [("even", even), ("odd", odd)] {
+                    let ckey = format!("{key}.{cell}");
+                    v.color(&ckey, c, false, at);
+                    if let Some(child) = c.texture() {
+                        if v.textures.iter().any(|(n, checker)| n == child && *checker) {
+                            v.push(at, &ckey, format!("\"{child}\" is a checker; a checker's cells must be colours or other textures"));
+                        }
+                    }
+                }
+                v.positive(&format!("{key}.scale"), *scale, at);
+            }
+            TextureDesc::Image { path, .. } => {
+                if path.is_empty() {
+                    v.push(at, &format!("{key}.path"), "must name an image file".into());
+                }
+            }
+            TextureDesc::Noise { scale, color, .. } => {
+                v.positive(&format!("{key}.scale"), *scale, at);
+                v.nonnegative3(&format!("{key}.color"), *color, at);
+            }
+        }
+    }
+
     for (name, m) in &file.materials {
         let at = m.span().start;
         let key = format!("materials.{name}");
         match m.get_ref() {
             MaterialDesc::Lambertian { albedo, emission } => {
-                v.reflectance(&format!("{key}.albedo"), *albedo, at);
-                v.nonnegative3(&format!("{key}.emission"), *emission, at);
+                v.color(&format!("{key}.albedo"), albedo, true, at);
+                v.color(&format!("{key}.emission"), emission, false, at);
             }
             MaterialDesc::Metal {
                 albedo,
                 fuzz,
                 emission,
             } => {
-                v.reflectance(&format!("{key}.albedo"), *albedo, at);
+                v.color(&format!("{key}.albedo"), albedo, true, at);
                 if !(0.0..=1.0).contains(fuzz) {
                     v.push(
                         at,
@@ -74,7 +115,7 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                         format!("must be in [0, 1], got {fuzz}"),
                     );
                 }
-                v.nonnegative3(&format!("{key}.emission"), *emission, at);
+                v.color(&format!("{key}.emission"), emission, false, at);
             }
             MaterialDesc::Dielectric {
                 ior,
@@ -85,9 +126,9 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                 if !(*ior > 0.0 && ior.is_finite()) {
                     v.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
                 }
-                v.reflectance(&format!("{key}.tint"), *tint, at);
+                v.color(&format!("{key}.tint"), tint, true, at);
                 v.nonnegative3(&format!("{key}.absorption"), *absorption, at);
-                v.nonnegative3(&format!("{key}.emission"), *emission, at);
+                v.color(&format!("{key}.emission"), emission, false, at);
             }
             MaterialDesc::Microfacet {
                 albedo,
@@ -96,9 +137,9 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                 ior,
                 emission,
             } => {
-                v.reflectance(&format!("{key}.albedo"), *albedo, at);
+                v.color(&format!("{key}.albedo"), albedo, true, at);
                 if let Some(ks) = specular {
-                    v.reflectance(&format!("{key}.specular"), *ks, at);
+                    v.color(&format!("{key}.specular"), ks, true, at);
                 }
                 if !(0.0..=1.0).contains(roughness) {
                     v.push(
@@ -110,10 +151,10 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                 if !(*ior > 0.0 && ior.is_finite()) {
                     v.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
                 }
-                v.nonnegative3(&format!("{key}.emission"), *emission, at);
+                v.color(&format!("{key}.emission"), emission, false, at);
             }
             MaterialDesc::Emissive { radiance, .. } => {
-                v.nonnegative3(&format!("{key}.radiance"), *radiance, at);
+                v.color(&format!("{key}.radiance"), radiance, false, at);
             }
         }
     }
@@ -220,6 +261,8 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
 struct Validator<'a> {
     src: &'a str,
     problems: Vec<Problem>,
+    /// Texture names, and whether each is a checker.
+    textures: Vec<(String, bool)>,
 }
 
 impl Validator<'_> {
@@ -259,6 +302,30 @@ impl Validator<'_> {
     fn nonnegative3(&mut self, key: &str, v: [f32; 3], at: usize) {
         if self.finite3(key, v, at) && v.iter().any(|&x| x < 0.0) {
             self.push(at, key, format!("must be >= 0, got {v:?}"));
+        }
+    }
+
+    /// A colour parameter: a colour (each component >= 0, and <= 1 for a reflectance), or
+    /// the name of a texture that exists (reflectance textures are clamped to 1 at look-up).
+    fn color(&mut self, key: &str, c: &ColorDesc, reflectance: bool, at: usize) {
+        match c {
+            ColorDesc::Rgb(rgb) if reflectance => self.reflectance(key, *rgb, at),
+            ColorDesc::Rgb(rgb) => self.nonnegative3(key, *rgb, at),
+            ColorDesc::Texture(name) => {
+                if !self.textures.iter().any(|(n, _)| n == name) {
+                    let known: Vec<&str> = self.textures.iter().map(|(n, _)| n.as_str()).collect();
+                    let known = if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    };
+                    self.push(
+                        at,
+                        key,
+                        format!("unknown texture \"{name}\" (defined: {known})"),
+                    );
+                }
+            }
         }
     }
 

@@ -1,0 +1,167 @@
+//! Mirrors `shaders/shared/textures.wgsl`.
+
+use glam::{IVec3, Vec2, Vec3};
+
+use super::bindings::Bindings;
+use super::types::{xyz, Hit};
+use crate::scene::records::{
+    Material, Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK, TEX_NOISE,
+};
+
+/// A texture coordinate folded into [0, 1] by the wrap mode (0 repeat, 1 clamp, 2 mirror).
+pub fn wrap_uv(t: f32, mode: u32) -> f32 {
+    match mode {
+        1 => t.clamp(0.0, 1.0),
+        2 => {
+            let m = t - 2.0 * (0.5 * t).floor();
+            if m > 1.0 {
+                2.0 - m
+            } else {
+                m
+            }
+        }
+        _ => t - t.floor(),
+    }
+}
+
+/// A texel index folded into 0 .. n - 1 by the wrap mode.
+pub fn wrap_texel(i: i32, n: i32, mode: u32) -> u32 {
+    match mode {
+        0 => ((i + n) % n) as u32,
+        _ => i.clamp(0, n - 1) as u32,
+    }
+}
+
+fn texel(b: &Bindings, i: u32) -> Vec3 {
+    xyz(b.texels[i as usize])
+}
+
+/// Bilinear image lookup; v = 0 is the bottom row.
+pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec2) -> Vec3 {
+    let mode = tex.flags & TEX_MODE_MASK;
+    let (w, h) = (tex.width as i32, tex.height as i32);
+    let x = wrap_uv(uv.x, mode) * w as f32 - 0.5;
+    let y = (1.0 - wrap_uv(uv.y, mode)) * h as f32 - 0.5;
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let xa = wrap_texel(x0 as i32, w, mode);
+    let xb = wrap_texel(x0 as i32 + 1, w, mode);
+    let ya = wrap_texel(y0 as i32, h, mode);
+    let yb = wrap_texel(y0 as i32 + 1, h, mode);
+    let row_a = tex.offset + ya * tex.width;
+    let row_b = tex.offset + yb * tex.width;
+    let top = texel(b, row_a + xa).lerp(texel(b, row_a + xb), fx);
+    let bottom = texel(b, row_b + xa).lerp(texel(b, row_b + xb), fx);
+    top.lerp(bottom, fy)
+}
+
+/// One corner of Perlin's gradient noise.
+pub fn perlin_corner(b: &Bindings, offset: u32, i: IVec3, t: Vec3, s: Vec3, d: IVec3) -> f32 {
+    let perm =
+        |k: i32, lane: usize| b.texels[(offset + 256 + (k & 255) as u32) as usize][lane] as u32;
+    let px = perm(i.x + d.x, 0);
+    let py = perm(i.y + d.y, 1);
+    let pz = perm(i.z + d.z, 2);
+    let g = texel(b, offset + (px ^ py ^ pz));
+    let df = d.as_vec3();
+    let w = Vec3::select(d.cmpeq(IVec3::ONE), s, Vec3::ONE - s);
+    w.x * w.y * w.z * g.dot(t - df)
+}
+
+/// Perlin gradient noise in about [-1, 1].
+pub fn perlin(b: &Bindings, offset: u32, p: Vec3) -> f32 {
+    let f = p.floor();
+    let t = p - f;
+    let s = t * t * (3.0 - 2.0 * t);
+    let i = f.as_ivec3();
+    let c = |x, y, z| perlin_corner(b, offset, i, t, s, IVec3::new(x, y, z));
+    c(0, 0, 0)
+        + c(1, 0, 0)
+        + c(0, 1, 0)
+        + c(1, 1, 0)
+        + c(0, 0, 1)
+        + c(1, 0, 1)
+        + c(0, 1, 1)
+        + c(1, 1, 1)
+}
+
+/// |Sum of 7 octaves of noise|.
+pub fn turbulence(b: &Bindings, offset: u32, p: Vec3) -> f32 {
+    let mut acc = 0.0;
+    let mut q = p;
+    let mut w = 1.0;
+    for _ in 0..7 {
+        acc += w * perlin(b, offset, q);
+        w *= 0.5;
+        q *= 2.0;
+    }
+    f32::abs(acc)
+}
+
+pub fn noise_value(b: &Bindings, tex: &Texture, p: Vec3) -> Vec3 {
+    let scale = tex.params[0];
+    let color = xyz(tex.color0);
+    match tex.flags & TEX_MODE_MASK {
+        1 => color * turbulence(b, tex.offset, scale * p),
+        2 => color * (0.5 * (1.0 + (scale * p.z + 10.0 * turbulence(b, tex.offset, p)).sin())),
+        _ => color * (0.5 * (1.0 + perlin(b, tex.offset, scale * p))),
+    }
+}
+
+/// Whether (uv, p) falls in an odd checker cell.
+pub fn checker_odd(tex: &Texture, uv: Vec2, p: Vec3) -> bool {
+    let s = tex.params[0];
+    if tex.flags & TEX_FLAG_SOLID != 0 {
+        let c = (s * p).floor().as_ivec3();
+        return ((c.x + c.y + c.z) & 1) == 1;
+    }
+    let c = (s * uv).floor().as_ivec2();
+    ((c.x + c.y) & 1) == 1
+}
+
+/// A texture that is not a checker.
+pub fn texture_leaf(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
+    let tex = &b.textures[index as usize];
+    match tex.tag {
+        TEX_IMAGE => image_value(b, tex, uv),
+        TEX_NOISE => noise_value(b, tex, p),
+        _ => xyz(tex.color0),
+    }
+}
+
+/// The colour of texture `index` at (uv, p).
+pub fn texture_value(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
+    let tex = &b.textures[index as usize];
+    if tex.tag != TEX_CHECKER {
+        return texture_leaf(b, index, uv, p);
+    }
+    let odd = checker_odd(tex, uv, p);
+    let cell = if odd { tex.odd } else { tex.even };
+    if cell == NO_TEXTURE {
+        return xyz(if odd { tex.color1 } else { tex.color0 });
+    }
+    texture_leaf(b, cell, uv, p)
+}
+
+/// The material at a hit with its textured colours looked up (reflectances clamped to 1).
+pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
+    let mut mat = *m;
+    if mat.tex_albedo != NO_TEXTURE {
+        mat.albedo = texture_value(b, mat.tex_albedo, hit.uv, hit.p)
+            .min(Vec3::ONE)
+            .extend(0.0)
+            .to_array();
+    }
+    if mat.tex_extra != NO_TEXTURE {
+        mat.extra = texture_value(b, mat.tex_extra, hit.uv, hit.p)
+            .min(Vec3::ONE)
+            .extend(0.0)
+            .to_array();
+    }
+    if mat.tex_emission != NO_TEXTURE {
+        mat.emission = texture_value(b, mat.tex_emission, hit.uv, hit.p)
+            .extend(0.0)
+            .to_array();
+    }
+    mat
+}

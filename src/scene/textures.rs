@@ -1,0 +1,189 @@
+//! Textures: image files decoded to linear RGB, the Perlin noise tables, and the texture
+//! records both backends read.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use toml::Spanned;
+
+use super::format::{CheckerMapping, ColorDesc, NoiseKind, TextureDesc, WrapMode};
+use super::records::{self, Texture, NOISE_TABLE_ENTRIES, NO_TEXTURE, TEX_FLAG_SOLID};
+
+/// An image in linear RGB, row 0 at the top.
+#[derive(Debug, Clone)]
+pub struct ImageData {
+    pub width: u32,
+    pub height: u32,
+    pub texels: Vec<[f32; 4]>,
+}
+
+/// The sRGB transfer function undone (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Reads an image with the `image` crate: float formats (HDR, EXR) are linear already,
+/// 8- and 16-bit ones are sRGB-decoded.
+pub fn load_image(path: &Path) -> Result<ImageData, String> {
+    let img = image::open(path).map_err(|e| e.to_string())?;
+    let linear = matches!(
+        img.color(),
+        image::ColorType::Rgb32F | image::ColorType::Rgba32F
+    );
+    let rgba = img.to_rgba32f();
+    let (width, height) = rgba.dimensions();
+    if width == 0 || height == 0 {
+        return Err("is empty".into());
+    }
+    let texels = rgba
+        .pixels()
+        .map(|p| {
+            let c = |v: f32| if linear { v } else { srgb_to_linear(v) };
+            [c(p[0]), c(p[1]), c(p[2]), 0.0]
+        })
+        .collect::<Vec<_>>();
+    if !texels.iter().flatten().all(|x| x.is_finite() && *x >= 0.0) {
+        return Err("has a negative or non-finite texel".into());
+    }
+    Ok(ImageData {
+        width,
+        height,
+        texels,
+    })
+}
+
+/// The Perlin tables of "Ray Tracing: The Next Week" from a fixed seed: 256 random unit
+/// vectors, then 256 rows holding the x, y and z permutations of 0..255.
+pub fn noise_tables() -> Vec<[f32; 4]> {
+    let mut state = 0x2545_f491u32;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        (state >> 8) as f32 / (1u32 << 24) as f32
+    };
+    let mut table = Vec::with_capacity(NOISE_TABLE_ENTRIES as usize);
+    while table.len() < 256 {
+        let v = glam::Vec3::new(next(), next(), next()) * 2.0 - 1.0;
+        // rejection sampling in the unit ball, then normalized: uniform directions
+        if v.length_squared() > 1e-4 && v.length_squared() <= 1.0 {
+            table.push(v.normalize().extend(0.0).to_array());
+        }
+    }
+    let mut perms = [[0u32; 256]; 3];
+    for perm in &mut perms {
+        for (i, p) in perm.iter_mut().enumerate() {
+            *p = i as u32;
+        }
+        for i in (1..256).rev() {
+            let j = ((next() * (i + 1) as f32) as usize).min(i);
+            perm.swap(i, j);
+        }
+    }
+    let [px, py, pz] = perms;
+    table.extend(
+        px.iter()
+            .zip(py.iter().zip(&pz))
+            .map(|(x, (y, z))| [*x as f32, *y as f32, *z as f32, 0.0]),
+    );
+    table
+}
+
+/// A material colour as a record value and a texture index: a colour is itself with no
+/// texture; a texture name gives white, multiplied out by the texture at the hit.
+pub fn color_slot(c: &ColorDesc, names: &[String]) -> ([f32; 4], u32) {
+    match c {
+        ColorDesc::Rgb(rgb) => ([rgb[0], rgb[1], rgb[2], 0.0], NO_TEXTURE),
+        ColorDesc::Texture(name) => (
+            [1.0, 1.0, 1.0, 0.0],
+            names.iter().position(|n| n == name).expect("validated") as u32,
+        ),
+    }
+}
+
+/// Texture records and texels, in the order of `textures` (by name); `images[i]` holds
+/// texture i's image when it is one.
+pub fn texture_records(
+    textures: &BTreeMap<String, Spanned<TextureDesc>>,
+    images: &[Option<ImageData>],
+) -> (Vec<Texture>, Vec<[f32; 4]>) {
+    let names: Vec<String> = textures.keys().cloned().collect();
+    let mut texels: Vec<[f32; 4]> = Vec::new();
+    let mut noise_offset = None;
+    let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
+    let records = textures
+        .values()
+        .zip(images)
+        .map(|(t, image)| match t.get_ref() {
+            TextureDesc::Constant { color } => Texture {
+                tag: records::TEX_CONSTANT,
+                color0: rgb(*color),
+                ..Default::default()
+            },
+            TextureDesc::Checker {
+                even,
+                odd,
+                scale,
+                mapping,
+            } => {
+                let (color0, even) = color_slot(even, &names);
+                let (color1, odd) = color_slot(odd, &names);
+                Texture {
+                    tag: records::TEX_CHECKER,
+                    flags: if *mapping == CheckerMapping::Solid {
+                        TEX_FLAG_SOLID
+                    } else {
+                        0
+                    },
+                    even,
+                    odd,
+                    color0,
+                    color1,
+                    params: [*scale, 0.0, 0.0, 0.0],
+                    ..Default::default()
+                }
+            }
+            TextureDesc::Image { wrap, .. } => {
+                let image = image.as_ref().expect("images are loaded before flattening");
+                let offset = texels.len() as u32;
+                texels.extend_from_slice(&image.texels);
+                Texture {
+                    tag: records::TEX_IMAGE,
+                    flags: match wrap {
+                        WrapMode::Repeat => 0,
+                        WrapMode::Clamp => 1,
+                        WrapMode::Mirror => 2,
+                    },
+                    width: image.width,
+                    height: image.height,
+                    offset,
+                    ..Default::default()
+                }
+            }
+            TextureDesc::Noise { scale, kind, color } => {
+                let offset = *noise_offset.get_or_insert_with(|| {
+                    let offset = texels.len() as u32;
+                    texels.extend(noise_tables());
+                    offset
+                });
+                Texture {
+                    tag: records::TEX_NOISE,
+                    flags: match kind {
+                        NoiseKind::Perlin => 0,
+                        NoiseKind::Turbulence => 1,
+                        NoiseKind::Marble => 2,
+                    },
+                    offset,
+                    color0: rgb(*color),
+                    params: [*scale, 0.0, 0.0, 0.0],
+                    ..Default::default()
+                }
+            }
+        })
+        .collect();
+    (records, texels)
+}
