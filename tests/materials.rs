@@ -344,3 +344,54 @@ fn microfacet_sampling_matches_its_pdf() {
         eprintln!("roughness {roughness}, {theta} deg: chi2 {chi2:.1} / critical {critical:.1} ({cells} cells), pdf integral {upper:.4}");
     }
 }
+
+/// The sampler's density over the whole sphere integrates to one: the specular lobe's
+/// visible-normal density mapped through the reflection, G1(wo) D(h) / (4 cos_o) wherever
+/// wo . h > 0 (including the directions under the surface, which the sampler draws and then
+/// absorbs), mixed with the cosine lobe. microfacet_pdf is this density above the surface.
+#[test]
+fn microfacet_sampling_density_integrates_to_one_over_the_sphere() {
+    use wgtrace::cpu::materials::{ggx_d, microfacet_spec_prob, smith_lambda};
+    const NT: usize = 400;
+    const NP: usize = 400;
+    for (roughness, theta) in [(0.3f32, 0.0f32), (0.3, 60.0), (0.6, 45.0), (1.0, 80.0)] {
+        let m = microfacet(0.5, 1.0, roughness, 1.5);
+        let (wo, _, _) = view(theta);
+        let p_s = microfacet_spec_prob(&m, wo.z) as f64;
+        let g1 = 1.0 / (1.0 + smith_lambda(wo.z, roughness)) as f64;
+        let (mut total, mut upper) = (0.0f64, 0.0f64);
+        for t in 0..NT {
+            for p in 0..NP {
+                // midpoint cells of equal solid angle: z uniform in [-1, 1], phi in [0, 2 pi)
+                let z = -1.0 + 2.0 * (t as f64 + 0.5) / NT as f64;
+                let phi = 2.0 * std::f64::consts::PI * (p as f64 + 0.5) / NP as f64;
+                let r = (1.0 - z * z).max(0.0).sqrt();
+                let wi = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                let h = (wo + wi).normalize();
+                let spec = if wo.dot(h) > 0.0 && h.z > 0.0 {
+                    g1 * ggx_d(h.z, roughness) as f64 / (4.0 * wo.z as f64)
+                } else {
+                    0.0
+                };
+                let diff = (z.max(0.0)) / std::f64::consts::PI;
+                let d = p_s * spec + (1.0 - p_s) * diff;
+                let cell = 4.0 * std::f64::consts::PI / (NT * NP) as f64;
+                total += d * cell;
+                if z > 0.0 {
+                    upper += microfacet_pdf(&m, Vec3::Z, wo, wi) as f64 * cell;
+                }
+            }
+        }
+        assert!(
+            (total - 1.0).abs() < 5e-3,
+            "roughness {roughness}, {theta} deg: density integrates to {total}"
+        );
+        assert!(
+            upper <= total + 1e-9,
+            "the pdf above the surface is part of it: {upper} vs {total}"
+        );
+        eprintln!(
+            "roughness {roughness}, {theta} deg: sphere {total:.4}, above the surface {upper:.4}"
+        );
+    }
+}
