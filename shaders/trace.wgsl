@@ -4,14 +4,10 @@
 #import shared/intersect
 #import shared/materials
 #import shared/rng
+#import shared/samplers
 #import shared/sampling
 #import shared/textures
 #import shared/types
-
-// Dimension pairs drawn from the RNG at each bounce.
-const DIM_PIXEL: u32 = 0u;
-const DIM_LENS: u32 = 1u;
-const DIM_BSDF: u32 = 2u;
 
 // Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left, x grows along
 // the camera's right vector. `jitter` is the position inside the pixel, `lens` in [0, 1)^2.
@@ -47,7 +43,7 @@ fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
         if (depth + 1u >= params.max_depth) {
             break;
         }
-        let u = rand_2d(pixel, sample, depth, DIM_BSDF, params.seed);
+        let u = bounce_2d(pixel, sample, depth, DIM_BSDF);
         let s = scatter(mat, ray, hit, u);
         if (!s.ok) {
             break;
@@ -68,8 +64,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let y = params.tile_y + gid.y;
     let pixel = y * params.width + x;
     let sample = params.sample_index;
-    let jitter = rand_2d(pixel, sample, 0u, DIM_PIXEL, params.seed);
-    let lens = rand_2d(pixel, sample, 0u, DIM_LENS, params.seed);
+    let jitter = sample_2d(pixel, sample, DIM_PIXEL);
+    let lens = sample_2d(pixel, sample, DIM_LENS);
     let c = trace_path(pixel, sample, camera_ray(x, y, jitter, lens));
     accum[2u * pixel] += vec4<f32>(c, 1.0);
     accum[2u * pixel + 1u] += vec4<f32>(c * c, 0.0);

@@ -39,6 +39,30 @@ enum BackendArg {
     Cpu,
 }
 
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum SamplerArg {
+    /// Independent uniform points.
+    Random,
+    /// One point per stratum of the pixel.
+    Jittered,
+    /// (i / N, radical inverse of i), rotated per pixel.
+    Hammersley,
+    /// Owen-scrambled Sobol' points.
+    Sobol,
+}
+
+impl From<SamplerArg> for wgtrace::scene::format::SamplerKind {
+    fn from(s: SamplerArg) -> Self {
+        use wgtrace::scene::format::SamplerKind as K;
+        match s {
+            SamplerArg::Random => K::Random,
+            SamplerArg::Jittered => K::Jittered,
+            SamplerArg::Hammersley => K::Hammersley,
+            SamplerArg::Sobol => K::Sobol,
+        }
+    }
+}
+
 #[derive(clap::Args)]
 struct RenderArgs {
     /// Scene file (TOML).
@@ -71,6 +95,9 @@ struct RenderArgs {
     /// Rewrite the output file every N passes, to watch the render converge.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     preview_every: Option<u32>,
+    /// Pixel sampler (overrides [render] sampler).
+    #[arg(long, value_enum)]
+    sampler: Option<SamplerArg>,
     /// Test every primitive on every ray instead of traversing the BVH (for comparisons).
     #[arg(long)]
     no_bvh: bool,
@@ -124,6 +151,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth,
         seed: args.seed,
         no_bvh: args.no_bvh,
+        sampler: args.sampler.map(Into::into),
     };
     let loading = std::time::Instant::now();
     let scene = wgtrace::load_scene(&args.scene, &overrides)?;

@@ -263,6 +263,7 @@ fn overrides_replace_render_settings_and_are_validated() {
         max_depth: Some(2),
         seed: Some(9),
         no_bvh: false,
+        sampler: None,
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
     assert_eq!(

@@ -45,6 +45,35 @@ fn gpu_matches_cpu_on_every_scene() {
     }
 }
 
+/// Every pixel sampler gives the same image on both backends (the default, Sobol', is
+/// covered above on every scene).
+#[test]
+fn gpu_matches_cpu_with_every_sampler() {
+    use wgtrace::scene::format::SamplerKind;
+    for sampler in [
+        SamplerKind::Random,
+        SamplerKind::Jittered,
+        SamplerKind::Hammersley,
+    ] {
+        let o = Overrides {
+            width: Some(48),
+            height: Some(48),
+            spp: Some(16),
+            seed: Some(3),
+            sampler: Some(sampler),
+            ..Default::default()
+        };
+        let scene = wgtrace::load_scene(&common::repo_path("scenes/cornell.toml"), &o).unwrap();
+        let c = compare(&render_gpu(&scene), &render_cpu(&scene), 8);
+        assert!(
+            c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
+            "{sampler:?}: {} tiles outside the bound, {:.4} of pixels agree",
+            c.failed_tiles.len(),
+            c.agree_fraction
+        );
+    }
+}
+
 const FURNACE: &str = r#"
 [render]
 width = 40

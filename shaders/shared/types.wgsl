@@ -43,6 +43,12 @@ const TEX_MODE_MASK: u32 = 3u;
 // a colour with no texture
 const NO_TEXTURE: u32 = 0xffffffffu;
 
+// Pixel samplers (Params.sampler).
+const SAMPLER_RANDOM: u32 = 0u;
+const SAMPLER_JITTERED: u32 = 1u;
+const SAMPLER_HAMMERSLEY: u32 = 2u;
+const SAMPLER_SOBOL: u32 = 3u;
+
 // Material flags.
 const MAT_FLAG_TWO_SIDED: u32 = 1u;
 
@@ -150,9 +156,12 @@ struct Params {
     num_unbounded: u32,
     // 1: traverse the BVH, 0: test every primitive
     use_bvh: u32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
+    // SAMPLER_* for the first bounce's 2D points
+    sampler: u32,
+    // jittered: the pixel is a 2^strata_log2 x 2^strata_log2 grid
+    strata_log2: u32,
+    // samples per pixel of the whole render (hammersley's N)
+    spp: u32,
 }
 
 struct Ray {

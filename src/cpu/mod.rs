@@ -10,6 +10,7 @@ pub mod bindings;
 pub mod intersect;
 pub mod materials;
 pub mod rng;
+pub mod samplers;
 pub mod sampling;
 pub mod textures;
 pub mod trace;

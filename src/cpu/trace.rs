@@ -6,15 +6,13 @@ use rayon::prelude::*;
 use super::bindings::Bindings;
 use super::intersect::{intersect_scene, surface_at};
 use super::materials::{emitted, scatter};
-use super::rng::rand_2d;
+use super::samplers::{bounce_2d, sample_2d};
 use super::sampling::{offset_ray, sample_disk};
 use super::textures::material_at;
 use super::types::{xyz, Ray, NO_HIT};
 use crate::scene::FlatScene;
 
-pub const DIM_PIXEL: u32 = 0;
-pub const DIM_LENS: u32 = 1;
-pub const DIM_BSDF: u32 = 2;
+pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_PIXEL};
 
 /// Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left.
 pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]) -> Ray {
@@ -53,7 +51,7 @@ pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
         if depth + 1 >= p.max_depth {
             break;
         }
-        let u = rand_2d(pixel, sample, depth, DIM_BSDF, p.seed);
+        let u = bounce_2d(b, pixel, sample, depth, DIM_BSDF);
         let s = scatter(mat, &ray, &hit, u);
         if !s.ok {
             break;
@@ -77,8 +75,8 @@ pub fn trace_pixel(b: &Bindings, x: u32, y: u32) -> Vec3 {
     let p = &b.params;
     let pixel = y * p.width + x;
     let sample = p.sample_index;
-    let jitter = rand_2d(pixel, sample, 0, DIM_PIXEL, p.seed);
-    let lens = rand_2d(pixel, sample, 0, DIM_LENS, p.seed);
+    let jitter = sample_2d(b, pixel, sample, DIM_PIXEL);
+    let lens = sample_2d(b, pixel, sample, DIM_LENS);
     trace_path(b, pixel, sample, camera_ray(b, x, y, jitter, lens))
 }
 

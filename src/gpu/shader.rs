@@ -25,6 +25,10 @@ pub const SHADER_FILES: &[(&str, &str)] = &[
     ),
     ("shared/rng", include_str!("../../shaders/shared/rng.wgsl")),
     (
+        "shared/samplers",
+        include_str!("../../shaders/shared/samplers.wgsl"),
+    ),
+    (
         "shared/sampling",
         include_str!("../../shaders/shared/sampling.wgsl"),
     ),

@@ -6,7 +6,7 @@
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::bvh::{self, Aabb};
-use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SamplerKind, SceneFile, TransformDesc};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Emitter, Material, Primitive, NO_DATA, NO_TEXTURE};
 use super::textures::{color_slot, texture_records, ImageData};
@@ -610,6 +610,12 @@ pub fn flatten(
         spp: r.spp,
         max_depth: r.max_depth,
         seed: r.seed,
+        sampler: match r.sampler {
+            SamplerKind::Random => records::SAMPLER_RANDOM,
+            SamplerKind::Jittered => records::SAMPLER_JITTERED,
+            SamplerKind::Hammersley => records::SAMPLER_HAMMERSLEY,
+            SamplerKind::Sobol => records::SAMPLER_SOBOL,
+        },
         camera: camera_frame(file, r.width as f32 / r.height as f32),
         background: file.background.color,
         primitives,

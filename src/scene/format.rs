@@ -33,6 +33,23 @@ pub struct RenderDesc {
     /// Rays per path: 1 shows emitters and background, 2 adds direct lighting, ...
     pub max_depth: u32,
     pub seed: u32,
+    /// Where the first bounce's 2D points come from (pixel position, lens, BSDF).
+    pub sampler: SamplerKind,
+}
+
+/// `[render] sampler`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SamplerKind {
+    /// Independent uniform points.
+    Random,
+    /// One point per stratum of the pixel, strata spread over the passes.
+    Jittered,
+    /// (i / N, radical inverse of i), rotated per pixel.
+    Hammersley,
+    /// Owen-scrambled Sobol' points.
+    #[default]
+    Sobol,
 }
 
 impl Default for RenderDesc {
@@ -43,6 +60,7 @@ impl Default for RenderDesc {
             spp: 64,
             max_depth: 8,
             seed: 0,
+            sampler: SamplerKind::default(),
         }
     }
 }

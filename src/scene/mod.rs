@@ -31,6 +31,7 @@ pub struct Overrides {
     pub seed: Option<u32>,
     /// Test every primitive on every ray instead of traversing the BVH (benchmarks, tests).
     pub no_bvh: bool,
+    pub sampler: Option<format::SamplerKind>,
 }
 
 /// Largest image side accepted.
@@ -59,6 +60,8 @@ pub struct FlatScene {
     pub spp: u32,
     pub max_depth: u32,
     pub seed: u32,
+    /// `records::SAMPLER_*`.
+    pub sampler: u32,
     pub camera: CameraFrame,
     pub background: [f32; 3],
     pub primitives: Vec<Primitive>,
@@ -118,9 +121,9 @@ impl FlatScene {
             tile_height: tile.height,
             num_unbounded: self.num_unbounded,
             use_bvh: self.use_bvh as u32,
-            pad0: 0,
-            pad1: 0,
-            pad2: 0,
+            sampler: self.sampler,
+            strata_log2: strata_log2(self.spp),
+            spp: self.spp,
         }
     }
 
@@ -133,6 +136,15 @@ impl FlatScene {
             height: self.height,
         }
     }
+}
+
+/// The smallest k with 4^k >= spp: jittered sampling's grid is 2^k x 2^k.
+pub fn strata_log2(spp: u32) -> u32 {
+    let mut k = 0;
+    while k < 15 && (1u64 << (2 * k)) < spp as u64 {
+        k += 1;
+    }
+    k
 }
 
 /// Reads, validates and flattens a scene file.
@@ -263,4 +275,5 @@ fn apply_overrides(file: &mut SceneFile, o: &Overrides) {
     r.spp = o.spp.unwrap_or(r.spp);
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
     r.seed = o.seed.unwrap_or(r.seed);
+    r.sampler = o.sampler.unwrap_or(r.sampler);
 }

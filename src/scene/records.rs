@@ -59,6 +59,12 @@ pub const NO_TEXTURE: u32 = u32::MAX;
 /// three permutations (x, y, z) stored as floats.
 pub const NOISE_TABLE_ENTRIES: u32 = 512;
 
+/// Pixel samplers (`Params::sampler`).
+pub const SAMPLER_RANDOM: u32 = 0;
+pub const SAMPLER_JITTERED: u32 = 1;
+pub const SAMPLER_HAMMERSLEY: u32 = 2;
+pub const SAMPLER_SOBOL: u32 = 3;
+
 /// Material flag: emits from both sides.
 pub const MAT_FLAG_TWO_SIDED: u32 = 1;
 
@@ -208,9 +214,12 @@ pub struct Params {
     pub num_unbounded: u32,
     /// 1: traverse the BVH; 0: test every primitive (for benchmarks and tests).
     pub use_bvh: u32,
-    pub pad0: u32,
-    pub pad1: u32,
-    pub pad2: u32,
+    /// `SAMPLER_*`: where the first bounce's 2D points come from.
+    pub sampler: u32,
+    /// Jittered sampling: the pixel is a 2^strata_log2 x 2^strata_log2 grid.
+    pub strata_log2: u32,
+    /// Samples per pixel of the whole render (Hammersley's N).
+    pub spp: u32,
 }
 
 /// One node of the flattened BVH, in depth-first order. Interior (`count` = 0): the first
@@ -342,9 +351,9 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             tile_height,
             num_unbounded,
             use_bvh,
-            pad0,
-            pad1,
-            pad2
+            sampler,
+            strata_log2,
+            spp
         }),
         layout!(KernelRay { origin, dir }),
         layout!(TextureLookup { uv, p }),

@@ -1,0 +1,110 @@
+// Pixel samplers: the 2D points a sample uses for its position in the pixel, on the lens
+// and for the first bounce's BSDF. random: independent points (rand_2d). jittered: strata
+// of the pixel. hammersley: (i / N, radical inverse of i), rotated per pixel. sobol:
+// Owen-scrambled Sobol' points (Burley, "Practical Hash-based Owen Scrambling", JCGT 2020).
+// Later bounces always use rand_2d.
+#import shared/bindings
+#import shared/rng
+#import shared/types
+
+// Dimension pairs drawn at each bounce (rand_2d's `dim`).
+const DIM_PIXEL: u32 = 0u;
+const DIM_LENS: u32 = 1u;
+const DIM_BSDF: u32 = 2u;
+
+// Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction numbers
+// v_k = v_{k-1} ^ (v_{k-1} >> 1), v_1 = 2^31, of the set bits of i.
+fn sobol_dim1(i: u32) -> u32 {
+    var v = 0x80000000u;
+    var r = 0u;
+    var k = i;
+    while (k != 0u) {
+        if ((k & 1u) != 0u) {
+            r ^= v;
+        }
+        k >>= 1u;
+        v ^= v >> 1u;
+    }
+    return r;
+}
+
+// Laine and Karras's hash-based permutation: bit k of the result depends only on bits
+// k and below of x (Burley 2020, the improved constants).
+fn laine_karras(x_in: u32, seed: u32) -> u32 {
+    var x = x_in + seed;
+    x ^= x * 0x6c50b47cu;
+    x ^= x * 0xb82f1e52u;
+    x ^= x * 0xc7afe638u;
+    x ^= x * 0x8d22f6e6u;
+    return x;
+}
+
+// Nested uniform (Owen) scramble of a base-2 fraction held in the bits of x.
+fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
+    return reverseBits(laine_karras(reverseBits(x), seed));
+}
+
+// Owen-scrambled, shuffled Sobol' point `sample` of pair `dim` in `pixel`: every power-of-2
+// prefix of the samples is a (0, m, 2)-net.
+fn sobol_owen(pixel: u32, sample: u32, dim: u32) -> vec2<f32> {
+    let h = pcg4d(vec4<u32>(pixel, dim, params.seed, 0x5b0c2a3du));
+    let index = nested_uniform_scramble(sample, h.x);
+    let x = nested_uniform_scramble(reverseBits(index), h.y);
+    let y = nested_uniform_scramble(sobol_dim1(index), h.z);
+    return vec2<f32>(u32_to_unit_float(x), u32_to_unit_float(y));
+}
+
+// Jittered: the pixel as a 2^k x 2^k grid (4^k >= spp). Sample i takes the cell of the i-th
+// point of the unscrambled (0, 2)-sequence, digitally shifted per pixel, so every
+// power-of-4 prefix of the passes covers the pixel evenly and the first 4^k samples fill
+// every cell once; within its cell a sample is uniform.
+fn jittered(pixel: u32, sample: u32) -> vec2<f32> {
+    let k = params.strata_log2;
+    let j = rand_2d(pixel, sample, 0u, DIM_PIXEL, params.seed);
+    if (k == 0u) {
+        return j;
+    }
+    let shift = pcg4d(vec4<u32>(pixel, params.seed, 0x2c1b3c6du, 0u));
+    let mask = (1u << k) - 1u;
+    let cx = ((reverseBits(sample) >> (32u - k)) ^ shift.x) & mask;
+    let cy = ((sobol_dim1(sample) >> (32u - k)) ^ shift.y) & mask;
+    let side = f32(1u << k);
+    return (vec2<f32>(f32(cx), f32(cy)) + j) / side;
+}
+
+// Hammersley: (i / N, base-2 radical inverse of i), N = spp, shifted modulo 1 by a random
+// offset per pixel (Cranley-Patterson rotation) so neighbouring pixels decorrelate.
+fn hammersley(pixel: u32, sample: u32) -> vec2<f32> {
+    let p = vec2<f32>(f32(sample) / f32(params.spp), u32_to_unit_float(reverseBits(sample)));
+    let s = p + rand_2d(pixel, 0u, 0u, DIM_PIXEL, params.seed ^ 0x68bc21ebu);
+    return s - floor(s);
+}
+
+// The 2D point of pair `dim` for sample `sample` of `pixel` at the first bounce.
+fn sample_2d(pixel: u32, sample: u32, dim: u32) -> vec2<f32> {
+    switch params.sampler {
+        case SAMPLER_JITTERED: {
+            if (dim == DIM_PIXEL) {
+                return jittered(pixel, sample);
+            }
+        }
+        case SAMPLER_HAMMERSLEY: {
+            if (dim == DIM_PIXEL) {
+                return hammersley(pixel, sample);
+            }
+        }
+        case SAMPLER_SOBOL: {
+            return sobol_owen(pixel, sample, dim);
+        }
+        default: {}
+    }
+    return rand_2d(pixel, sample, 0u, dim, params.seed);
+}
+
+// The 2D point of pair `dim` at bounce `depth`: the sampler's at the first bounce.
+fn bounce_2d(pixel: u32, sample: u32, depth: u32, dim: u32) -> vec2<f32> {
+    if (depth == 0u) {
+        return sample_2d(pixel, sample, dim);
+    }
+    return rand_2d(pixel, sample, depth, dim, params.seed);
+}

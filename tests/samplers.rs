@@ -1,0 +1,126 @@
+//! Pixel samplers against their definitions (CPU; tests/gpu.rs renders each on both
+//! backends): Hammersley's radical inverse is exact, jittered puts one sample in each
+//! stratum (and every power-of-4 prefix in each coarser stratum), Sobol' points are
+//! (0, 2)-sequences in their two dimensions, scrambled or not.
+
+use wgtrace::cpu::bindings::Bindings;
+use wgtrace::cpu::rng::u32_to_unit_float;
+use wgtrace::cpu::samplers::{hammersley, jittered, sobol_dim1, sobol_owen_bits, DIM_PIXEL};
+use wgtrace::scene::records::Params;
+use wgtrace::FlatScene;
+
+fn scene(spp: u32) -> FlatScene {
+    let src =
+        format!("[render]\nspp = {spp}\n[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n");
+    wgtrace::load_scene_str(&src, std::path::Path::new("s.toml"), &Default::default()).unwrap()
+}
+
+fn params(s: &FlatScene) -> Params {
+    s.params(0, s.full_tile())
+}
+
+#[test]
+fn radical_inverse_is_exact() {
+    for i in (0u32..1 << 16).chain((0..1000).map(|k| k * 16_777 + 3)) {
+        let exact: f64 = (0..24)
+            .filter(|b| i >> b & 1 == 1)
+            .map(|b| 0.5f64.powi(b + 1))
+            .sum();
+        assert_eq!(u32_to_unit_float(i.reverse_bits()) as f64, exact, "i = {i}");
+    }
+}
+
+#[test]
+fn hammersley_points_are_i_over_n_and_the_radical_inverse_rotated_per_pixel() {
+    let s = scene(16);
+    let b = Bindings::new(&s, params(&s));
+    for pixel in [0u32, 77, 1000] {
+        let first = hammersley(&b, pixel, 0);
+        for i in 0..16u32 {
+            let p = hammersley(&b, pixel, i);
+            // undo the rotation (the point of sample 0 is the rotation itself)
+            let x = (p[0] - first[0]).rem_euclid(1.0);
+            let y = (p[1] - first[1]).rem_euclid(1.0);
+            let ry = u32_to_unit_float(i.reverse_bits());
+            assert!(
+                (x - i as f32 / 16.0).abs() < 1e-6 || (x - i as f32 / 16.0).abs() > 1.0 - 1e-6,
+                "x {x}"
+            );
+            assert!(
+                (y - ry).abs() < 1e-6 || (y - ry).abs() > 1.0 - 1e-6,
+                "y {y} vs {ry}"
+            );
+        }
+    }
+}
+
+#[test]
+fn jittered_puts_one_sample_in_each_stratum_and_prefixes_stay_stratified() {
+    for (spp, k) in [(16u32, 2u32), (64, 3), (256, 4)] {
+        let s = scene(spp);
+        assert_eq!(params(&s).strata_log2, k);
+        let b = Bindings::new(&s, params(&s));
+        for pixel in [0u32, 5, 12345] {
+            let pts: Vec<[f32; 2]> = (0..spp).map(|i| jittered(&b, pixel, i)).collect();
+            // every power-of-4 prefix covers the 2^j x 2^j grid once per cell
+            for j in 0..=k {
+                let n = 1usize << (2 * j);
+                let side = (1u32 << j) as f32;
+                let mut seen = vec![false; n];
+                for p in &pts[..n] {
+                    assert!(p[0] >= 0.0 && p[0] < 1.0 && p[1] >= 0.0 && p[1] < 1.0);
+                    let cell = (p[1] * side) as usize * (1 << j) + (p[0] * side) as usize;
+                    assert!(
+                        !seen[cell],
+                        "spp {spp}, pixel {pixel}: two of the first {n} samples share a cell"
+                    );
+                    seen[cell] = true;
+                }
+            }
+        }
+    }
+}
+
+/// Whether the points (as 32-bit fractions) form a (0, m, 2)-net: each of the 2^m boxes of
+/// every shape 2^-a x 2^-(m - a) holds exactly one point.
+fn is_02_net(points: &[[u32; 2]], m: u32) -> bool {
+    let cell = |v: u32, bits: u32| {
+        if bits == 0 {
+            0
+        } else {
+            (v >> (32 - bits)) as usize
+        }
+    };
+    (0..=m).all(|a| {
+        let mut count = vec![0u32; 1 << m];
+        for p in points {
+            count[(cell(p[0], a) << (m - a)) | cell(p[1], m - a)] += 1;
+        }
+        count.iter().all(|&c| c == 1)
+    })
+}
+
+#[test]
+fn sobol_points_are_02_sequences_scrambled_or_not() {
+    let plain: Vec<[u32; 2]> = (0u32..1024)
+        .map(|i| [i.reverse_bits(), sobol_dim1(i)])
+        .collect();
+    for m in 0..=10 {
+        assert!(is_02_net(&plain[..1 << m], m), "unscrambled, first 2^{m}");
+    }
+    for pixel in [0u32, 1, 999, 123_456] {
+        for dim in [DIM_PIXEL, 1, 2] {
+            let pts: Vec<[u32; 2]> = (0u32..1024)
+                .map(|i| sobol_owen_bits(pixel, i, dim, 7))
+                .collect();
+            for m in 0..=10 {
+                assert!(
+                    is_02_net(&pts[..1 << m], m),
+                    "pixel {pixel}, dim {dim}, first 2^{m}"
+                );
+            }
+        }
+    }
+    // scrambling decorrelates pixels: their first points differ
+    assert_ne!(sobol_owen_bits(0, 0, 0, 7), sobol_owen_bits(1, 0, 0, 7));
+}
