@@ -59,9 +59,10 @@ pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec2) -> Vec3 {
 pub fn perlin_corner(b: &Bindings, offset: u32, i: IVec3, t: Vec3, s: Vec3, d: IVec3) -> f32 {
     let perm =
         |k: i32, lane: usize| b.texels[(offset + 256 + (k & 255) as u32) as usize][lane] as u32;
-    let px = perm(i.x + d.x, 0);
-    let py = perm(i.y + d.y, 1);
-    let pz = perm(i.z + d.z, 2);
+    // wrapping, as WGSL's i32 addition (a saturated lattice index far away must not panic)
+    let px = perm(i.x.wrapping_add(d.x), 0);
+    let py = perm(i.y.wrapping_add(d.y), 1);
+    let pz = perm(i.z.wrapping_add(d.z), 2);
     let g = texel(b, offset + (px ^ py ^ pz));
     let df = d.as_vec3();
     let w = Vec3::select(d.cmpeq(IVec3::ONE), s, Vec3::ONE - s);
@@ -113,10 +114,10 @@ pub fn checker_odd(tex: &Texture, uv: Vec2, p: Vec3) -> bool {
     let s = tex.params[0];
     if tex.flags & TEX_FLAG_SOLID != 0 {
         let c = (s * p).floor().as_ivec3();
-        return ((c.x + c.y + c.z) & 1) == 1;
+        return (c.x.wrapping_add(c.y).wrapping_add(c.z) & 1) == 1;
     }
     let c = (s * uv).floor().as_ivec2();
-    ((c.x + c.y) & 1) == 1
+    (c.x.wrapping_add(c.y) & 1) == 1
 }
 
 /// A texture that is not a checker.

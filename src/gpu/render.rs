@@ -235,6 +235,8 @@ pub(crate) fn check_scene_fits(device: &wgpu::Device, scene: &FlatScene) -> Resu
         ("primitives", std::mem::size_of_val(&scene.primitives[..])),
         ("bvh", std::mem::size_of_val(&scene.bvh[..])),
         ("shape_data", std::mem::size_of_val(&scene.shape_data[..])),
+        ("textures", std::mem::size_of_val(&scene.textures[..])),
+        ("texels", std::mem::size_of_val(&scene.texels[..])),
     ] {
         if bytes as u64 > limit {
             return Err(GpuError::SceneTooLarge {

@@ -148,8 +148,8 @@ pub enum TextureDesc {
         #[serde(default)]
         mapping: CheckerMapping,
     },
-    /// An image file (PNG, JPEG, HDR, EXR, PPM), `path` relative to the scene file; 8-bit
-    /// images are sRGB-decoded to linear; bilinear filtering.
+    /// An image file (PNG, JPEG, HDR, EXR, PPM), `path` relative to the scene file; 8- and
+    /// 16-bit images are sRGB-decoded to linear; bilinear filtering.
     Image {
         path: String,
         #[serde(default)]
