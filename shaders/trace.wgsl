@@ -25,6 +25,15 @@ fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
     return Ray(params.cam_origin.xyz + lens_offset, normalize(target_offset - lens_offset));
 }
 
+// Radiance of a ray that leaves the scene in unit direction d: the constant background, or
+// the vertical gradient bottom + (top - bottom) (d.y + 1) / 2.
+fn background_radiance(d: vec3<f32>) -> vec3<f32> {
+    if (params.background_top.w > 0.5) {
+        return mix(params.background.rgb, params.background_top.rgb, 0.5 * (d.y + 1.0));
+    }
+    return params.background.rgb;
+}
+
 // Radiance along one camera path. max_depth counts rays: 1 shows emitters and the
 // background, 2 adds direct lighting, and so on.
 fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
@@ -34,7 +43,7 @@ fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
     for (var depth = 0u; depth < params.max_depth; depth++) {
         let cand = intersect_scene(ray);
         if (cand.prim == NO_HIT) {
-            radiance += throughput * params.background.rgb;
+            radiance += throughput * background_radiance(ray.dir);
             break;
         }
         let hit = surface_at(ray, cand);

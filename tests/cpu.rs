@@ -289,3 +289,19 @@ fn every_shipped_scene_loads_and_has_emitters_or_a_background() {
         );
     }
 }
+
+#[test]
+fn a_gradient_background_needs_top_and_bottom_and_not_color() {
+    let base = "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[background]\n";
+    let e = load_err(&format!("{base}top = [1, 1, 1]\n"));
+    assert!(
+        e.contains("background: a gradient needs both top and bottom"),
+        "{e}"
+    );
+    let e = load_err(&format!(
+        "{base}top = [1, 1, 1]\nbottom = [0, 0, 0]\ncolor = [1, 1, 1]\n"
+    ));
+    assert!(e.contains("not both"), "{e}");
+    let e = load_err(&format!("{base}top = [1, -1, 1]\nbottom = [0, 0, 0]\n"));
+    assert!(e.contains("background.top: must be >= 0"), "{e}");
+}

@@ -190,6 +190,55 @@ fn tiny_and_huge_spheres_render_without_holes_or_speckles() {
     }
 }
 
+/// A Lambertian floor of albedo a under the gradient sky L(d) = B + (T - B)(d.y + 1) / 2
+/// receives E = pi (B + T) / 2 + 2 pi (T - B) / 6 (the cosine-weighted integral over the
+/// upper hemisphere), so at max_depth 2 it shows a ((B + T) / 2 + (T - B) / 3). The image
+/// mean holds it to 4 standard errors on both backends.
+#[test]
+fn gradient_sky_lights_a_floor_by_its_closed_form() {
+    let src = r#"
+[render]
+width = 32
+height = 32
+spp = 64
+max_depth = 2
+[camera]
+look_from = [0, 1, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+vfov = 30
+[background]
+top = [0.2, 0.5, 1.0]
+bottom = [1.0, 0.6, 0.1]
+[materials]
+floor = { type = "lambertian", albedo = [0.8, 0.6, 0.4] }
+[[objects]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "floor"
+"#;
+    let (t, b, a) = ([0.2f64, 0.5, 1.0], [1.0f64, 0.6, 0.1], [0.8f64, 0.6, 0.4]);
+    let s = scene_from_str(src);
+    for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+        let n = img.pixel_count();
+        for c in 0..3 {
+            let expected = a[c] * ((b[c] + t[c]) / 2.0 + (t[c] - b[c]) / 3.0);
+            let mean: f64 = (0..n).map(|i| img.mean(i)[c] as f64).sum::<f64>() / n as f64;
+            // pixels are independent: the standard error of the image mean
+            let var: f64 = (0..n)
+                .map(|i| img.variance(i)[c] as f64 / img.samples(i) as f64)
+                .sum::<f64>()
+                / (n * n) as f64;
+            assert!(
+                (mean - expected).abs() <= 4.0 * var.sqrt() + 1e-6,
+                "{name} channel {c}: {mean} vs {expected} (standard error {})",
+                var.sqrt()
+            );
+        }
+    }
+}
+
 /// White furnace per material: albedo 1 under a uniform background of radiance 1. Every
 /// sample of a lossless material (Lambertian, mirror metal, clear glass, which splits light
 /// between reflection and refraction) returns exactly 1; no material ever returns more than

@@ -139,8 +139,10 @@ struct Params {
     cam_up: vec4<f32>,
     // unit forward vector, .w = focus distance
     cam_forward: vec4<f32>,
-    // radiance of rays that leave the scene, .w unused
+    // radiance of rays that leave the scene (the bottom of a gradient), .w unused
     background: vec4<f32>,
+    // the top of a vertical gradient; .w = 1 for a gradient, 0 for a constant
+    background_top: vec4<f32>,
     width: u32,
     height: u32,
     max_depth: u32,

@@ -33,6 +33,15 @@ pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]
     }
 }
 
+/// Radiance of a ray leaving the scene: the constant, or the vertical gradient.
+pub fn background_radiance(b: &Bindings, d: Vec3) -> Vec3 {
+    let p = &b.params;
+    if p.background_top[3] > 0.5 {
+        return xyz(p.background).lerp(xyz(p.background_top), 0.5 * (d.y + 1.0));
+    }
+    xyz(p.background)
+}
+
 /// Radiance along one camera path; max_depth counts rays.
 pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
     let p = &b.params;
@@ -42,7 +51,7 @@ pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
     for depth in 0..p.max_depth {
         let cand = intersect_scene(b, &ray);
         if cand.prim == NO_HIT {
-            radiance += throughput * xyz(p.background);
+            radiance += throughput * background_radiance(b, ray.dir);
             break;
         }
         let hit = surface_at(b, &ray, &cand);

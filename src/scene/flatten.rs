@@ -617,7 +617,12 @@ pub fn flatten(
             SamplerKind::Sobol => records::SAMPLER_SOBOL,
         },
         camera: camera_frame(file, r.width as f32 / r.height as f32),
-        background: file.background.color,
+        background: file
+            .background
+            .bottom
+            .or(file.background.color)
+            .unwrap_or([0.0; 3]),
+        background_top: file.background.top,
         primitives,
         materials,
         emitters,

@@ -92,12 +92,15 @@ fn default_vfov() -> f32 {
     40.0
 }
 
-/// `[background]`: radiance of rays that leave the scene.
+/// `[background]`: radiance of rays that leave the scene: a constant `color`, or a vertical
+/// gradient from `bottom` (straight down) to `top` (straight up), linear in the direction's
+/// y as in "Ray Tracing in One Weekend".
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BackgroundDesc {
-    #[serde(default)]
-    pub color: [f32; 3],
+    pub color: Option<[f32; 3]>,
+    pub top: Option<[f32; 3]>,
+    pub bottom: Option<[f32; 3]>,
 }
 
 /// A colour parameter: `[r, g, b]`, or the name of a `[textures]` entry.

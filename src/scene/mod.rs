@@ -63,7 +63,10 @@ pub struct FlatScene {
     /// `records::SAMPLER_*`.
     pub sampler: u32,
     pub camera: CameraFrame,
+    /// Background radiance: the constant colour, or the bottom of the gradient.
     pub background: [f32; 3],
+    /// The top of the gradient, when the background is one.
+    pub background_top: Option<[f32; 3]>,
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
     pub emitters: Vec<Emitter>,
@@ -108,6 +111,10 @@ impl FlatScene {
                 self.background[2],
                 0.0,
             ],
+            background_top: match self.background_top {
+                Some(t) => [t[0], t[1], t[2], 1.0],
+                None => [0.0; 4],
+            },
             width: self.width,
             height: self.height,
             max_depth: self.max_depth,

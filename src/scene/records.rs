@@ -197,8 +197,10 @@ pub struct Params {
     pub cam_up: [f32; 4],
     /// Unit forward vector; `.w` = focus distance.
     pub cam_forward: [f32; 4],
-    /// Radiance of rays that leave the scene.
+    /// Radiance of rays that leave the scene (the bottom of a gradient).
     pub background: [f32; 4],
+    /// The top of a vertical gradient; `.w` = 1 for a gradient, 0 for a constant.
+    pub background_top: [f32; 4],
     pub width: u32,
     pub height: u32,
     pub max_depth: u32,
@@ -338,6 +340,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             cam_up,
             cam_forward,
             background,
+            background_top,
             width,
             height,
             max_depth,

@@ -61,7 +61,29 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
             v.push(0, "camera.focus_distance", format!("must be > 0, got {fd}"));
         }
     }
-    v.nonnegative3("background.color", file.background.color, 0);
+    let bg = &file.background;
+    for (key, c) in [
+        ("background.color", bg.color),
+        ("background.top", bg.top),
+        ("background.bottom", bg.bottom),
+    ] {
+        if let Some(c) = c {
+            v.nonnegative3(key, c, 0);
+        }
+    }
+    if bg.top.is_some() != bg.bottom.is_some() {
+        v.push(
+            0,
+            "background",
+            "a gradient needs both top and bottom".into(),
+        );
+    } else if bg.top.is_some() && bg.color.is_some() {
+        v.push(
+            0,
+            "background",
+            "give either color or top and bottom, not both".into(),
+        );
+    }
 
     for (name, t) in &file.textures {
         let at = t.span().start;
