@@ -14,6 +14,29 @@ pub struct Problem {
     pub message: String,
 }
 
+impl Problem {
+    /// A problem at byte `offset` of the scene text `src` (0: no position, e.g. a value
+    /// that came from the command line or a default).
+    pub fn at(
+        src: &str,
+        offset: usize,
+        key: impl Into<String>,
+        message: impl Into<String>,
+    ) -> Self {
+        let (line, column) = if offset == 0 {
+            (0, 0)
+        } else {
+            line_col(src, offset)
+        };
+        Problem {
+            line,
+            column,
+            key: key.into(),
+            message: message.into(),
+        }
+    }
+}
+
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {

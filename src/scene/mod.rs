@@ -174,105 +174,89 @@ pub fn load_scene_str(
         problems,
     };
     let mut file: SceneFile = toml::from_str(src).map_err(|e| {
-        let (line, column) = e.span().map_or((0, 0), |s| error::line_col(src, s.start));
-        invalid(vec![Problem {
-            line,
-            column,
-            key: String::new(),
-            message: e.message().trim().to_string(),
-        }])
+        let offset = e.span().map_or(0, |s| s.start);
+        invalid(vec![Problem::at(src, offset, "", e.message().trim())])
     })?;
     apply_overrides(&mut file, overrides);
-    let mut problems = validate::validate(&file, src);
+    let problems = validate::validate(&file, src);
     if !problems.is_empty() {
         return Err(invalid(problems));
     }
-    let meshes = load_meshes(&file, src, path, &mut problems);
-    let images = load_images(&file, src, path, &mut problems);
+
+    // Files the scene names (OBJ meshes, images), relative to it.
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut problems = Vec::new();
+    let meshes: Vec<Option<mesh::MeshData>> = file
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, obj)| match obj.get_ref() {
+            ObjectDesc::Mesh { path, .. } => read_relative(
+                (src, dir, path),
+                obj.span().start,
+                format!("objects[{i}].path"),
+                mesh::load_obj,
+                &mut problems,
+            ),
+            _ => None,
+        })
+        .collect();
+    let images: Vec<Option<textures::ImageData>> = file
+        .textures
+        .iter()
+        .map(|(name, t)| match t.get_ref() {
+            TextureDesc::Image { path, .. } => read_relative(
+                (src, dir, path),
+                t.span().start,
+                format!("textures.{name}.path"),
+                textures::load_image,
+                &mut problems,
+            ),
+            _ => None,
+        })
+        .collect();
     if !problems.is_empty() {
         return Err(invalid(problems));
     }
+
     flatten::flatten(&file, &meshes, &images, !overrides.no_bvh).map_err(|objects| {
         invalid(
             objects
                 .into_iter()
                 .map(|i| {
-                    let (line, column) = error::line_col(src, file.objects[i].span().start);
-                    Problem {
-                        line,
-                        column,
-                        key: format!("objects[{i}]"),
-                        message: "degenerates in f32 under its transform (a size, normal or \
-                                  matrix becomes zero, infinite or NaN)"
-                            .into(),
-                    }
+                    Problem::at(
+                        src,
+                        file.objects[i].span().start,
+                        format!("objects[{i}]"),
+                        "degenerates in f32 under its transform (a size, normal or matrix \
+                         becomes zero, infinite or NaN)",
+                    )
                 })
                 .collect(),
         )
     })
 }
 
-/// Reads every image texture's file (relative to the scene file); a file that cannot be
-/// read or decoded is a problem at its texture.
-fn load_images(
-    file: &SceneFile,
-    src: &str,
-    scene_path: &Path,
+/// Loads `rel` (relative to the scene's folder `dir`) with `load`; a failure becomes a
+/// problem at byte `offset` of the scene text, naming `key` and the full path.
+fn read_relative<T>(
+    (src, dir, rel): (&str, &Path, &str),
+    offset: usize,
+    key: String,
+    load: impl Fn(&Path) -> Result<T, String>,
     problems: &mut Vec<Problem>,
-) -> Vec<Option<textures::ImageData>> {
-    let dir = scene_path.parent().unwrap_or(Path::new(""));
-    file.textures
-        .iter()
-        .map(|(name, t)| {
-            let TextureDesc::Image { path, .. } = t.get_ref() else {
-                return None;
-            };
-            let full = dir.join(path);
-            textures::load_image(&full)
-                .map_err(|e| {
-                    let (line, column) = error::line_col(src, t.span().start);
-                    problems.push(Problem {
-                        line,
-                        column,
-                        key: format!("textures.{name}.path"),
-                        message: format!("{}: {e}", full.display()),
-                    });
-                })
-                .ok()
+) -> Option<T> {
+    let full = dir.join(rel);
+    load(&full)
+        .map_err(|e| {
+            problems.push(Problem::at(
+                src,
+                offset,
+                key,
+                format!("{}: {e}", full.display()),
+            ))
         })
-        .collect()
-}
-
-/// Reads every mesh object's OBJ file (relative to the scene file); a file that cannot be
-/// read is a problem at its object.
-fn load_meshes(
-    file: &SceneFile,
-    src: &str,
-    scene_path: &Path,
-    problems: &mut Vec<Problem>,
-) -> Vec<Option<mesh::MeshData>> {
-    let dir = scene_path.parent().unwrap_or(Path::new(""));
-    file.objects
-        .iter()
-        .enumerate()
-        .map(|(i, obj)| {
-            let ObjectDesc::Mesh { path, .. } = obj.get_ref() else {
-                return None;
-            };
-            let full = dir.join(path);
-            mesh::load_obj(&full)
-                .map_err(|e| {
-                    let (line, column) = error::line_col(src, obj.span().start);
-                    problems.push(Problem {
-                        line,
-                        column,
-                        key: format!("objects[{i}].path"),
-                        message: format!("{}: {e}", full.display()),
-                    });
-                })
-                .ok()
-        })
-        .collect()
+        .ok()
 }
 
 fn apply_overrides(file: &mut SceneFile, o: &Overrides) {

@@ -2,7 +2,7 @@
 
 use glam::Vec3;
 
-use super::error::{self, Problem};
+use super::error::Problem;
 use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TextureDesc, TransformDesc};
 use super::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE};
 
@@ -289,17 +289,8 @@ struct Validator<'a> {
 
 impl Validator<'_> {
     fn push(&mut self, offset: usize, key: &str, message: String) {
-        let (line, column) = if offset == 0 {
-            (0, 0)
-        } else {
-            error::line_col(self.src, offset)
-        };
-        self.problems.push(Problem {
-            line,
-            column,
-            key: key.to_string(),
-            message,
-        });
+        self.problems
+            .push(Problem::at(self.src, offset, key, message));
     }
 
     fn range_u32(&mut self, key: &str, value: u32, lo: u32, hi: u32, at: usize) {
