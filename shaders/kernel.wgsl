@@ -35,7 +35,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let ray = Ray(rays[i].origin.xyz, rays[i].dir.xyz);
-    let cand = intersect_scene(ray);
+    let cand = intersect_scene(ray, FAR);
     var out = KernelHit(cand.t, cand.prim, 0u, 0u, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
     if (cand.prim != NO_HIT) {
         let h = surface_at(ray, cand);

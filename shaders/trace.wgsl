@@ -2,6 +2,7 @@
 // iterative bounce loop; the result is added to the accumulation buffer.
 #import shared/bindings
 #import shared/intersect
+#import shared/lights
 #import shared/materials
 #import shared/rng
 #import shared/samplers
@@ -25,41 +26,135 @@ fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
     return Ray(params.cam_origin.xyz + lens_offset, normalize(target_offset - lens_offset));
 }
 
-// Radiance of a ray that leaves the scene in unit direction d: the constant background, or
-// the vertical gradient bottom + (top - bottom) (d.y + 1) / 2.
-fn background_radiance(d: vec3<f32>) -> vec3<f32> {
-    if (params.background_top.w > 0.5) {
-        return mix(params.background.rgb, params.background_top.rgb, 0.5 * (d.y + 1.0));
+// A ray leaving a hit in direction dir, from just off the surface on dir's side.
+fn spawn_ray(hit: Hit, dir: vec3<f32>) -> Ray {
+    return Ray(offset_ray(hit.p, select(-hit.ng, hit.ng, dot(dir, hit.ng) > 0.0), hit.err), dir);
+}
+
+// Next-event estimation at a hit: a direction toward a light, a shadow ray from just off
+// the surface to just short of the sampled point, and the light's emission there (its own
+// shading record: side, texture) times BSDF x cos, weighed against BSDF sampling by the
+// power heuristic and divided by the light's pdf.
+fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -> vec3<f32> {
+    let ls = sample_light(hit.p, u_light, u);
+    if (ls.light == NO_LIGHT) {
+        return vec3<f32>(0.0);
     }
-    return params.background.rgb;
+    let f = bsdf_eval(mat, ray, hit, ls.dir);
+    if (all(f == vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
+    var shadow = spawn_ray(hit, ls.dir);
+    var t_max = FAR;
+    var le: vec3<f32>;
+    let e = emitters[ls.light];
+    if (e.kind == LIGHT_ENVIRONMENT) {
+        le = background_radiance(ls.dir);
+    } else {
+        let lh = surface_at(Ray(hit.p, ls.dir), Candidate(ls.dist, e.primitive, ls.uv.x, ls.uv.y));
+        le = emitted(material_at(materials[lh.material], lh), lh);
+        if (all(le == vec3<f32>(0.0))) {
+            return vec3<f32>(0.0);
+        }
+        let end = offset_ray(lh.p, select(-lh.ng, lh.ng, dot(ls.dir, lh.ng) < 0.0), lh.err);
+        let v = end - shadow.origin;
+        t_max = length(v);
+        if (!(t_max > 0.0)) {
+            return vec3<f32>(0.0);
+        }
+        shadow.dir = v / t_max;
+    }
+    if (intersect_scene(shadow, t_max).prim != NO_HIT) {
+        return vec3<f32>(0.0);
+    }
+    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, ls.dir));
+    return f * le * (w / ls.pdf);
 }
 
 // Radiance along one camera path. max_depth counts rays: 1 shows emitters and the
-// background, 2 adds direct lighting, and so on.
+// background, 2 adds direct lighting, and so on. light_sampling picks how lights are
+// found: by hitting them (bsdf); by a direction drawn half the time toward a light and
+// weighted by the mixture pdf (mixture); or by next-event estimation at every vertex plus
+// the material's direction, each weighted by the power heuristic so that emission is
+// counted once (mis).
 fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
     var ray = camera;
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
+    // the previous vertex, for the MIS weight of an emitter the ray hits: its point, the
+    // pdf of the ray's direction, and whether that came from a delta lobe (weight 1)
+    var prev_p = camera.origin;
+    var prev_pdf = 0.0;
+    var prev_delta = true;
     for (var depth = 0u; depth < params.max_depth; depth++) {
-        let cand = intersect_scene(ray);
+        let cand = intersect_scene(ray, FAR);
+        let mis = params.light_sampling == LIGHT_SAMPLING_MIS && !prev_delta;
         if (cand.prim == NO_HIT) {
-            radiance += throughput * background_radiance(ray.dir);
+            var le = background_radiance(ray.dir);
+#ifdef HAS_LIGHT_SAMPLING
+            if (mis && params.env_light != NO_LIGHT) {
+                le *= power_heuristic(prev_pdf, light_pdf(params.env_light, prev_p, prev_p, ray.dir));
+            }
+#endif
+            radiance += throughput * le;
             break;
         }
         let hit = surface_at(ray, cand);
         let mat = material_at(materials[hit.material], hit);
-        radiance += throughput * emitted(mat, hit);
+        var le = emitted(mat, hit);
+#ifdef HAS_LIGHT_SAMPLING
+        let light = primitives[cand.prim].flags >> PRIM_LIGHT_SHIFT;
+        if (mis && light != 0u && any(le > vec3<f32>(0.0))) {
+            le *= power_heuristic(prev_pdf, light_pdf(light - 1u, prev_p, hit.p, ray.dir));
+        }
+#endif
+        radiance += throughput * le;
         if (depth + 1u >= params.max_depth) {
             break;
         }
         let u = bounce_2d(pixel, sample, depth, DIM_BSDF);
+#ifdef HAS_LIGHT_SAMPLING
+        if (params.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat)) {
+            let ul = bounce_2d(pixel, sample, depth, DIM_LIGHT);
+            let uc = bounce_2d(pixel, sample, depth, DIM_LIGHT_CHOICE);
+            radiance += throughput * direct_light(mat, ray, hit, uc.x, ul);
+        }
+        if (params.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat)) {
+            // one direction from the 50/50 mixture; the path goes on along it
+            let uc = bounce_2d(pixel, sample, depth, DIM_LIGHT_CHOICE);
+            var dir: vec3<f32>;
+            if (uc.y < 0.5) {
+                let ls = sample_light(hit.p, uc.x, bounce_2d(pixel, sample, depth, DIM_LIGHT));
+                if (ls.light == NO_LIGHT) {
+                    break;
+                }
+                dir = ls.dir;
+            } else {
+                let s = scatter(mat, ray, hit, u);
+                if (!s.ok) {
+                    break;
+                }
+                dir = s.dir;
+            }
+            let f = bsdf_eval(mat, ray, hit, dir);
+            let pdf = 0.5 * light_pdf_total(hit.p, dir) + 0.5 * bsdf_pdf(mat, ray, hit, dir);
+            if (!(pdf > 0.0) || all(f == vec3<f32>(0.0))) {
+                break;
+            }
+            throughput *= f / pdf;
+            ray = spawn_ray(hit, dir);
+            continue;
+        }
+#endif
         let s = scatter(mat, ray, hit, u);
         if (!s.ok) {
             break;
         }
         throughput *= s.weight;
-        let side = select(-hit.ng, hit.ng, dot(s.dir, hit.ng) > 0.0);
-        ray = Ray(offset_ray(hit.p, side, hit.err), s.dir);
+        prev_p = hit.p;
+        prev_pdf = s.pdf;
+        prev_delta = s.delta;
+        ray = spawn_ray(hit, s.dir);
     }
     return radiance;
 }

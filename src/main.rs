@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use wgtrace::image_io::{write_image, OutputFormat};
 use wgtrace::render::{render_progressive, Progress};
+use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::{BackendChoice, Engine, Overrides};
 
 #[derive(Parser)]
@@ -37,30 +38,6 @@ enum BackendArg {
     Gpu,
     /// The CPU reference renderer.
     Cpu,
-}
-
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum SamplerArg {
-    /// Independent uniform points.
-    Random,
-    /// One point per stratum of the pixel.
-    Jittered,
-    /// (i / N, radical inverse of i), rotated per pixel.
-    Hammersley,
-    /// Owen-scrambled Sobol' points.
-    Sobol,
-}
-
-impl From<SamplerArg> for wgtrace::scene::format::SamplerKind {
-    fn from(s: SamplerArg) -> Self {
-        use wgtrace::scene::format::SamplerKind as K;
-        match s {
-            SamplerArg::Random => K::Random,
-            SamplerArg::Jittered => K::Jittered,
-            SamplerArg::Hammersley => K::Hammersley,
-            SamplerArg::Sobol => K::Sobol,
-        }
-    }
 }
 
 #[derive(clap::Args)]
@@ -97,7 +74,10 @@ struct RenderArgs {
     preview_every: Option<u32>,
     /// Pixel sampler (overrides [render] sampler).
     #[arg(long, value_enum)]
-    sampler: Option<SamplerArg>,
+    sampler: Option<SamplerKind>,
+    /// How paths find lights (overrides [render] light_sampling).
+    #[arg(long, value_enum)]
+    light_sampling: Option<LightSampling>,
     /// Test every primitive on every ray instead of traversing the BVH (for comparisons).
     #[arg(long)]
     no_bvh: bool,
@@ -151,7 +131,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         max_depth: args.max_depth,
         seed: args.seed,
         no_bvh: args.no_bvh,
-        sampler: args.sampler.map(Into::into),
+        sampler: args.sampler,
+        light_sampling: args.light_sampling,
     };
     let loading = std::time::Instant::now();
     let scene = wgtrace::load_scene(&args.scene, &overrides)?;

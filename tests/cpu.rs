@@ -99,7 +99,7 @@ fn polygon_fan_hits_inside_misses_outside_and_faces_by_vertex_order() {
         (2.0, 0.0, false),
     ] {
         let r = ray([x, y, 1.0], [0.0, 0.0, -1.0]);
-        let cand = intersect_scene(&b, &r);
+        let cand = intersect_scene(&b, &r, FAR);
         assert_eq!(cand.prim != NO_HIT, hit, "({x}, {y})");
         if hit {
             assert!((cand.t - 1.0).abs() < 1e-6);
@@ -110,7 +110,7 @@ fn polygon_fan_hits_inside_misses_outside_and_faces_by_vertex_order() {
         }
     }
     let back = ray([0.0, 0.0, -1.0], [0.0, 0.0, 1.0]);
-    let h = surface_at(&b, &back, &intersect_scene(&b, &back));
+    let h = surface_at(&b, &back, &intersect_scene(&b, &back, FAR));
     assert!(!h.front_face);
 }
 
@@ -148,7 +148,7 @@ fn rays_leaving_a_sphere_never_rehit_it_at_any_scale() {
                 origin,
                 dir: (target - origin).normalize(),
             };
-            let cand = intersect_scene(&b, &r);
+            let cand = intersect_scene(&b, &r, FAR);
             assert_ne!(cand.prim, NO_HIT, "{center:?} r {radius}: aimed ray missed");
             let h = surface_at(&b, &r, &cand);
             let d = sample_cosine_hemisphere(h.ng, rand_2d(i, 2, 0, 0, 7));
@@ -156,7 +156,7 @@ fn rays_leaving_a_sphere_never_rehit_it_at_any_scale() {
                 origin: offset_ray(h.p, h.ng, h.err),
                 dir: d,
             };
-            let again = intersect_scene(&b, &out);
+            let again = intersect_scene(&b, &out, FAR);
             assert_eq!(
                 again.prim, NO_HIT,
                 "{center:?} r {radius}: self-intersection at {:?}",
@@ -264,11 +264,16 @@ fn overrides_replace_render_settings_and_are_validated() {
         seed: Some(9),
         no_bvh: false,
         sampler: None,
+        light_sampling: Some(wgtrace::scene::format::LightSampling::Mixture),
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
     assert_eq!(
         (s.width, s.height, s.spp, s.max_depth, s.seed),
         (33, 17, 3, 2, 9)
+    );
+    assert_eq!(
+        s.light_sampling,
+        wgtrace::scene::records::LIGHT_SAMPLING_MIXTURE
     );
     let zero = Overrides {
         width: Some(0),
@@ -291,7 +296,7 @@ fn every_shipped_scene_loads_and_has_emitters_or_a_background() {
 }
 
 #[test]
-fn a_gradient_background_needs_top_and_bottom_and_not_color() {
+fn background_mistakes_are_named() {
     let base = "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[background]\n";
     let e = load_err(&format!("{base}top = [1, 1, 1]\n"));
     assert!(
@@ -301,7 +306,21 @@ fn a_gradient_background_needs_top_and_bottom_and_not_color() {
     let e = load_err(&format!(
         "{base}top = [1, 1, 1]\nbottom = [0, 0, 0]\ncolor = [1, 1, 1]\n"
     ));
-    assert!(e.contains("not both"), "{e}");
+    assert!(
+        e.contains("give one of color, top and bottom, or texture"),
+        "{e}"
+    );
     let e = load_err(&format!("{base}top = [1, -1, 1]\nbottom = [0, 0, 0]\n"));
     assert!(e.contains("background.top: must be >= 0"), "{e}");
+    let e = load_err(&format!("{base}texture = \"sky\"\n"));
+    assert!(
+        e.contains("background.texture: no texture named \"sky\""),
+        "{e}"
+    );
+    let e = load_err(&format!(
+        "{base}texture = \"sky\"\n[textures]\nsky = {{ type = \"constant\", color = [1, 1, 1] }}\n"
+    ));
+    assert!(e.contains("\"sky\" is not an image texture"), "{e}");
+    let e = load_err(&format!("{base}color = [1, 1, 1]\nstrength = 2\n"));
+    assert!(e.contains("apply to a texture background only"), "{e}");
 }

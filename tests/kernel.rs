@@ -9,7 +9,7 @@ mod common;
 use glam::{Vec3, Vec4};
 use wgtrace::cpu::bindings::Bindings;
 use wgtrace::cpu::intersect::{intersect_scene, surface_at};
-use wgtrace::cpu::types::{Ray, NO_HIT};
+use wgtrace::cpu::types::{Ray, FAR, NO_HIT};
 use wgtrace::gpu::kernel::intersect_rays;
 use wgtrace::scene::records::{KernelHit, KernelRay};
 use wgtrace::FlatScene;
@@ -69,7 +69,7 @@ fn rays(center: Vec3, r: f32, n: usize, seed: u32) -> Vec<Ray> {
 /// The CPU reference's answer in the kernel's record.
 fn cpu_hit(scene: &FlatScene, r: &Ray) -> KernelHit {
     let b = Bindings::new(scene, scene.params(0, scene.full_tile()));
-    let c = intersect_scene(&b, r);
+    let c = intersect_scene(&b, r, FAR);
     let mut out = KernelHit {
         t: c.t,
         prim: c.prim,

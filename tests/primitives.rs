@@ -32,7 +32,7 @@ fn ray(o: impl Into<Vec3>, d: impl Into<Vec3>) -> Ray {
 /// The closest hit of a ray in a scene (CPU reference), with its shading record.
 fn trace(s: &FlatScene, r: Ray) -> Option<(Candidate, Hit)> {
     let b = Bindings::new(s, s.params(0, s.full_tile()));
-    let c = intersect_scene(&b, &r);
+    let c = intersect_scene(&b, &r, FAR);
     (c.prim != NO_HIT).then(|| (c, surface_at(&b, &r, &c)))
 }
 
@@ -573,7 +573,7 @@ fn bvh_finds_the_same_closest_hit_as_brute_force() {
     for _ in 0..10_000 {
         let o = Vec3::new(coord(&mut rng), coord(&mut rng), coord(&mut rng)) * 1.5;
         let r = ray(o, common::random_unit(&mut rng));
-        let (a, b) = (intersect_scene(&bw, &r), intersect_scene(&bo, &r));
+        let (a, b) = (intersect_scene(&bw, &r, FAR), intersect_scene(&bo, &r, FAR));
         assert_eq!(a, b, "{r:?}");
         hits += (a.prim != NO_HIT) as u32;
     }

@@ -295,11 +295,12 @@ fn intersect_aabb(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3
 // 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps) with eps = 2^-24.
 const BOX_WIDEN: f32 = 1.0000003576278687;
 
-// Closest hit along the ray: every unbounded primitive (planes), then the BVH in order
+// Closest hit along the ray before t_max (FAR: anywhere; a shadow ray's length: whether
+// anything lies in between): every unbounded primitive (planes), then the BVH in order
 // (nearer child first, a far child pushed with its entry distance and skipped when the
 // closest hit is already nearer), or every bounded primitive when use_bvh = 0.
-fn intersect_scene(ray: Ray) -> Candidate {
-    var best = Candidate(FAR, NO_HIT, 0.0, 0.0);
+fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
+    var best = Candidate(t_max, NO_HIT, 0.0, 0.0);
     for (var i = 0u; i < params.num_unbounded; i++) {
         best = closer(best, i, ray);
     }

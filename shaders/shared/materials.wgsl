@@ -8,6 +8,16 @@ struct Scatter {
     dir: vec3<f32>,
     // BSDF * cos / pdf of the sampled direction
     weight: vec3<f32>,
+    // the pdf of the sampled direction (what MIS weighs against light sampling)
+    pdf: f32,
+    // the direction came from a delta lobe (mirror, refraction; fuzzy metal too, whose pdf
+    // has no closed form): no light sampling can produce it
+    delta: bool,
+}
+
+// The path ends here.
+fn absorbed() -> Scatter {
+    return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true);
 }
 
 // Radiance the surface emits toward the ray that hit it.
@@ -25,9 +35,9 @@ fn scatter_lambertian(mat: Material, hit: Hit, u: vec2<f32>) -> Scatter {
     let side = select(-1.0, 1.0, hit.front_face);
     let dir = sample_cosine_hemisphere(side * hit.ns, u);
     if (side * dot(dir, hit.ng) <= 0.0) {
-        return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        return absorbed();
     }
-    return Scatter(true, dir, mat.albedo.rgb);
+    return Scatter(true, dir, mat.albedo.rgb, dot(side * hit.ns, dir) / PI, false);
 }
 
 // Mirror direction of d about the unit normal n: d - 2 (d . n) n.
@@ -43,9 +53,9 @@ fn scatter_metal(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     let v = reflect_dir(ray.dir, side * hit.ns) + mat.params.x * sample_sphere(u);
     let len = length(v);
     if (!(len > 0.0) || side * dot(v, hit.ng) <= 0.0) {
-        return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        return absorbed();
     }
-    return Scatter(true, v / len, mat.albedo.rgb);
+    return Scatter(true, v / len, mat.albedo.rgb, 0.0, true);
 }
 
 // Schlick's approximation of the Fresnel reflectance at cosine c between media of relative
@@ -73,13 +83,13 @@ fn scatter_dielectric(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
         weight *= exp(-mat.extra.rgb * length(hit.p - ray.origin));
     }
     if (sin2_t >= 1.0) {
-        return Scatter(true, reflect_dir(ray.dir, n), weight);
+        return Scatter(true, reflect_dir(ray.dir, n), weight, 0.0, true);
     }
     let cos_t = sqrt(1.0 - sin2_t);
     if (u.x < schlick(select(cos_i, cos_t, eta > 1.0), eta)) {
-        return Scatter(true, reflect_dir(ray.dir, n), weight);
+        return Scatter(true, reflect_dir(ray.dir, n), weight, 0.0, true);
     }
-    return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), weight);
+    return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), weight, 0.0, true);
 }
 
 // Below this GGX alpha the specular lobe is a perfect mirror (a delta, as in pbrt-v4): eval
@@ -192,7 +202,7 @@ fn scatter_microfacet(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
     let wo = -ray.dir;
     let cos_o = dot(n, wo);
     if (cos_o <= 0.0) {
-        return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        return absorbed();
     }
     let p_s = microfacet_spec_prob(mat, cos_o);
     let is_smooth = mat.params.x < ALPHA_SMOOTH;
@@ -200,9 +210,9 @@ fn scatter_microfacet(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
         // the mirror lobe: weight = ks F(cos_o) / p_s
         let wi = reflect_dir(ray.dir, n);
         if (side * dot(wi, hit.ng) <= 0.0) {
-            return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+            return absorbed();
         }
-        return Scatter(true, wi, mat.extra.rgb * (schlick(cos_o, mat.params.y) / p_s));
+        return Scatter(true, wi, mat.extra.rgb * (schlick(cos_o, mat.params.y) / p_s), 0.0, true);
     }
     var wi: vec3<f32>;
     if (u.x < p_s) {
@@ -216,9 +226,9 @@ fn scatter_microfacet(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
     }
     let pdf = microfacet_pdf(mat, n, wo, wi);
     if (!(pdf > 0.0) || side * dot(wi, hit.ng) <= 0.0) {
-        return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+        return absorbed();
     }
-    return Scatter(true, wi, microfacet_eval(mat, n, wo, wi) / pdf);
+    return Scatter(true, wi, microfacet_eval(mat, n, wo, wi) / pdf, pdf, false);
 }
 
 fn scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
@@ -237,7 +247,57 @@ fn scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
         }
         default: {
             // emissive and unknown materials absorb
-            return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0));
+            return absorbed();
         }
     }
+}
+
+// BSDF x cos toward wi for the materials light sampling serves (0 for the others): what
+// scatter's weight is the ratio of, and 0 under the geometric surface, where scatter
+// absorbs. The microfacet's mirror lobe when smooth is a delta and is left out.
+fn bsdf_eval(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> vec3<f32> {
+    let side = select(-1.0, 1.0, hit.front_face);
+    if (side * dot(wi, hit.ng) <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let n = side * hit.ns;
+    switch mat.tag {
+        case MAT_LAMBERTIAN: {
+            return mat.albedo.rgb * (max(0.0, dot(n, wi)) / PI);
+        }
+        case MAT_MICROFACET: {
+            return microfacet_eval(mat, n, -ray.dir, wi);
+        }
+        default: {
+            return vec3<f32>(0.0);
+        }
+    }
+}
+
+// The density with which scatter draws wi (before it absorbs directions under the
+// geometric surface), for the materials light sampling serves.
+fn bsdf_pdf(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> f32 {
+    let n = select(-hit.ns, hit.ns, hit.front_face);
+    switch mat.tag {
+        case MAT_LAMBERTIAN: {
+            return max(0.0, dot(n, wi)) / PI;
+        }
+        case MAT_MICROFACET: {
+            return microfacet_pdf(mat, n, -ray.dir, wi);
+        }
+        default: {
+            return 0.0;
+        }
+    }
+}
+
+// Whether next-event estimation applies at a surface: it has a lobe that is not a delta.
+fn nee_applies(mat: Material) -> bool {
+    return mat.tag == MAT_LAMBERTIAN || mat.tag == MAT_MICROFACET;
+}
+
+// Whether the 50/50 mixture samples lights at a surface: as nee_applies, less the smooth
+// microfacet, whose mirror lobe the mixture's pdf cannot hold.
+fn mixture_applies(mat: Material) -> bool {
+    return mat.tag == MAT_LAMBERTIAN || (mat.tag == MAT_MICROFACET && mat.params.x >= ALPHA_SMOOTH);
 }

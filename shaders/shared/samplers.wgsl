@@ -11,6 +11,10 @@
 const DIM_PIXEL: u32 = 0u;
 const DIM_LENS: u32 = 1u;
 const DIM_BSDF: u32 = 2u;
+// a point on a light
+const DIM_LIGHT: u32 = 3u;
+// .x chooses the light, .y the mixture's strategy
+const DIM_LIGHT_CHOICE: u32 = 4u;
 
 // Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction numbers
 // v_k = v_{k-1} ^ (v_{k-1} >> 1), v_1 = 2^31, of the set bits of i.

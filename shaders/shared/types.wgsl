@@ -49,6 +49,26 @@ const SAMPLER_JITTERED: u32 = 1u;
 const SAMPLER_HAMMERSLEY: u32 = 2u;
 const SAMPLER_SOBOL: u32 = 3u;
 
+// Light-sampling strategies (Params.light_sampling).
+const LIGHT_SAMPLING_BSDF: u32 = 0u;
+const LIGHT_SAMPLING_MIXTURE: u32 = 1u;
+const LIGHT_SAMPLING_MIS: u32 = 2u;
+
+// Background kinds (Params.background_kind).
+const BACKGROUND_CONSTANT: u32 = 0u;
+const BACKGROUND_GRADIENT: u32 = 1u;
+const BACKGROUND_IMAGE: u32 = 2u;
+
+// Light kinds (switch in lights.wgsl).
+const LIGHT_TRIANGLE: u32 = 0u;
+const LIGHT_DISK: u32 = 1u;
+const LIGHT_SPHERE: u32 = 2u;
+const LIGHT_ENVIRONMENT: u32 = 3u;
+// an index that names no light
+const NO_LIGHT: u32 = 0xffffffffu;
+// Primitive.flags >> PRIM_LIGHT_SHIFT = index in the light list + 1, 0 for none
+const PRIM_LIGHT_SHIFT: u32 = 8u;
+
 // Material flags.
 const MAT_FLAG_TWO_SIDED: u32 = 1u;
 
@@ -122,11 +142,22 @@ struct Texture {
     params: vec4<f32>,
 }
 
+// One light: an emissive primitive with its world-space geometry, or the environment
+// (primitive = NO_HIT). Chosen with probability prob by inverting the running sum cdf.
+// triangle: vertices a, b, c | disk: a = (center, radius), b = unit normal
+// sphere: a = (center, radius)
 struct Emitter {
     primitive: u32,
-    material: u32,
+    kind: u32,
+    prob: f32,
+    cdf: f32,
+    a: vec4<f32>,
+    b: vec4<f32>,
+    c: vec4<f32>,
     area: f32,
     power: f32,
+    pad0: u32,
+    pad1: u32,
 }
 
 // Per-dispatch constants: camera, image, pass and tile.
@@ -141,8 +172,10 @@ struct Params {
     cam_forward: vec4<f32>,
     // radiance of rays that leave the scene (the bottom of a gradient), .w unused
     background: vec4<f32>,
-    // the top of a vertical gradient; .w = 1 for a gradient, 0 for a constant
+    // the top of a vertical gradient
     background_top: vec4<f32>,
+    // image background: (cos, sin) of its rotation about +y, strength
+    env: vec4<f32>,
     width: u32,
     height: u32,
     max_depth: u32,
@@ -164,6 +197,18 @@ struct Params {
     strata_log2: u32,
     // samples per pixel of the whole render (hammersley's N)
     spp: u32,
+    // LIGHT_SAMPLING_*
+    light_sampling: u32,
+    // BACKGROUND_*
+    background_kind: u32,
+    // image background: its texture, the first texels entry of its distribution, and its
+    // index in the light list (or NO_LIGHT)
+    env_texture: u32,
+    env_cdf: u32,
+    env_light: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 struct Ray {

@@ -314,11 +314,12 @@ pub fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f3
     FAR
 }
 
-/// Closest hit along the ray: planes, then the BVH in order (or every primitive).
-pub fn intersect_scene(b: &Bindings, ray: &Ray) -> Candidate {
+/// Closest hit along the ray before t_max: planes, then the BVH in order (or every
+/// primitive).
+pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
     let p = &b.params;
     let mut best = Candidate {
-        t: FAR,
+        t: t_max,
         prim: NO_HIT,
         u: 0.0,
         v: 0.0,

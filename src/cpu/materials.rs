@@ -15,6 +15,10 @@ pub struct Scatter {
     pub dir: Vec3,
     /// BSDF * cos / pdf of the sampled direction.
     pub weight: Vec3,
+    /// The pdf of the sampled direction (what MIS weighs against light sampling).
+    pub pdf: f32,
+    /// The direction came from a delta lobe (mirror, refraction, fuzzy metal).
+    pub delta: bool,
 }
 
 /// Radiance the surface emits toward the ray that hit it.
@@ -38,6 +42,8 @@ pub fn scatter_lambertian(mat: &Material, hit: &Hit, u: [f32; 2]) -> Scatter {
         ok: true,
         dir,
         weight: xyz(mat.albedo),
+        pdf: (side * hit.ns).dot(dir) / PI,
+        delta: false,
     }
 }
 
@@ -46,6 +52,8 @@ const ABSORBED: Scatter = Scatter {
     ok: false,
     dir: Vec3::ZERO,
     weight: Vec3::ZERO,
+    pdf: 0.0,
+    delta: true,
 };
 
 /// Mirror direction of d about the unit normal n.
@@ -68,6 +76,8 @@ pub fn scatter_metal(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatt
         ok: true,
         dir: v / len,
         weight: xyz(mat.albedo),
+        pdf: 0.0,
+        delta: true,
     }
 }
 
@@ -100,6 +110,8 @@ pub fn scatter_dielectric(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
         ok: true,
         dir: reflect_dir(ray.dir, n),
         weight,
+        pdf: 0.0,
+        delta: true,
     };
     if sin2_t >= 1.0 {
         return reflected;
@@ -112,6 +124,8 @@ pub fn scatter_dielectric(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
         ok: true,
         dir: (eta * ray.dir + (eta * cos_i - cos_t) * n).normalize(),
         weight,
+        pdf: 0.0,
+        delta: true,
     }
 }
 
@@ -227,6 +241,8 @@ pub fn scatter_microfacet(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
             ok: true,
             dir: wi,
             weight: xyz(mat.extra) * (schlick(cos_o, mat.params[1]) / p_s),
+            pdf: 0.0,
+            delta: true,
         };
     }
     let wi = if u[0] < p_s {
@@ -248,6 +264,8 @@ pub fn scatter_microfacet(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
         ok: true,
         dir: wi,
         weight: microfacet_eval(mat, n, wo, wi) / pdf,
+        pdf,
+        delta: false,
     }
 }
 
@@ -260,4 +278,39 @@ pub fn scatter(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
         // emissive and unknown materials absorb
         _ => ABSORBED,
     }
+}
+
+/// BSDF x cos toward wi for the materials light sampling serves (0 for the others), 0
+/// under the geometric surface; the smooth microfacet's mirror lobe is left out.
+pub fn bsdf_eval(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> Vec3 {
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    if side * wi.dot(hit.ng) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let n = side * hit.ns;
+    match mat.tag {
+        MAT_LAMBERTIAN => xyz(mat.albedo) * (n.dot(wi).max(0.0) / PI),
+        MAT_MICROFACET => microfacet_eval(mat, n, -ray.dir, wi),
+        _ => Vec3::ZERO,
+    }
+}
+
+/// The density with which scatter draws wi, for the materials light sampling serves.
+pub fn bsdf_pdf(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> f32 {
+    let n = if hit.front_face { hit.ns } else { -hit.ns };
+    match mat.tag {
+        MAT_LAMBERTIAN => n.dot(wi).max(0.0) / PI,
+        MAT_MICROFACET => microfacet_pdf(mat, n, -ray.dir, wi),
+        _ => 0.0,
+    }
+}
+
+/// Whether next-event estimation applies: the material has a lobe that is not a delta.
+pub fn nee_applies(mat: &Material) -> bool {
+    mat.tag == MAT_LAMBERTIAN || mat.tag == MAT_MICROFACET
+}
+
+/// Whether the 50/50 mixture samples lights: as `nee_applies`, less the smooth microfacet.
+pub fn mixture_applies(mat: &Material) -> bool {
+    mat.tag == MAT_LAMBERTIAN || (mat.tag == MAT_MICROFACET && mat.params[0] >= ALPHA_SMOOTH)
 }

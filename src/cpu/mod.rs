@@ -8,6 +8,7 @@
 
 pub mod bindings;
 pub mod intersect;
+pub mod lights;
 pub mod materials;
 pub mod rng;
 pub mod samplers;

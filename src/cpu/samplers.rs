@@ -7,6 +7,10 @@ use crate::scene::records::{SAMPLER_HAMMERSLEY, SAMPLER_JITTERED, SAMPLER_SOBOL}
 pub const DIM_PIXEL: u32 = 0;
 pub const DIM_LENS: u32 = 1;
 pub const DIM_BSDF: u32 = 2;
+/// A point on a light.
+pub const DIM_LIGHT: u32 = 3;
+/// `.x` chooses the light, `.y` the mixture's strategy.
+pub const DIM_LIGHT_CHOICE: u32 = 4;
 
 /// Second dimension of Sobol' (primitive polynomial x + 1).
 pub fn sobol_dim1(i: u32) -> u32 {

@@ -5,14 +5,21 @@ use rayon::prelude::*;
 
 use super::bindings::Bindings;
 use super::intersect::{intersect_scene, surface_at};
-use super::materials::{emitted, scatter};
+use super::lights::{
+    background_radiance, light_pdf, light_pdf_total, power_heuristic, sample_light,
+};
+use super::materials::{bsdf_eval, bsdf_pdf, emitted, mixture_applies, nee_applies, scatter};
 use super::samplers::{bounce_2d, sample_2d};
 use super::sampling::{offset_ray, sample_disk};
 use super::textures::material_at;
-use super::types::{xyz, Ray, NO_HIT};
+use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
+use crate::scene::records::{
+    Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE, NO_LIGHT,
+    PRIM_LIGHT_SHIFT,
+};
 use crate::scene::FlatScene;
 
-pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_PIXEL};
+pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
 
 /// Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left.
 pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]) -> Ray {
@@ -33,48 +40,155 @@ pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]
     }
 }
 
-/// Radiance of a ray leaving the scene: the constant, or the vertical gradient.
-pub fn background_radiance(b: &Bindings, d: Vec3) -> Vec3 {
-    let p = &b.params;
-    if p.background_top[3] > 0.5 {
-        return xyz(p.background).lerp(xyz(p.background_top), 0.5 * (d.y + 1.0));
+/// A ray leaving a hit in direction dir, from just off the surface on dir's side.
+pub fn spawn_ray(hit: &Hit, dir: Vec3) -> Ray {
+    let side = if dir.dot(hit.ng) > 0.0 {
+        hit.ng
+    } else {
+        -hit.ng
+    };
+    Ray {
+        origin: offset_ray(hit.p, side, hit.err),
+        dir,
     }
-    xyz(p.background)
 }
 
-/// Radiance along one camera path; max_depth counts rays.
+/// Next-event estimation at a hit: shadow ray to just short of a sampled light point, the
+/// light's emission there times BSDF x cos, power-heuristic weight, over the light's pdf.
+pub fn direct_light(
+    b: &Bindings,
+    mat: &Material,
+    ray: &Ray,
+    hit: &Hit,
+    u_light: f32,
+    u: [f32; 2],
+) -> Vec3 {
+    let ls = sample_light(b, hit.p, u_light, u);
+    if ls.light == NO_LIGHT {
+        return Vec3::ZERO;
+    }
+    let f = bsdf_eval(mat, ray, hit, ls.dir);
+    if f == Vec3::ZERO {
+        return Vec3::ZERO;
+    }
+    let mut shadow = spawn_ray(hit, ls.dir);
+    let mut t_max = FAR;
+    let e = &b.emitters[ls.light as usize];
+    let le = if e.kind == LIGHT_ENVIRONMENT {
+        background_radiance(b, ls.dir)
+    } else {
+        let to_light = Ray {
+            origin: hit.p,
+            dir: ls.dir,
+        };
+        let cand = Candidate {
+            t: ls.dist,
+            prim: e.primitive,
+            u: ls.uv.x,
+            v: ls.uv.y,
+        };
+        let lh = surface_at(b, &to_light, &cand);
+        let le = emitted(
+            &material_at(b, &b.materials[lh.material as usize], &lh),
+            &lh,
+        );
+        if le == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let facing = if ls.dir.dot(lh.ng) < 0.0 {
+            lh.ng
+        } else {
+            -lh.ng
+        };
+        let v = offset_ray(lh.p, facing, lh.err) - shadow.origin;
+        t_max = v.length();
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(t_max > 0.0) {
+            return Vec3::ZERO;
+        }
+        shadow.dir = v / t_max;
+        le
+    };
+    if intersect_scene(b, &shadow, t_max).prim != NO_HIT {
+        return Vec3::ZERO;
+    }
+    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, ls.dir));
+    f * le * (w / ls.pdf)
+}
+
+/// Radiance along one camera path; max_depth counts rays; light_sampling picks bsdf,
+/// mixture or mis (see trace.wgsl).
 pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
     let p = &b.params;
     let mut ray = camera;
     let mut radiance = Vec3::ZERO;
     let mut throughput = Vec3::ONE;
+    let mut prev_p = camera.origin;
+    let mut prev_pdf = 0.0;
+    let mut prev_delta = true;
     for depth in 0..p.max_depth {
-        let cand = intersect_scene(b, &ray);
+        let cand = intersect_scene(b, &ray, FAR);
+        let mis = p.light_sampling == LIGHT_SAMPLING_MIS && !prev_delta;
         if cand.prim == NO_HIT {
-            radiance += throughput * background_radiance(b, ray.dir);
+            let mut le = background_radiance(b, ray.dir);
+            if mis && p.env_light != NO_LIGHT {
+                le *= power_heuristic(prev_pdf, light_pdf(b, p.env_light, prev_p, prev_p, ray.dir));
+            }
+            radiance += throughput * le;
             break;
         }
         let hit = surface_at(b, &ray, &cand);
         let mat = &material_at(b, &b.materials[hit.material as usize], &hit);
-        radiance += throughput * emitted(mat, &hit);
+        let mut le = emitted(mat, &hit);
+        let light = b.primitives[cand.prim as usize].flags >> PRIM_LIGHT_SHIFT;
+        if mis && light != 0 && le.cmpgt(Vec3::ZERO).any() {
+            le *= power_heuristic(prev_pdf, light_pdf(b, light - 1, prev_p, hit.p, ray.dir));
+        }
+        radiance += throughput * le;
         if depth + 1 >= p.max_depth {
             break;
         }
         let u = bounce_2d(b, pixel, sample, depth, DIM_BSDF);
+        if p.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat) {
+            let ul = bounce_2d(b, pixel, sample, depth, DIM_LIGHT);
+            let uc = bounce_2d(b, pixel, sample, depth, DIM_LIGHT_CHOICE);
+            radiance += throughput * direct_light(b, mat, &ray, &hit, uc[0], ul);
+        }
+        if p.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat) {
+            let uc = bounce_2d(b, pixel, sample, depth, DIM_LIGHT_CHOICE);
+            let dir = if uc[1] < 0.5 {
+                let ul = bounce_2d(b, pixel, sample, depth, DIM_LIGHT);
+                let ls = sample_light(b, hit.p, uc[0], ul);
+                if ls.light == NO_LIGHT {
+                    break;
+                }
+                ls.dir
+            } else {
+                let s = scatter(mat, &ray, &hit, u);
+                if !s.ok {
+                    break;
+                }
+                s.dir
+            };
+            let f = bsdf_eval(mat, &ray, &hit, dir);
+            let pdf = 0.5 * light_pdf_total(b, hit.p, dir) + 0.5 * bsdf_pdf(mat, &ray, &hit, dir);
+            #[allow(clippy::neg_cmp_op_on_partial_ord)]
+            if !(pdf > 0.0) || f == Vec3::ZERO {
+                break;
+            }
+            throughput *= f / pdf;
+            ray = spawn_ray(&hit, dir);
+            continue;
+        }
         let s = scatter(mat, &ray, &hit, u);
         if !s.ok {
             break;
         }
         throughput *= s.weight;
-        let side = if s.dir.dot(hit.ng) > 0.0 {
-            hit.ng
-        } else {
-            -hit.ng
-        };
-        ray = Ray {
-            origin: offset_ray(hit.p, side, hit.err),
-            dir: s.dir,
-        };
+        prev_p = hit.p;
+        prev_pdf = s.pdf;
+        prev_delta = s.delta;
+        ray = spawn_ray(&hit, s.dir);
     }
     radiance
 }

@@ -34,9 +34,11 @@ pub enum GpuError {
         limit_mib: u64,
     },
     #[error(
-        "testing every primitive on every ray (--no-bvh) would run {iterations} loop \
-         iterations per path, more than the {limit} that llvmpipe (lavapipe) runs before it \
-         silently stops a shader's loops; use the BVH or --backend cpu"
+        "this render would run {iterations} loop iterations per path (every primitive on \
+         every ray with --no-bvh, every light at every bounce with light_sampling = \
+         \"mixture\"), more than the {limit} that llvmpipe (lavapipe) runs before it \
+         silently stops a shader's loops; use the BVH, light_sampling = \"mis\", or \
+         --backend cpu"
     )]
     LoopLimit { iterations: u64, limit: u64 },
     #[error(transparent)]

@@ -5,7 +5,7 @@ use wgpu::util::DeviceExt;
 
 use super::context::{GpuContext, GpuError};
 use super::shader;
-use crate::scene::records::Params;
+use crate::scene::records::{self, Params};
 use crate::scene::{FlatScene, Tile};
 
 /// Most pixels one dispatch (one submission) traces: bounds the time of a submission.
@@ -203,18 +203,18 @@ impl GpuRenderer {
 /// before it ends them silently (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`).
 pub const LLVMPIPE_LOOP_LIMIT: u64 = 65535;
 
-/// Refuses work that llvmpipe would cut short: without the BVH, a path runs about
-/// max_depth x primitives loop iterations.
+/// Refuses work that llvmpipe would cut short: without the BVH, each ray (camera, bounce,
+/// or MIS shadow ray) runs a loop over every primitive; the 50/50 mixture runs one over
+/// every light at each bounce, with or without the BVH.
 pub(crate) fn check_loop_limit(
     ctx: &GpuContext,
     scene: &FlatScene,
     paths: bool,
 ) -> Result<(), GpuError> {
-    if scene.use_bvh || !ctx.info.name.contains("llvmpipe") {
+    if !ctx.info.name.contains("llvmpipe") {
         return Ok(());
     }
-    let rays = if paths { scene.max_depth as u64 } else { 1 };
-    let iterations = rays * (scene.primitives.len() as u64 + 1);
+    let iterations = loop_iterations(scene, paths);
     if iterations > LLVMPIPE_LOOP_LIMIT {
         return Err(GpuError::LoopLimit {
             iterations,
@@ -222,6 +222,28 @@ pub(crate) fn check_loop_limit(
         });
     }
     Ok(())
+}
+
+/// Loop iterations of one path (or of one kernel ray when `paths` is false) that grow
+/// with the scene: primitive loops without the BVH, and the mixture's loop over lights.
+pub fn loop_iterations(scene: &FlatScene, paths: bool) -> u64 {
+    let lights = scene.light_sampling != records::LIGHT_SAMPLING_BSDF && !scene.emitters.is_empty();
+    let per_ray = if scene.use_bvh {
+        0
+    } else {
+        scene.primitives.len() as u64 + 1
+    };
+    if !paths {
+        return per_ray;
+    }
+    let depth = scene.max_depth as u64;
+    let shadow = (lights && scene.light_sampling == records::LIGHT_SAMPLING_MIS) as u64;
+    let mixture = if lights && scene.light_sampling == records::LIGHT_SAMPLING_MIXTURE {
+        scene.emitters.len() as u64
+    } else {
+        0
+    };
+    depth * ((1 + shadow) * per_ray + mixture)
 }
 
 /// Refuses a scene whose buffers exceed the adapter's storage binding limit (wgpu's default

@@ -20,6 +20,10 @@ pub const SHADER_FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/shared/intersect.wgsl"),
     ),
     (
+        "shared/lights",
+        include_str!("../../shaders/shared/lights.wgsl"),
+    ),
+    (
         "shared/materials",
         include_str!("../../shaders/shared/materials.wgsl"),
     ),
@@ -168,7 +172,7 @@ pub fn kernel_shader(defines: &BTreeSet<String>) -> Result<String, ShaderError> 
 }
 
 /// Every define a shader may be assembled with (the tests validate each).
-pub const FEATURE_DEFINES: &[&str] = &["HAS_TEXTURES"];
+pub const FEATURE_DEFINES: &[&str] = &["HAS_TEXTURES", "HAS_LIGHT_SAMPLING", "HAS_ENV_MAP"];
 
 /// The defines a scene's shaders are assembled with: code for features the scene does not
 /// use is left out.
@@ -176,6 +180,14 @@ pub fn scene_defines(scene: &crate::scene::FlatScene) -> BTreeSet<String> {
     let mut defines = BTreeSet::new();
     if !scene.textures.is_empty() {
         defines.insert("HAS_TEXTURES".to_string());
+    }
+    if scene.light_sampling != crate::scene::records::LIGHT_SAMPLING_BSDF
+        && !scene.emitters.is_empty()
+    {
+        defines.insert("HAS_LIGHT_SAMPLING".to_string());
+    }
+    if scene.env.is_some() {
+        defines.insert("HAS_ENV_MAP".to_string());
     }
     defines
 }

@@ -6,11 +6,14 @@
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::bvh::{self, Aabb};
-use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SamplerKind, SceneFile, TransformDesc};
+use super::format::{
+    ColorDesc, LightSampling, MaterialDesc, ObjectDesc, SamplerKind, SceneFile, TransformDesc,
+};
+use super::lights::{env_distribution, light_list, Environment};
 use super::mesh::MeshData;
-use super::records::{self, BvhNode, Emitter, Material, Primitive, NO_DATA, NO_TEXTURE};
+use super::records::{self, BvhNode, Material, Primitive, NO_DATA, NO_TEXTURE};
 use super::textures::{color_slot, texture_records, ImageData};
-use super::{CameraFrame, FlatScene};
+use super::{CameraFrame, EnvironmentMap, FlatScene};
 
 fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
     let slot = |c: &ColorDesc| color_slot(c, textures);
@@ -490,10 +493,6 @@ pub fn primitive_area(p: &Primitive, shape_data: &[[f32; 4]]) -> f32 {
     local * m.determinant().abs().powf(2.0 / 3.0)
 }
 
-fn luminance(c: [f32; 4]) -> f32 {
-    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
-}
-
 /// Whether a primitive's record, and its transform and bounds, are usable in f32: finite,
 /// with non-zero sizes and unit normals. A valid scene can still fail this under an extreme
 /// transform (a scale that underflows or overflows f32, a matrix that is singular in f32).
@@ -581,27 +580,36 @@ pub fn flatten(
         })
         .collect();
 
-    let emitters = primitives
-        .iter()
-        .enumerate()
-        .skip(num_unbounded as usize)
-        .filter_map(|(i, p)| {
-            let mat = &materials[p.material as usize];
-            let sides = if mat.flags & records::MAT_FLAG_TWO_SIDED != 0 {
-                2.0
-            } else {
-                1.0
-            };
-            let area = primitive_area(p, &shape_data);
-            let power = luminance(mat.emission) * area * std::f32::consts::PI * sides;
-            (power > 0.0).then_some(Emitter {
-                primitive: i as u32,
-                material: p.material,
-                area,
-                power,
-            })
-        })
-        .collect();
+    let bg = &file.background;
+    let env_texture = bg.texture.as_ref().map(|name| {
+        texture_names
+            .iter()
+            .position(|n| n == name)
+            .expect("validated") as u32
+    });
+    let mut texels = texels;
+    let mut env_cdf = 0;
+    let env = env_texture.map(|i| {
+        let (dist, integral) = env_distribution(&Environment {
+            texture: &textures[i as usize],
+            texels: &texels,
+            strength: bg.strength.unwrap_or(1.0),
+        });
+        env_cdf = texels.len() as u32;
+        texels.extend(dist);
+        let radius = bvh.first().map_or(1.0, |root| {
+            0.5 * (Vec3::from(root.hi) - Vec3::from(root.lo)).length()
+        });
+        (integral, radius)
+    });
+    let (emitters, env_light) = light_list(
+        &mut primitives,
+        num_unbounded as usize,
+        &materials,
+        &shape_data,
+        env,
+    );
+    let rotation = bg.rotation.unwrap_or(0.0).to_radians();
 
     let r = &file.render;
     Ok(FlatScene {
@@ -617,12 +625,20 @@ pub fn flatten(
             SamplerKind::Sobol => records::SAMPLER_SOBOL,
         },
         camera: camera_frame(file, r.width as f32 / r.height as f32),
-        background: file
-            .background
-            .bottom
-            .or(file.background.color)
-            .unwrap_or([0.0; 3]),
-        background_top: file.background.top,
+        light_sampling: match r.light_sampling {
+            LightSampling::Bsdf => records::LIGHT_SAMPLING_BSDF,
+            LightSampling::Mixture => records::LIGHT_SAMPLING_MIXTURE,
+            LightSampling::Mis => records::LIGHT_SAMPLING_MIS,
+        },
+        background: bg.bottom.or(bg.color).unwrap_or([0.0; 3]),
+        background_top: bg.top,
+        env: env_texture.map(|texture| EnvironmentMap {
+            texture,
+            cdf: env_cdf,
+            light: env_light,
+            rotation: [rotation.cos(), rotation.sin()],
+            strength: bg.strength.unwrap_or(1.0),
+        }),
         primitives,
         materials,
         emitters,

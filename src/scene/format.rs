@@ -35,10 +35,26 @@ pub struct RenderDesc {
     pub seed: u32,
     /// Where the first bounce's 2D points come from (pixel position, lens, BSDF).
     pub sampler: SamplerKind,
+    /// How paths find lights.
+    pub light_sampling: LightSampling,
 }
 
-/// `[render] sampler`.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+/// `[render] light_sampling` (and `--light-sampling`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum LightSampling {
+    /// The material's own sampling only: lights are found by hitting them.
+    Bsdf,
+    /// With probability 1/2 a light, else the material, weighted by the mixture pdf
+    /// ("Ray Tracing: The Rest of Your Life").
+    Mixture,
+    /// Next-event estimation plus material sampling, power heuristic (pbrt-v4).
+    #[default]
+    Mis,
+}
+
+/// `[render] sampler` (and `--sampler`).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum SamplerKind {
     /// Independent uniform points.
@@ -61,6 +77,7 @@ impl Default for RenderDesc {
             max_depth: 8,
             seed: 0,
             sampler: SamplerKind::default(),
+            light_sampling: LightSampling::default(),
         }
     }
 }
@@ -92,15 +109,19 @@ fn default_vfov() -> f32 {
     40.0
 }
 
-/// `[background]`: radiance of rays that leave the scene: a constant `color`, or a vertical
+/// `[background]`: radiance of rays that leave the scene: a constant `color`, a vertical
 /// gradient from `bottom` (straight down) to `top` (straight up), linear in the direction's
-/// y as in "Ray Tracing in One Weekend".
+/// y as in "Ray Tracing in One Weekend", or an equirectangular image `texture` (an image
+/// in `[textures]`) turned `rotation` degrees about +y and scaled by `strength`.
 #[derive(Debug, Clone, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BackgroundDesc {
     pub color: Option<[f32; 3]>,
     pub top: Option<[f32; 3]>,
     pub bottom: Option<[f32; 3]>,
+    pub texture: Option<String>,
+    pub rotation: Option<f32>,
+    pub strength: Option<f32>,
 }
 
 /// A colour parameter: `[r, g, b]`, or the name of a `[textures]` entry.

@@ -7,6 +7,7 @@ pub mod bvh;
 pub mod error;
 pub mod flatten;
 pub mod format;
+pub mod lights;
 pub mod mesh;
 pub mod records;
 pub mod textures;
@@ -32,6 +33,7 @@ pub struct Overrides {
     /// Test every primitive on every ray instead of traversing the BVH (benchmarks, tests).
     pub no_bvh: bool,
     pub sampler: Option<format::SamplerKind>,
+    pub light_sampling: Option<format::LightSampling>,
 }
 
 /// Largest image side accepted.
@@ -67,8 +69,13 @@ pub struct FlatScene {
     pub background: [f32; 3],
     /// The top of the gradient, when the background is one.
     pub background_top: Option<[f32; 3]>,
+    /// The image background, when it is one.
+    pub env: Option<EnvironmentMap>,
+    /// `records::LIGHT_SAMPLING_*`.
+    pub light_sampling: u32,
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
+    /// The light list: emissive primitives that can be sampled, then the image background.
     pub emitters: Vec<Emitter>,
     /// Material names, in record order.
     pub material_names: Vec<String>,
@@ -85,6 +92,20 @@ pub struct FlatScene {
     pub textures: Vec<Texture>,
     /// Image texels (linear RGB) and Perlin tables, indexed by `Texture::offset`.
     pub texels: Vec<[f32; 4]>,
+}
+
+/// An equirectangular image background.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnvironmentMap {
+    /// Its texture record.
+    pub texture: u32,
+    /// First `texels` entry of its sampling distribution.
+    pub cdf: u32,
+    /// Its index in the light list (`records::NO_LIGHT` when it is black).
+    pub light: u32,
+    /// cos and sin of its rotation about +y.
+    pub rotation: [f32; 2],
+    pub strength: f32,
 }
 
 /// A rectangle of pixels rendered by one dispatch.
@@ -112,7 +133,11 @@ impl FlatScene {
                 0.0,
             ],
             background_top: match self.background_top {
-                Some(t) => [t[0], t[1], t[2], 1.0],
+                Some(t) => [t[0], t[1], t[2], 0.0],
+                None => [0.0; 4],
+            },
+            env: match self.env {
+                Some(e) => [e.rotation[0], e.rotation[1], e.strength, 0.0],
                 None => [0.0; 4],
             },
             width: self.width,
@@ -131,6 +156,18 @@ impl FlatScene {
             sampler: self.sampler,
             strata_log2: strata_log2(self.spp),
             spp: self.spp,
+            light_sampling: self.light_sampling,
+            background_kind: if self.env.is_some() {
+                records::BACKGROUND_IMAGE
+            } else if self.background_top.is_some() {
+                records::BACKGROUND_GRADIENT
+            } else {
+                records::BACKGROUND_CONSTANT
+            },
+            env_texture: self.env.map_or(0, |e| e.texture),
+            env_cdf: self.env.map_or(0, |e| e.cdf),
+            env_light: self.env.map_or(records::NO_LIGHT, |e| e.light),
+            ..Default::default()
         }
     }
 
@@ -267,4 +304,5 @@ fn apply_overrides(file: &mut SceneFile, o: &Overrides) {
     r.max_depth = o.max_depth.unwrap_or(r.max_depth);
     r.seed = o.seed.unwrap_or(r.seed);
     r.sampler = o.sampler.unwrap_or(r.sampler);
+    r.light_sampling = o.light_sampling.unwrap_or(r.light_sampling);
 }

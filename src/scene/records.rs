@@ -65,6 +65,29 @@ pub const SAMPLER_JITTERED: u32 = 1;
 pub const SAMPLER_HAMMERSLEY: u32 = 2;
 pub const SAMPLER_SOBOL: u32 = 3;
 
+/// Light-sampling strategies (`Params::light_sampling`).
+pub const LIGHT_SAMPLING_BSDF: u32 = 0;
+pub const LIGHT_SAMPLING_MIXTURE: u32 = 1;
+pub const LIGHT_SAMPLING_MIS: u32 = 2;
+
+/// Background kinds (`Params::background_kind`).
+pub const BACKGROUND_CONSTANT: u32 = 0;
+pub const BACKGROUND_GRADIENT: u32 = 1;
+pub const BACKGROUND_IMAGE: u32 = 2;
+
+/// Light kinds (`Emitter::kind`): the cases of the `switch` in `lights.wgsl`.
+pub const LIGHT_TRIANGLE: u32 = 0;
+pub const LIGHT_DISK: u32 = 1;
+pub const LIGHT_SPHERE: u32 = 2;
+pub const LIGHT_ENVIRONMENT: u32 = 3;
+/// An index that names no light.
+pub const NO_LIGHT: u32 = u32::MAX;
+/// `Primitive::flags >> PRIM_LIGHT_SHIFT` is the primitive's index in the light list plus
+/// one, or 0 when it is not in the list.
+pub const PRIM_LIGHT_SHIFT: u32 = 8;
+/// Most lights a scene may have (the index must fit the flag bits above the shift).
+pub const MAX_LIGHTS: u32 = (1 << (32 - PRIM_LIGHT_SHIFT)) - 2;
+
 /// Material flag: emits from both sides.
 pub const MAT_FLAG_TWO_SIDED: u32 = 1;
 
@@ -175,14 +198,31 @@ impl Default for Texture {
     }
 }
 
-/// One entry of the emitter list: an emissive primitive, its area and emitted power.
+/// One entry of the light list: an emissive primitive with its world-space geometry for
+/// sampling, or the environment (`primitive` = `NO_HIT`). Lights are chosen with
+/// probability `prob`, by inverting the running sum `cdf` (that of the lights up to and
+/// including this one); `prob` is the difference of consecutive `cdf` values, so it is
+/// exactly the probability that the inversion picks this light.
+/// - triangle: vertices `a`, `b`, `c`
+/// - disk: `a` = (center, radius), `b` = (unit normal, 0)
+/// - sphere: `a` = (center, radius)
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Emitter {
     pub primitive: u32,
-    pub material: u32,
+    /// `LIGHT_*`.
+    pub kind: u32,
+    pub prob: f32,
+    pub cdf: f32,
+    pub a: [f32; 4],
+    pub b: [f32; 4],
+    pub c: [f32; 4],
+    /// World-space area (0 for the environment).
     pub area: f32,
+    /// Emitted power estimate that `prob` is proportional to.
     pub power: f32,
+    pub pad0: u32,
+    pub pad1: u32,
 }
 
 /// Per-dispatch constants (a uniform buffer): camera, image, pass and tile.
@@ -199,8 +239,10 @@ pub struct Params {
     pub cam_forward: [f32; 4],
     /// Radiance of rays that leave the scene (the bottom of a gradient).
     pub background: [f32; 4],
-    /// The top of a vertical gradient; `.w` = 1 for a gradient, 0 for a constant.
+    /// The top of a vertical gradient.
     pub background_top: [f32; 4],
+    /// Image background: (cos, sin) of its rotation about +y, its strength, 0.
+    pub env: [f32; 4],
     pub width: u32,
     pub height: u32,
     pub max_depth: u32,
@@ -222,6 +264,19 @@ pub struct Params {
     pub strata_log2: u32,
     /// Samples per pixel of the whole render (Hammersley's N).
     pub spp: u32,
+    /// `LIGHT_SAMPLING_*`.
+    pub light_sampling: u32,
+    /// `BACKGROUND_*`.
+    pub background_kind: u32,
+    /// Image background: its texture.
+    pub env_texture: u32,
+    /// Image background: first `texels` entry of its sampling distribution.
+    pub env_cdf: u32,
+    /// Image background: its index in the light list, else `NO_LIGHT`.
+    pub env_light: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// One node of the flattened BVH, in depth-first order. Interior (`count` = 0): the first
@@ -330,9 +385,16 @@ pub fn record_layouts() -> Vec<RecordLayout> {
         }),
         layout!(Emitter {
             primitive,
-            material,
+            kind,
+            prob,
+            cdf,
+            a,
+            b,
+            c,
             area,
-            power
+            power,
+            pad0,
+            pad1
         }),
         layout!(Params {
             cam_origin,
@@ -341,6 +403,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             cam_forward,
             background,
             background_top,
+            env,
             width,
             height,
             max_depth,
@@ -356,7 +419,15 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             use_bvh,
             sampler,
             strata_log2,
-            spp
+            spp,
+            light_sampling,
+            background_kind,
+            env_texture,
+            env_cdf,
+            env_light,
+            pad0,
+            pad1,
+            pad2
         }),
         layout!(KernelRay { origin, dir }),
         layout!(TextureLookup { uv, p }),

@@ -71,17 +71,60 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
             v.nonnegative3(key, c, 0);
         }
     }
+    let kinds = [
+        bg.color.is_some(),
+        bg.top.is_some() || bg.bottom.is_some(),
+        bg.texture.is_some(),
+    ];
+    if kinds.iter().filter(|&&k| k).count() > 1 {
+        v.push(
+            0,
+            "background",
+            "give one of color, top and bottom, or texture".into(),
+        );
+    }
+    if let Some(name) = &bg.texture {
+        match file.textures.get(name).map(|t| t.get_ref()) {
+            Some(TextureDesc::Image { .. }) => {}
+            Some(_) => v.push(
+                0,
+                "background.texture",
+                format!("\"{name}\" is not an image texture; an environment needs an image"),
+            ),
+            None => {
+                let known: Vec<&str> = file.textures.keys().map(String::as_str).collect();
+                v.push(
+                    0,
+                    "background.texture",
+                    format!(
+                        "no texture named \"{name}\" (textures: {})",
+                        known.join(", ")
+                    ),
+                );
+            }
+        }
+    } else if bg.rotation.is_some() || bg.strength.is_some() {
+        v.push(
+            0,
+            "background",
+            "rotation and strength apply to a texture background only".into(),
+        );
+    }
+    if let Some(r) = bg.rotation {
+        if !r.is_finite() {
+            v.push(0, "background.rotation", format!("must be finite, got {r}"));
+        }
+    }
+    if let Some(k) = bg.strength {
+        if !(k >= 0.0 && k.is_finite()) {
+            v.push(0, "background.strength", format!("must be >= 0, got {k}"));
+        }
+    }
     if bg.top.is_some() != bg.bottom.is_some() {
         v.push(
             0,
             "background",
             "a gradient needs both top and bottom".into(),
-        );
-    } else if bg.top.is_some() && bg.color.is_some() {
-        v.push(
-            0,
-            "background",
-            "give either color or top and bottom, not both".into(),
         );
     }
 

@@ -162,10 +162,10 @@ pub struct Comparison {
 /// Compares two accumulations of the same scene and sample count.
 ///
 /// Per `tile` x `tile` block and channel, the difference of the two block means must stay
-/// within z * sqrt(2) * standard error, where the standard error of one block mean comes from
-/// the per-pixel sample variances (`reference`'s) and the sample count, and z is the Sidak
-/// threshold at family-wise level 1e-3 over all blocks and channels. A small floor
-/// (1e-5 relative) absorbs float rounding in zero-variance blocks.
+/// within z x the standard error of that difference, sqrt(se_a^2 + se_ref^2), each block
+/// mean's standard error coming from its pixels' sample variances and sample counts, and z
+/// is the Sidak threshold at family-wise level 1e-3 over all blocks and channels. A small
+/// floor (1e-5 relative) absorbs float rounding in zero-variance blocks.
 pub fn compare(a: &Accumulation, reference: &Accumulation, tile: u32) -> Comparison {
     assert_eq!((a.width, a.height), (reference.width, reference.height));
     let (w, h) = (a.width, a.height);
@@ -183,12 +183,13 @@ pub fn compare(a: &Accumulation, reference: &Accumulation, tile: u32) -> Compari
             for y in ty * tile..((ty + 1) * tile).min(h) {
                 for x in tx * tile..((tx + 1) * tile).min(w) {
                     let i = (y * w + x) as usize;
-                    let (ma, mr, vr) = (a.mean(i), reference.mean(i), reference.variance(i));
-                    let n = reference.samples(i) as f64;
+                    let (ma, mr) = (a.mean(i), reference.mean(i));
+                    let (va, vr) = (a.variance(i), reference.variance(i));
+                    let (na, nr) = (a.samples(i) as f64, reference.samples(i) as f64);
                     for c in 0..3 {
                         sum_a[c] += ma[c] as f64;
                         sum_r[c] += mr[c] as f64;
-                        var_sum[c] += vr[c] as f64 / n;
+                        var_sum[c] += va[c] as f64 / na + vr[c] as f64 / nr;
                     }
                     count += 1.0;
                 }
@@ -196,7 +197,7 @@ pub fn compare(a: &Accumulation, reference: &Accumulation, tile: u32) -> Compari
             for c in 0..3 {
                 let (ma, mr) = (sum_a[c] / count, sum_r[c] / count);
                 let se = var_sum[c].sqrt() / count;
-                let bound = z * std::f64::consts::SQRT_2 * se + 1e-5 * mr.abs().max(1e-3);
+                let bound = z * se + 1e-5 * mr.abs().max(1e-3);
                 if (ma - mr).abs() > bound {
                     failed.push(format!(
                         "tile ({tx}, {ty}) channel {c}: {ma:.6} vs {mr:.6}, bound {bound:.6}"
@@ -216,4 +217,30 @@ pub fn compare(a: &Accumulation, reference: &Accumulation, tile: u32) -> Compari
         tiles: (tiles_x * tiles_y) as usize,
         agree_fraction: agree as f64 / a.pixel_count() as f64,
     }
+}
+
+/// The mean of every pixel of an image per channel, and its standard error (pixels are
+/// independent, so the variances of the pixel means add).
+pub fn image_mean(img: &Accumulation) -> ([f64; 3], [f64; 3]) {
+    let n = img.pixel_count();
+    let mut mean = [0.0; 3];
+    let mut se = [0.0; 3];
+    for c in 0..3 {
+        mean[c] = (0..n).map(|i| img.mean(i)[c] as f64).sum::<f64>() / n as f64;
+        let var: f64 = (0..n)
+            .map(|i| img.variance(i)[c] as f64 / img.samples(i) as f64)
+            .sum::<f64>()
+            / (n * n) as f64;
+        se[c] = var.sqrt();
+    }
+    (mean, se)
+}
+
+/// Variance of one sample, averaged over pixels and channels: the noise a strategy leaves.
+pub fn sample_variance(img: &Accumulation) -> f64 {
+    let n = img.pixel_count();
+    (0..n)
+        .map(|i| img.variance(i).iter().map(|&v| v as f64).sum::<f64>() / 3.0)
+        .sum::<f64>()
+        / n as f64
 }

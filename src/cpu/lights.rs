@@ -1,0 +1,308 @@
+//! Mirrors `shaders/shared/lights.wgsl`: the background, choosing and sampling lights, and
+//! light-sampling pdfs.
+
+use glam::{Vec2, Vec3, Vec4};
+
+use super::bindings::Bindings;
+use super::intersect::{intersect_disk, intersect_sphere, intersect_triangle};
+use super::sampling::{onb_tangents, sample_disk, sample_sphere, PI};
+use super::textures::texture_value;
+use super::types::{xyz, Ray, FAR};
+use crate::scene::records::{
+    BACKGROUND_GRADIENT, BACKGROUND_IMAGE, LIGHT_DISK, LIGHT_ENVIRONMENT, LIGHT_SPHERE,
+    LIGHT_TRIANGLE, NO_LIGHT,
+};
+
+/// Below this cosine a light is seen edge-on: pdf 0 and no sample.
+pub const EDGE_ON_COS: f32 = 1e-6;
+
+/// The image background's frame: a world direction turned by minus the rotation.
+pub fn env_local(b: &Bindings, d: Vec3) -> Vec3 {
+    let (c, s) = (b.params.env[0], b.params.env[1]);
+    Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
+}
+
+/// Equirectangular coordinates (u, t) of a direction; t = theta / pi from straight up.
+pub fn env_coords(b: &Bindings, d: Vec3) -> Vec2 {
+    let l = env_local(b, d);
+    Vec2::new(
+        0.5 + l.x.atan2(-l.z) * (0.5 / PI),
+        l.y.clamp(-1.0, 1.0).acos() / PI,
+    )
+}
+
+/// The direction of equirectangular coordinates (u, t).
+pub fn env_direction(b: &Bindings, ut: Vec2) -> Vec3 {
+    let theta = PI * ut.y;
+    let phi = 2.0 * PI * (ut.x - 0.5);
+    let st = theta.sin();
+    let l = Vec3::new(st * phi.sin(), theta.cos(), -st * phi.cos());
+    let (c, s) = (b.params.env[0], b.params.env[1]);
+    Vec3::new(c * l.x + s * l.z, l.y, -s * l.x + c * l.z)
+}
+
+/// Radiance of a ray leaving the scene: the constant, the gradient, or the image.
+pub fn background_radiance(b: &Bindings, d: Vec3) -> Vec3 {
+    let p = &b.params;
+    match p.background_kind {
+        BACKGROUND_GRADIENT => xyz(p.background).lerp(xyz(p.background_top), 0.5 * (d.y + 1.0)),
+        BACKGROUND_IMAGE => {
+            let ut = env_coords(b, d);
+            texture_value(b, p.env_texture, Vec2::new(ut.x, 1.0 - ut.y), d) * p.env[2]
+        }
+        _ => xyz(p.background),
+    }
+}
+
+/// Scalar i of the image background's distribution.
+pub fn env_cdf_at(b: &Bindings, i: u32) -> f32 {
+    b.texels[(b.params.env_cdf + (i >> 2)) as usize][(i & 3) as usize]
+}
+
+/// A point drawn from a piecewise-constant density: x, the density at x, the interval.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CdfSample {
+    pub x: f32,
+    pub pdf: f32,
+    pub i: u32,
+}
+
+/// Inverts the CDF of n intervals stored from scalar `base`.
+pub fn sample_cdf(b: &Bindings, base: u32, n: u32, u: f32) -> CdfSample {
+    let (mut lo, mut hi) = (0u32, n);
+    while hi - lo > 1 {
+        let mid = (lo + hi) / 2;
+        if env_cdf_at(b, base + mid) <= u {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let c0 = env_cdf_at(b, base + lo);
+    let c1 = env_cdf_at(b, base + lo + 1);
+    let du = ((u - c0) / (c1 - c0)).clamp(0.0, 1.0);
+    CdfSample {
+        x: ((lo as f32 + du) / n as f32).min(0.999_999_94),
+        pdf: (c1 - c0) * n as f32,
+        i: lo,
+    }
+}
+
+/// Solid-angle pdf of direction d under the image background's distribution.
+pub fn env_pdf(b: &Bindings, d: Vec3) -> f32 {
+    let tex = &b.textures[b.params.env_texture as usize];
+    let ut = env_coords(b, d);
+    let sin_theta = (1.0 - d.y * d.y).max(0.0).sqrt();
+    if sin_theta <= 0.0 {
+        return 0.0;
+    }
+    let row = ((ut.y * tex.height as f32) as u32).min(tex.height - 1);
+    let col = ((ut.x * tex.width as f32) as u32).min(tex.width - 1);
+    let p_row = (env_cdf_at(b, row + 1) - env_cdf_at(b, row)) * tex.height as f32;
+    let base = tex.height + 1 + row * (tex.width + 1);
+    let p_col = (env_cdf_at(b, base + col + 1) - env_cdf_at(b, base + col)) * tex.width as f32;
+    p_row * p_col / (2.0 * PI * PI * sin_theta)
+}
+
+/// The index of the light whose CDF interval holds u.
+pub fn choose_light(b: &Bindings, u: f32) -> u32 {
+    let (mut lo, mut hi) = (0u32, b.params.num_emitters - 1);
+    while lo < hi {
+        let mid = (lo + hi) / 2;
+        if u < b.emitters[mid as usize].cdf {
+            hi = mid;
+        } else {
+            lo = mid + 1;
+        }
+    }
+    lo
+}
+
+/// A direction toward a light from a reference point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightSample {
+    /// The light, `NO_LIGHT` when there is no sample.
+    pub light: u32,
+    pub dir: Vec3,
+    /// Distance to the sampled point (FAR for the environment).
+    pub dist: f32,
+    /// Solid-angle pdf, the choice of the light included.
+    pub pdf: f32,
+    /// The candidate's (u, v) on the light.
+    pub uv: Vec2,
+}
+
+/// Solid-angle pdf of a point drawn uniformly from an area, seen from p; 0 edge-on.
+pub fn area_pdf(p: Vec3, x: Vec3, n: Vec3, area: f32) -> f32 {
+    let v = x - p;
+    let d2 = v.dot(v);
+    let c = n.dot(v).abs() / d2.sqrt();
+    // Written as in WGSL, so NaN takes the same branch on both backends.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(d2 > 0.0) || !(c >= EDGE_ON_COS) || c * area <= d2 * 1e-30 {
+        return 0.0;
+    }
+    d2 / (c * area)
+}
+
+/// 1 - cos(theta_max) of the cone a sphere subtends at squared distance dc2.
+pub fn sphere_cone(r: f32, dc2: f32) -> f32 {
+    let sin2_max = r * r / dc2;
+    if sin2_max < 0.000_685_23 {
+        return 0.5 * sin2_max;
+    }
+    1.0 - (1.0 - sin2_max).max(0.0).sqrt()
+}
+
+/// A point on a sphere light seen from p (cone, or area from inside) and its pdf in `.w`.
+pub fn sample_sphere_light(center: Vec3, r: f32, p: Vec3, u: [f32; 2]) -> Vec4 {
+    let oc = center - p;
+    let dc2 = oc.dot(oc);
+    if dc2 <= r * r {
+        let n = sample_sphere(u);
+        let x = center + r * n;
+        return x.extend(area_pdf(p, x, n, 4.0 * PI * r * r));
+    }
+    let sin2_max = r * r / dc2;
+    let sin_max = sin2_max.sqrt();
+    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
+    let mut cos_t = (cos_max - 1.0) * u[0] + 1.0;
+    let mut sin2_t = 1.0 - cos_t * cos_t;
+    if sin2_max < 0.000_685_23 {
+        sin2_t = sin2_max * u[0];
+        cos_t = (1.0 - sin2_t).sqrt();
+    }
+    let cos_a = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
+    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
+    let phi = 2.0 * PI * u[1];
+    let wc = oc / dc2.sqrt();
+    let tb = onb_tangents(wc);
+    let n = -(sin_a * phi.cos() * tb[0] + sin_a * phi.sin() * tb[1] + cos_a * wc);
+    (center + r * n).extend(1.0 / (2.0 * PI * sphere_cone(r, dc2)))
+}
+
+/// Solid-angle pdf that light i is sampled toward x (direction d from p), choice included.
+pub fn light_pdf(b: &Bindings, i: u32, p: Vec3, x: Vec3, d: Vec3) -> f32 {
+    let e = &b.emitters[i as usize];
+    let (ea, eb, ec) = (xyz(e.a), xyz(e.b), xyz(e.c));
+    let pdf = match e.kind {
+        LIGHT_TRIANGLE => area_pdf(p, x, (eb - ea).cross(ec - ea).normalize(), e.area),
+        LIGHT_DISK => area_pdf(p, x, eb, e.area),
+        LIGHT_SPHERE => {
+            let dc2 = (ea - p).dot(ea - p);
+            if dc2 <= e.a[3] * e.a[3] {
+                area_pdf(p, x, (x - ea).normalize(), e.area)
+            } else {
+                1.0 / (2.0 * PI * sphere_cone(e.a[3], dc2))
+            }
+        }
+        LIGHT_ENVIRONMENT => env_pdf(b, d),
+        _ => 0.0,
+    };
+    e.prob * pdf
+}
+
+/// Samples a direction toward a light from p: the light by u_light, the point by u.
+pub fn sample_light(b: &Bindings, p: Vec3, u_light: f32, u: [f32; 2]) -> LightSample {
+    let mut ls = LightSample {
+        light: NO_LIGHT,
+        dir: Vec3::Z,
+        dist: FAR,
+        pdf: 0.0,
+        uv: Vec2::ZERO,
+    };
+    if b.params.num_emitters == 0 {
+        return ls;
+    }
+    let i = choose_light(b, u_light);
+    let e = &b.emitters[i as usize];
+    let (ea, eb, ec) = (xyz(e.a), xyz(e.b), xyz(e.c));
+    let (x, pdf) = match e.kind {
+        LIGHT_TRIANGLE => {
+            let su = u[0].sqrt();
+            let wa = 1.0 - su;
+            let wb = u[1] * su;
+            let x = wa * ea + wb * eb + (1.0 - wa - wb) * ec;
+            ls.uv = Vec2::new(wb, 1.0 - wa - wb);
+            let n = (eb - ea).cross(ec - ea).normalize();
+            (x, area_pdf(p, x, n, e.area))
+        }
+        LIGHT_DISK => {
+            let d = sample_disk(u) * e.a[3];
+            let tb = onb_tangents(eb);
+            let x = ea + d.x * tb[0] + d.y * tb[1];
+            (x, area_pdf(p, x, eb, e.area))
+        }
+        LIGHT_SPHERE => {
+            let s = sample_sphere_light(ea, e.a[3], p, u);
+            (s.truncate(), s.w)
+        }
+        LIGHT_ENVIRONMENT => {
+            let tex = &b.textures[b.params.env_texture as usize];
+            let row = sample_cdf(b, 0, tex.height, u[1]);
+            let col = sample_cdf(b, tex.height + 1 + row.i * (tex.width + 1), tex.width, u[0]);
+            let sin_theta = (PI * row.x).sin();
+            if sin_theta > 0.0 {
+                ls.dir = env_direction(b, Vec2::new(col.x, row.x));
+                ls.pdf = e.prob * row.pdf * col.pdf / (2.0 * PI * PI * sin_theta);
+                ls.light = if ls.pdf > 0.0 { i } else { NO_LIGHT };
+            }
+            return ls;
+        }
+        _ => (Vec3::ZERO, 0.0),
+    };
+    let v = x - p;
+    let dist = v.length();
+    if pdf > 0.0 && dist > 0.0 {
+        ls.light = i;
+        ls.dir = v / dist;
+        ls.dist = dist;
+        ls.pdf = e.prob * pdf;
+    }
+    ls
+}
+
+/// Solid-angle pdf of direction d from p under light sampling as a whole (every light's
+/// surface along the ray, whatever lies in between).
+pub fn light_pdf_total(b: &Bindings, p: Vec3, d: Vec3) -> f32 {
+    let ray = Ray { origin: p, dir: d };
+    let mut total = 0.0;
+    for i in 0..b.params.num_emitters {
+        let e = &b.emitters[i as usize];
+        let (ea, eb, ec) = (xyz(e.a), xyz(e.b), xyz(e.c));
+        let t = match e.kind {
+            LIGHT_TRIANGLE => intersect_triangle(ea, eb, ec, &ray, FAR).x,
+            LIGHT_DISK => intersect_disk(ea, eb, e.a[3], &ray, FAR),
+            LIGHT_SPHERE => {
+                let oc = p - ea;
+                let c = oc.dot(oc) - e.a[3] * e.a[3];
+                if c <= 0.0 {
+                    let bb = oc.dot(d);
+                    -bb + (bb * bb - c).max(0.0).sqrt()
+                } else {
+                    intersect_sphere(ea, e.a[3], &ray, FAR)
+                }
+            }
+            LIGHT_ENVIRONMENT => 0.0,
+            _ => FAR,
+        };
+        if t < FAR {
+            total += light_pdf(b, i, p, p + t * d, d);
+        }
+    }
+    total
+}
+
+/// The power heuristic (beta = 2) weight of pdf a against pdf b, by ratios.
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(a > 0.0) {
+        return 0.0;
+    }
+    if a >= b {
+        let r = b / a;
+        return 1.0 / (1.0 + r * r);
+    }
+    let r = a / b;
+    r * r / (1.0 + r * r)
+}

@@ -1,0 +1,217 @@
+//! The light list: every emissive primitive that can be sampled, and an image background,
+//! with selection probabilities proportional to power; and the image background's 2D
+//! sampling distribution. The shader side is `shaders/shared/lights.wgsl`.
+
+use glam::{Mat3, Vec3};
+
+use super::flatten::primitive_area;
+use super::records::{
+    self, Emitter, Material, Primitive, Texture, LIGHT_DISK, LIGHT_ENVIRONMENT, LIGHT_SPHERE,
+    LIGHT_TRIANGLE, NO_HIT, NO_LIGHT, PRIM_LIGHT_SHIFT,
+};
+
+/// Luminance of a linear RGB colour (Rec. 709 weights).
+pub fn luminance(c: [f32; 4]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// The image background as the light builder sees it.
+pub struct Environment<'a> {
+    pub texture: &'a Texture,
+    pub texels: &'a [[f32; 4]],
+    pub strength: f32,
+}
+
+/// The sampling distribution of an equirectangular image, packed four scalars per texel
+/// entry: the marginal CDF over rows (height + 1 values, row 0 at the top = +y), then one
+/// conditional CDF per row (width + 1 values each). The density of texel (x, y) is
+/// proportional to the largest luminance among it and its eight neighbours (the bilinear
+/// look-up's support, so every direction with radiance can be sampled) times sin(theta) at
+/// the row's centre. Also returns the integral of luminance over the sphere,
+/// sum L sin(theta) dphi dtheta.
+pub fn env_distribution(env: &Environment) -> (Vec<[f32; 4]>, f64) {
+    let (w, h) = (env.texture.width as usize, env.texture.height as usize);
+    let image = &env.texels[env.texture.offset as usize..][..w * h];
+    let lum = |x: usize, y: usize| f64::from(luminance(image[y * w + x]));
+    let (dphi, dtheta) = (
+        2.0 * std::f64::consts::PI / w as f64,
+        std::f64::consts::PI / h as f64,
+    );
+    let mut integral = 0.0;
+    let mut rows = Vec::with_capacity(h);
+    let mut row_sums = Vec::with_capacity(h);
+    for y in 0..h {
+        let sin_theta = ((y as f64 + 0.5) * dtheta).sin();
+        let f: Vec<f64> = (0..w)
+            .map(|x| {
+                let mut m = 0.0f64;
+                for dy in [-1i64, 0, 1] {
+                    let yy = (y as i64 + dy).clamp(0, h as i64 - 1) as usize;
+                    for dx in [-1i64, 0, 1] {
+                        let xx = (x as i64 + dx).rem_euclid(w as i64) as usize;
+                        m = m.max(lum(xx, yy));
+                    }
+                }
+                integral += lum(x, y) * sin_theta * dphi * dtheta;
+                m * sin_theta
+            })
+            .collect();
+        row_sums.push(f.iter().sum::<f64>());
+        rows.push(cdf(&f));
+    }
+    let mut scalars = cdf(&row_sums);
+    for r in rows {
+        scalars.extend(r);
+    }
+    let packed = scalars
+        .chunks(4)
+        .map(|c| {
+            let mut v = [0.0; 4];
+            v[..c.len()].copy_from_slice(c);
+            v
+        })
+        .collect();
+    (packed, integral * f64::from(env.strength))
+}
+
+/// Running sums of `f` normalised to end at exactly 1 (n + 1 values from 0); uniform when
+/// `f` sums to 0.
+fn cdf(f: &[f64]) -> Vec<f32> {
+    let total: f64 = f.iter().sum();
+    let n = f.len();
+    let mut out = Vec::with_capacity(n + 1);
+    let mut acc = 0.0;
+    out.push(0.0);
+    for (i, v) in f.iter().enumerate() {
+        acc += v;
+        let c = if total > 0.0 {
+            acc / total
+        } else {
+            (i + 1) as f64 / n as f64
+        };
+        out.push(c as f32);
+    }
+    out[n] = 1.0;
+    out
+}
+
+/// The rows of a primitive's object-to-world transform as (linear part, translation), when
+/// it is a similarity (rotation, uniform scale, translation), with the scale.
+fn similarity(p: &Primitive, shape_data: &[[f32; 4]]) -> Option<(Mat3, Vec3, f32)> {
+    if p.flags & records::PRIM_FLAG_TRANSFORM == 0 {
+        return Some((Mat3::IDENTITY, Vec3::ZERO, 1.0));
+    }
+    let rows = &shape_data[p.data as usize + 3..][..3];
+    let m = Mat3::from_cols(
+        Vec3::from_slice(&rows[0]),
+        Vec3::from_slice(&rows[1]),
+        Vec3::from_slice(&rows[2]),
+    )
+    .transpose();
+    let t = Vec3::new(rows[0][3], rows[1][3], rows[2][3]);
+    let g = m.transpose() * m;
+    let s2 = g.x_axis.x;
+    let off = (g - Mat3::from_diagonal(Vec3::splat(s2))).to_cols_array();
+    let similar = s2 > 0.0 && off.iter().all(|x| x.abs() <= 1e-5 * s2);
+    similar.then(|| (m, t, s2.sqrt()))
+}
+
+/// A primitive's light record with world-space geometry, or None when it cannot be sampled
+/// (planes, boxes, cylinders, and spheres and disks under a non-uniform scale: they still
+/// emit, and paths find them by hitting them).
+fn emitter_geometry(p: &Primitive, shape_data: &[[f32; 4]]) -> Option<Emitter> {
+    let (m, t, s) = similarity(p, shape_data)?;
+    let point = |v: [f32; 4]| (m * Vec3::from_slice(&v) + t).extend(v[3] * s).to_array();
+    let e = match p.tag {
+        records::PRIM_TRIANGLE => Emitter {
+            kind: LIGHT_TRIANGLE,
+            a: [p.a[0], p.a[1], p.a[2], 0.0],
+            b: [p.b[0], p.b[1], p.b[2], 0.0],
+            c: [p.c[0], p.c[1], p.c[2], 0.0],
+            ..Default::default()
+        },
+        records::PRIM_DISK => Emitter {
+            kind: LIGHT_DISK,
+            a: point(p.a),
+            b: (m * Vec3::from_slice(&p.b))
+                .normalize()
+                .extend(0.0)
+                .to_array(),
+            ..Default::default()
+        },
+        records::PRIM_SPHERE => Emitter {
+            kind: LIGHT_SPHERE,
+            a: point(p.a),
+            ..Default::default()
+        },
+        _ => return None,
+    };
+    Some(e)
+}
+
+/// The light list, with each listed primitive's flags carrying its light index. Every
+/// bounded primitive whose material emits and whose shape can be sampled is a light, and
+/// so is an image background (`env`, with the scene's bounding radius for its power);
+/// its index in the list is returned too. Probabilities are proportional to power:
+/// pi x area x luminance of the emission (a texture counts as white) per emitting side,
+/// and pi r^2 x the integral of the background's luminance over the sphere.
+pub fn light_list(
+    primitives: &mut [Primitive],
+    num_unbounded: usize,
+    materials: &[Material],
+    shape_data: &[[f32; 4]],
+    env: Option<(f64, f32)>,
+) -> (Vec<Emitter>, u32) {
+    let mut lights = Vec::new();
+    for (i, p) in primitives.iter_mut().enumerate().skip(num_unbounded) {
+        let mat = &materials[p.material as usize];
+        let sides = if mat.flags & records::MAT_FLAG_TWO_SIDED != 0 {
+            2.0
+        } else {
+            1.0
+        };
+        let radiance = if mat.tex_emission != records::NO_TEXTURE {
+            1.0
+        } else {
+            luminance(mat.emission)
+        };
+        if radiance.is_nan() || radiance <= 0.0 {
+            continue;
+        }
+        let area = primitive_area(p, shape_data);
+        let Some(e) = emitter_geometry(p, shape_data) else {
+            continue;
+        };
+        if !(area > 0.0 && area.is_finite()) || lights.len() as u32 >= records::MAX_LIGHTS {
+            continue;
+        }
+        let power = radiance * area * std::f32::consts::PI * sides;
+        p.flags |= (lights.len() as u32 + 1) << PRIM_LIGHT_SHIFT;
+        lights.push(Emitter {
+            primitive: i as u32,
+            area,
+            power,
+            ..e
+        });
+    }
+    let mut env_light = NO_LIGHT;
+    if let Some((integral, radius)) = env {
+        let power = std::f64::consts::PI * f64::from(radius).powi(2) * integral;
+        if integral > 0.0 {
+            env_light = lights.len() as u32;
+            lights.push(Emitter {
+                primitive: NO_HIT,
+                kind: LIGHT_ENVIRONMENT,
+                power: (power as f32).max(f32::MIN_POSITIVE),
+                ..Default::default()
+            });
+        }
+    }
+    let powers: Vec<f64> = lights.iter().map(|e| f64::from(e.power)).collect();
+    let c = cdf(&powers);
+    for (i, e) in lights.iter_mut().enumerate() {
+        e.cdf = c[i + 1];
+        e.prob = c[i + 1] - c[i];
+    }
+    (lights, env_light)
+}
