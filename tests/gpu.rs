@@ -74,6 +74,34 @@ fn gpu_matches_cpu_with_every_sampler() {
     }
 }
 
+/// The other light-sampling strategies give the same image on both backends too, on the
+/// scenes with area lights of every kind and with an image background (mis, the default,
+/// is covered above on every scene).
+#[test]
+fn gpu_matches_cpu_under_every_light_sampling_strategy() {
+    use wgtrace::scene::format::LightSampling;
+    for scene in ["scenes/lights.toml", "scenes/sky.toml"] {
+        for strategy in [LightSampling::Bsdf, LightSampling::Mixture] {
+            let o = Overrides {
+                width: Some(48),
+                height: Some(32),
+                spp: Some(16),
+                seed: Some(5),
+                light_sampling: Some(strategy),
+                ..Default::default()
+            };
+            let s = wgtrace::load_scene(&common::repo_path(scene), &o).unwrap();
+            let c = compare(&render_gpu(&s), &render_cpu(&s), 8);
+            assert!(
+                c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
+                "{scene} {strategy:?}: {} tiles outside the bound, {:.4} of pixels agree",
+                c.failed_tiles.len(),
+                c.agree_fraction
+            );
+        }
+    }
+}
+
 const FURNACE: &str = r#"
 [render]
 width = 40

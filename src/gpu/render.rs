@@ -255,6 +255,7 @@ pub(crate) fn check_scene_fits(device: &wgpu::Device, scene: &FlatScene) -> Resu
         .min(limits.max_buffer_size);
     for (what, bytes) in [
         ("primitives", std::mem::size_of_val(&scene.primitives[..])),
+        ("emitters", std::mem::size_of_val(&scene.emitters[..])),
         ("bvh", std::mem::size_of_val(&scene.bvh[..])),
         ("shape_data", std::mem::size_of_val(&scene.shape_data[..])),
         ("textures", std::mem::size_of_val(&scene.textures[..])),
