@@ -29,7 +29,11 @@ fn main() {
     let img = image::Rgb32FImage::from_fn(width, height, |x, y| {
         let theta = (y as f32 + 0.5) / height as f32 * PI;
         let phi = ((x as f32 + 0.5) / width as f32 - 0.5) * 2.0 * PI;
-        let d = Vec3::new(theta.sin() * phi.sin(), theta.cos(), -theta.sin() * phi.cos());
+        let d = Vec3::new(
+            theta.sin() * phi.sin(),
+            theta.cos(),
+            -theta.sin() * phi.cos(),
+        );
         let c = if d.y >= 0.0 {
             let t = (1.0 - d.y).powi(4);
             let zenith = Vec3::new(0.25, 0.45, 0.95);

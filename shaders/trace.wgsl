@@ -47,6 +47,10 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
     var shadow = spawn_ray(hit, ls.dir);
     var t_max = FAR;
     var le: vec3<f32>;
+    // the direction the MIS weight takes the material's pdf of: from the ray origin, as a
+    // bounce ray toward the same point has it, so the two weights of a path add up to one
+    // (from hit.p they differ by about offset / (distance x cos), 1e-3 on grazing chords)
+    var pdf_dir = ls.dir;
     let e = emitters[ls.light];
     if (e.kind == LIGHT_ENVIRONMENT) {
         le = background_radiance(ls.dir);
@@ -56,6 +60,7 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
         if (all(le == vec3<f32>(0.0))) {
             return vec3<f32>(0.0);
         }
+        pdf_dir = normalize(lh.p - shadow.origin);
         let end = offset_ray(lh.p, select(-lh.ng, lh.ng, dot(ls.dir, lh.ng) < 0.0), lh.err);
         let v = end - shadow.origin;
         t_max = length(v);
@@ -67,7 +72,7 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
     if (intersect_scene(shadow, t_max).prim != NO_HIT) {
         return vec3<f32>(0.0);
     }
-    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, ls.dir));
+    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, pdf_dir));
     return f * le * (w / ls.pdf);
 }
 

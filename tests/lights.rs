@@ -140,9 +140,12 @@ fn area_lights_give_their_closed_form_irradiance_under_every_strategy() {
     }
 }
 
-/// A closed box whose inward walls all emit Le = 1 and reflect with albedo 0.5: every
-/// camera ray sees Le / (1 - rho) = 2 (less 0.5^40 for the path length), whichever way the
-/// strategy finds the walls: emission is counted exactly once.
+/// The furnace of the issue: a sphere whose inside emits Le = 1 (two-sided emission) and
+/// reflects with albedo 0.5, seen from inside; and a closed box of inward-facing polygons
+/// (twelve triangle lights) made the same way. Every camera ray sees Le / (1 - rho) = 2
+/// (less 0.5^40 for the path length), whichever way the strategy finds the walls:
+/// emission is counted exactly once. Inside the sphere light sampling draws by area (the
+/// cone does not exist), on the walls of the box by triangle.
 #[test]
 fn an_emitting_furnace_converges_to_le_over_one_minus_albedo_under_every_strategy() {
     let mut walls = String::new();
@@ -173,8 +176,12 @@ fn an_emitting_furnace_converges_to_le_over_one_minus_albedo_under_every_strateg
             );
         }
     }
-    let src = format!(
-        r#"
+    let sphere = "[[objects]]\ntype = \"sphere\"\ncenter = [0.2, 0.1, 0]\nradius = 1.5\nmaterial = \"wall\"\n";
+    let dir = std::env::temp_dir();
+    let expected = 2.0 * (1.0 - 0.5f64.powi(40));
+    for (name, objects, lights) in [("sphere", sphere, 1), ("box", walls.as_str(), 12)] {
+        let src = format!(
+            r#"
 [render]
 width = 16
 height = 16
@@ -185,15 +192,18 @@ look_from = [0.1, 0.2, 0.3]
 look_at = [0.5, -0.4, -1]
 vfov = 100
 [materials]
-wall = {{ type = "lambertian", albedo = [0.5, 0.5, 0.5], emission = [1, 1, 1] }}
-{walls}"#
-    );
-    let dir = std::env::temp_dir();
-    let expected = 2.0 * (1.0 - 0.5f64.powi(40));
-    for strategy in STRATEGIES {
-        let scene = with_strategy(&src, strategy, &dir);
-        assert_eq!(scene.emitters.len(), 12);
-        assert_mean(&format!("furnace {strategy:?}"), &scene, [expected; 3]);
+wall = {{ type = "lambertian", albedo = [0.5, 0.5, 0.5], emission = [1, 1, 1], two_sided = true }}
+{objects}"#
+        );
+        for strategy in STRATEGIES {
+            let scene = with_strategy(&src, strategy, &dir);
+            assert_eq!(scene.emitters.len(), lights);
+            assert_mean(
+                &format!("{name} furnace {strategy:?}"),
+                &scene,
+                [expected; 3],
+            );
+        }
     }
 }
 

@@ -147,6 +147,14 @@ fn area_pdf(p: vec3<f32>, x: vec3<f32>, n: vec3<f32>, area: f32) -> f32 {
     return d2 / (c * area);
 }
 
+// Whether p is inside a sphere light for sampling: within radius x (1 + 1/1024), squared 1 + 1/512. On and just
+// outside the surface (a point shaded on the light itself) the cone degenerates into a
+// cap of nearly zero size whose directions rounding destroys; area sampling is exact there.
+fn sphere_inside(p: vec3<f32>, center: vec3<f32>, r: f32) -> bool {
+    let v = p - center;
+    return dot(v, v) <= r * r * (1.0 + 1.0 / 512.0);
+}
+
 // 1 - cos(theta_max) of the cone a sphere of radius r subtends at squared distance dc2
 // from its centre (sin^2 / 2 for small cones, where the subtraction would cancel).
 fn sphere_cone(r: f32, dc2: f32) -> f32 {
@@ -159,11 +167,11 @@ fn sphere_cone(r: f32, dc2: f32) -> f32 {
 
 // A point on a sphere light seen from p: uniform in the cone of directions the sphere
 // subtends (pbrt-v4's Sphere::Sample, small cones by the series), or uniform by area when
-// p is inside. Returns the point in .xyz, its solid-angle pdf in .w.
+// p is inside (sphere_inside). Returns the point in .xyz, its solid-angle pdf in .w.
 fn sample_sphere_light(center: vec3<f32>, r: f32, p: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
     let oc = center - p;
     let dc2 = dot(oc, oc);
-    if (dc2 <= r * r) {
+    if (sphere_inside(p, center, r)) {
         let n = sample_sphere(u);
         let x = center + r * n;
         return vec4<f32>(x, area_pdf(p, x, n, 4.0 * PI * r * r));
@@ -200,11 +208,10 @@ fn light_pdf(i: u32, p: vec3<f32>, x: vec3<f32>, d: vec3<f32>) -> f32 {
             pdf = area_pdf(p, x, e.b.xyz, e.area);
         }
         case LIGHT_SPHERE: {
-            let dc2 = dot(e.a.xyz - p, e.a.xyz - p);
-            if (dc2 <= e.a.w * e.a.w) {
+            if (sphere_inside(p, e.a.xyz, e.a.w)) {
                 pdf = area_pdf(p, x, normalize(x - e.a.xyz), e.area);
             } else {
-                pdf = 1.0 / (2.0 * PI * sphere_cone(e.a.w, dc2));
+                pdf = 1.0 / (2.0 * PI * sphere_cone(e.a.w, dot(e.a.xyz - p, e.a.xyz - p)));
             }
         }
         case LIGHT_ENVIRONMENT: {
@@ -291,12 +298,15 @@ fn light_pdf_total(p: vec3<f32>, d: vec3<f32>) -> f32 {
                 t = intersect_disk(e.a.xyz, e.b.xyz, e.a.w, ray, FAR);
             }
             case LIGHT_SPHERE: {
-                let oc = p - e.a.xyz;
-                let c = dot(oc, oc) - e.a.w * e.a.w;
-                if (c <= 0.0) {
-                    // inside: the way out
+                if (sphere_inside(p, e.a.xyz, e.a.w)) {
+                    // inside: the far root (the way out)
+                    let oc = p - e.a.xyz;
                     let b = dot(oc, d);
+                    let c = dot(oc, oc) - e.a.w * e.a.w;
                     t = -b + sqrt(max(0.0, b * b - c));
+                    if (!(t > 0.0)) {
+                        t = FAR;
+                    }
                 } else {
                     t = intersect_sphere(e.a.xyz, e.a.w, ray, FAR);
                 }

@@ -145,6 +145,13 @@ pub fn area_pdf(p: Vec3, x: Vec3, n: Vec3, area: f32) -> f32 {
     d2 / (c * area)
 }
 
+/// Whether p is inside a sphere light for sampling: within radius x (1 + 1/1024), squared 1 + 1/512, so that
+/// points on the surface sample by area rather than by a degenerate cone.
+pub fn sphere_inside(p: Vec3, center: Vec3, r: f32) -> bool {
+    let v = p - center;
+    v.dot(v) <= r * r * (1.0 + 1.0 / 512.0)
+}
+
 /// 1 - cos(theta_max) of the cone a sphere subtends at squared distance dc2.
 pub fn sphere_cone(r: f32, dc2: f32) -> f32 {
     let sin2_max = r * r / dc2;
@@ -158,7 +165,7 @@ pub fn sphere_cone(r: f32, dc2: f32) -> f32 {
 pub fn sample_sphere_light(center: Vec3, r: f32, p: Vec3, u: [f32; 2]) -> Vec4 {
     let oc = center - p;
     let dc2 = oc.dot(oc);
-    if dc2 <= r * r {
+    if sphere_inside(p, center, r) {
         let n = sample_sphere(u);
         let x = center + r * n;
         return x.extend(area_pdf(p, x, n, 4.0 * PI * r * r));
@@ -189,11 +196,10 @@ pub fn light_pdf(b: &Bindings, i: u32, p: Vec3, x: Vec3, d: Vec3) -> f32 {
         LIGHT_TRIANGLE => area_pdf(p, x, (eb - ea).cross(ec - ea).normalize(), e.area),
         LIGHT_DISK => area_pdf(p, x, eb, e.area),
         LIGHT_SPHERE => {
-            let dc2 = (ea - p).dot(ea - p);
-            if dc2 <= e.a[3] * e.a[3] {
+            if sphere_inside(p, ea, e.a[3]) {
                 area_pdf(p, x, (x - ea).normalize(), e.area)
             } else {
-                1.0 / (2.0 * PI * sphere_cone(e.a[3], dc2))
+                1.0 / (2.0 * PI * sphere_cone(e.a[3], (ea - p).dot(ea - p)))
             }
         }
         LIGHT_ENVIRONMENT => env_pdf(b, d),
@@ -274,11 +280,17 @@ pub fn light_pdf_total(b: &Bindings, p: Vec3, d: Vec3) -> f32 {
             LIGHT_TRIANGLE => intersect_triangle(ea, eb, ec, &ray, FAR).x,
             LIGHT_DISK => intersect_disk(ea, eb, e.a[3], &ray, FAR),
             LIGHT_SPHERE => {
-                let oc = p - ea;
-                let c = oc.dot(oc) - e.a[3] * e.a[3];
-                if c <= 0.0 {
+                if sphere_inside(p, ea, e.a[3]) {
+                    let oc = p - ea;
                     let bb = oc.dot(d);
-                    -bb + (bb * bb - c).max(0.0).sqrt()
+                    let c = oc.dot(oc) - e.a[3] * e.a[3];
+                    let t = -bb + (bb * bb - c).max(0.0).sqrt();
+                    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+                    if !(t > 0.0) {
+                        FAR
+                    } else {
+                        t
+                    }
                 } else {
                     intersect_sphere(ea, e.a[3], &ray, FAR)
                 }

@@ -73,6 +73,9 @@ pub fn direct_light(
     }
     let mut shadow = spawn_ray(hit, ls.dir);
     let mut t_max = FAR;
+    // the material's pdf for the MIS weight is taken from the ray origin, as a bounce ray
+    // toward the same point has it, so the two weights of a path add up to one
+    let mut pdf_dir = ls.dir;
     let e = &b.emitters[ls.light as usize];
     let le = if e.kind == LIGHT_ENVIRONMENT {
         background_radiance(b, ls.dir)
@@ -95,6 +98,7 @@ pub fn direct_light(
         if le == Vec3::ZERO {
             return Vec3::ZERO;
         }
+        pdf_dir = (lh.p - shadow.origin).normalize();
         let facing = if ls.dir.dot(lh.ng) < 0.0 {
             lh.ng
         } else {
@@ -112,7 +116,7 @@ pub fn direct_light(
     if intersect_scene(b, &shadow, t_max).prim != NO_HIT {
         return Vec3::ZERO;
     }
-    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, ls.dir));
+    let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, pdf_dir));
     f * le * (w / ls.pdf)
 }
 

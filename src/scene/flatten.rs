@@ -19,7 +19,9 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
     let slot = |c: &ColorDesc| color_slot(c, textures);
     let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
     let (tag, albedo, emission, params, extra) = match m {
-        MaterialDesc::Lambertian { albedo, emission } => (
+        MaterialDesc::Lambertian {
+            albedo, emission, ..
+        } => (
             records::MAT_LAMBERTIAN,
             slot(albedo),
             slot(emission),
@@ -30,6 +32,7 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             albedo,
             fuzz,
             emission,
+            ..
         } => (
             records::MAT_METAL,
             slot(albedo),
@@ -42,6 +45,7 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             tint,
             absorption,
             emission,
+            ..
         } => (
             records::MAT_DIELECTRIC,
             slot(tint),
@@ -55,6 +59,7 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             roughness,
             ior,
             emission,
+            ..
         } => (
             records::MAT_MICROFACET,
             slot(albedo),
@@ -70,13 +75,7 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             ([0.0; 4], NO_TEXTURE),
         ),
     };
-    let two_sided = matches!(
-        m,
-        MaterialDesc::Emissive {
-            two_sided: true,
-            ..
-        }
-    );
+    let two_sided = m.two_sided();
     Material {
         tag,
         flags: if two_sided {

@@ -231,6 +231,9 @@ pub enum MaterialDesc {
         albedo: ColorDesc,
         #[serde(default)]
         emission: ColorDesc,
+        /// Emit from the back side too.
+        #[serde(default)]
+        two_sided: bool,
     },
     /// Mirror reflection, the direction perturbed by up to `fuzz` (0 = perfect mirror).
     Metal {
@@ -239,6 +242,9 @@ pub enum MaterialDesc {
         fuzz: f32,
         #[serde(default)]
         emission: ColorDesc,
+        /// Emit from the back side too.
+        #[serde(default)]
+        two_sided: bool,
     },
     /// Glass-like: reflection or refraction chosen by Schlick's Fresnel; `tint` multiplies
     /// every scattering, `absorption` (per unit length, Beer-Lambert) acts inside.
@@ -250,6 +256,9 @@ pub enum MaterialDesc {
         absorption: [f32; 3],
         #[serde(default)]
         emission: ColorDesc,
+        /// Emit from the back side too.
+        #[serde(default)]
+        two_sided: bool,
     },
     /// Cook-Torrance: a GGX specular lobe (`roughness` = alpha in [0, 1], Schlick's Fresnel
     /// from `ior`, colour `specular`, default `albedo`) over a Lambertian base (`albedo`)
@@ -262,6 +271,9 @@ pub enum MaterialDesc {
         ior: f32,
         #[serde(default)]
         emission: ColorDesc,
+        /// Emit from the back side too.
+        #[serde(default)]
+        two_sided: bool,
     },
     /// A light: emits `radiance` from its front side, or both with `two_sided`; absorbs.
     Emissive {
@@ -269,6 +281,19 @@ pub enum MaterialDesc {
         #[serde(default)]
         two_sided: bool,
     },
+}
+
+impl MaterialDesc {
+    /// Whether the material emits from both sides.
+    pub fn two_sided(&self) -> bool {
+        match self {
+            MaterialDesc::Lambertian { two_sided, .. }
+            | MaterialDesc::Metal { two_sided, .. }
+            | MaterialDesc::Dielectric { two_sided, .. }
+            | MaterialDesc::Microfacet { two_sided, .. }
+            | MaterialDesc::Emissive { two_sided, .. } => *two_sided,
+        }
+    }
 }
 
 fn glass_ior() -> f32 {

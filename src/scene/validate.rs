@@ -163,7 +163,9 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
         let at = m.span().start;
         let key = format!("materials.{name}");
         match m.get_ref() {
-            MaterialDesc::Lambertian { albedo, emission } => {
+            MaterialDesc::Lambertian {
+                albedo, emission, ..
+            } => {
                 v.color(&format!("{key}.albedo"), albedo, true, at);
                 v.color(&format!("{key}.emission"), emission, false, at);
             }
@@ -171,6 +173,7 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                 albedo,
                 fuzz,
                 emission,
+                ..
             } => {
                 v.color(&format!("{key}.albedo"), albedo, true, at);
                 if !(0.0..=1.0).contains(fuzz) {
@@ -187,6 +190,7 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                 tint,
                 absorption,
                 emission,
+                ..
             } => {
                 if !(*ior > 0.0 && ior.is_finite()) {
                     v.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
@@ -201,6 +205,7 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
                 roughness,
                 ior,
                 emission,
+                ..
             } => {
                 v.color(&format!("{key}.albedo"), albedo, true, at);
                 if let Some(ks) = specular {
