@@ -87,6 +87,10 @@ fn cpu_backend_and_overrides_work_and_preview_rewrites_the_file() {
             "5",
             "--preview-every",
             "1",
+            "--light-sampling",
+            "mixture",
+            "--sampler",
+            "hammersley",
         ],
     );
     assert!(String::from_utf8_lossy(&o.stderr).contains("CPU reference"));
@@ -135,6 +139,11 @@ fn bad_input_gives_a_clear_error_and_nonzero_exit() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("16384x16384 image needs 8192 MiB"), "{e}");
     assert!(!e.contains("panicked"), "{e}");
+
+    let o = wgtrace(&["render", &scene, "--light-sampling", "nee"]);
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(e.contains("[possible values: bsdf, mixture, mis]"), "{e}");
 
     let o = wgtrace(&["render", &scene, "--spp", "0", "-o", "/dev/null/x.png"]);
     assert!(!o.status.success());
