@@ -312,7 +312,7 @@ fn mean_inverse_pdf_of_each_light_sampler_is_the_solid_angle_it_covers() {
         let b = bindings(&scene);
         let samples = light_samples(&b, from, 100_000);
         let (mean, se) = mean_inverse_pdf(&samples);
-        eprintln!("{name}: mean 1/pdf {mean:.6} +- {se:.6}, solid angle {omega:.6}");
+        eprintln!("{name}: mean 1/pdf {mean:.6e} +- {se:.2e}, solid angle {omega:.6e}");
         assert!(
             (mean - omega).abs() <= 4.0 * se + 1e-5 * omega,
             "{name}: mean 1/pdf {mean} vs solid angle {omega} (standard error {se})"
