@@ -69,6 +69,40 @@ pub fn to_srgb8(rgb: &[f32]) -> Vec<u8> {
 /// the format its extension names. The file is written beside the target and renamed over
 /// it, so a reader never sees a half-written image.
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), ImageError> {
+    write_pixels(path, width, height, rgb, || to_srgb8(rgb))
+}
+
+/// Writes a per-pixel relative error estimate (`width * height` values): EXR keeps the
+/// values themselves (in all three channels); PNG and PPM show log10 of the error from -3
+/// (0.1%, dark blue) to 0 (100%, yellow) in the viridis colour map.
+pub fn write_error_map(
+    path: &Path,
+    width: u32,
+    height: u32,
+    errors: &[f32],
+) -> Result<(), ImageError> {
+    use plotters::style::colors::colormaps::ViridisRGB;
+    let gray: Vec<f32> = errors.iter().flat_map(|&e| [e; 3]).collect();
+    write_pixels(path, width, height, &gray, || {
+        errors
+            .iter()
+            .flat_map(|&e| {
+                let t = (f64::from(e).max(1e-12).log10() + 3.0) / 3.0;
+                let c = ViridisRGB::get_color(if t.is_nan() { 0.0 } else { t.clamp(0.0, 1.0) });
+                [c.0, c.1, c.2]
+            })
+            .collect()
+    })
+}
+
+/// Writes `linear` (EXR) or the 8-bit pixels `encoded` makes (PNG, PPM), atomically.
+fn write_pixels(
+    path: &Path,
+    width: u32,
+    height: u32,
+    linear: &[f32],
+    encoded: impl Fn() -> Vec<u8>,
+) -> Result<(), ImageError> {
     let format = OutputFormat::from_path(path)?;
     let wrap = |e: Box<dyn std::error::Error + Send + Sync>| ImageError::Write {
         path: path.to_path_buf(),
@@ -78,12 +112,12 @@ pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<
     let result = (|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
         match format {
             OutputFormat::Png => {
-                image::RgbImage::from_raw(width, height, to_srgb8(rgb))
+                image::RgbImage::from_raw(width, height, encoded())
                     .ok_or("image size does not match the pixel data")?
                     .save_with_format(&tmp, ImageFormat::Png)?;
             }
             OutputFormat::Exr => {
-                image::Rgb32FImage::from_raw(width, height, rgb.to_vec())
+                image::Rgb32FImage::from_raw(width, height, linear.to_vec())
                     .ok_or("image size does not match the pixel data")?
                     .save_with_format(&tmp, ImageFormat::OpenExr)?;
             }
@@ -91,12 +125,7 @@ pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<
                 let file = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
                 PnmEncoder::new(file)
                     .with_subtype(PnmSubtype::Pixmap(SampleEncoding::Binary))
-                    .write_image(
-                        &to_srgb8(rgb),
-                        width,
-                        height,
-                        image::ExtendedColorType::Rgb8,
-                    )?;
+                    .write_image(&encoded(), width, height, image::ExtendedColorType::Rgb8)?;
             }
         }
         std::fs::rename(&tmp, path)?;

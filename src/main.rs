@@ -7,8 +7,8 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
-use wgtrace::image_io::{write_image, OutputFormat};
-use wgtrace::render::{render_progressive, Progress};
+use wgtrace::image_io::{write_error_map, write_image, OutputFormat};
+use wgtrace::render::{render_until, StopRule, Stopped};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::{BackendChoice, Engine, Overrides};
 
@@ -28,8 +28,58 @@ struct Cli {
 enum Command {
     /// Render a scene file to an image.
     Render(RenderArgs),
+    /// Measure how error falls with samples and seconds, per sampler and light-sampling
+    /// strategy, against a reference; writes results.csv, report.md and plots.
+    Converge(ConvergeArgs),
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
+}
+
+#[derive(clap::Args)]
+struct ConvergeArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Reference image (linear EXR of the same size). Default: render one at
+    /// --reference-spp, cached in the output folder with its settings beside it.
+    #[arg(long)]
+    reference: Option<PathBuf>,
+    /// Samples per pixel of a rendered reference.
+    #[arg(long, default_value_t = 4096)]
+    reference_spp: u32,
+    /// Backend of a rendered reference (the CPU reference is much faster than lavapipe).
+    #[arg(long, value_enum, default_value_t = BackendArg::Cpu)]
+    reference_backend: BackendArg,
+    /// Largest samples per pixel of the ladder 1, 2, 4, ...
+    #[arg(long, default_value_t = 256)]
+    spp_max: u32,
+    /// Independent runs (seeds) per point.
+    #[arg(long, default_value_t = 3)]
+    runs: u32,
+    /// Configurations, sampler:strategy[:max_depth], comma-separated (default: all four
+    /// samplers with bsdf, mixture and mis).
+    #[arg(long, value_delimiter = ',', value_parser = wgtrace::converge::Config::parse)]
+    configs: Vec<wgtrace::converge::Config>,
+    /// Output folder.
+    #[arg(long, default_value = "converge")]
+    out: PathBuf,
+    /// Backend of the measured renders.
+    #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
+    backend: BackendArg,
+    /// Which Vulkan adapter (index from `wgtrace info`).
+    #[arg(long, default_value_t = 0)]
+    adapter: usize,
+    /// Image width (overrides [render] width, for every render and the reference).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height (overrides [render] height).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Rays per path of configurations that give none (overrides [render] max_depth).
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -78,6 +128,20 @@ struct RenderArgs {
     /// How paths find lights (overrides [render] light_sampling).
     #[arg(long, value_enum)]
     light_sampling: Option<LightSampling>,
+    /// Stop after as many passes as fit in this many seconds, then write the image. Without
+    /// --spp the scene's spp no longer caps the passes (except for hammersley, whose point
+    /// set depends on it).
+    #[arg(long, value_name = "SECONDS", value_parser = positive_f64)]
+    time_limit: Option<f64>,
+    /// Stop once the estimated relative error (sqrt of mean (variance / n) / (mean^2 +
+    /// 0.01) over pixels and channels) is at most E; e.g. 0.02 for 2%. Uncapped by the
+    /// scene's spp as with --time-limit.
+    #[arg(long, value_name = "E", value_parser = positive_f64)]
+    target_error: Option<f64>,
+    /// Also write the per-pixel relative error estimate: .exr holds the values, .png/.ppm
+    /// show them in colour (log scale, 0.1% dark blue to 100% yellow).
+    #[arg(long, value_name = "PATH")]
+    error_map: Option<PathBuf>,
     /// Test every primitive on every ray instead of traversing the BVH (for comparisons).
     #[arg(long)]
     no_bvh: bool,
@@ -86,10 +150,21 @@ struct RenderArgs {
     quiet: bool,
 }
 
+fn positive_f64(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("must be a number > 0, got {s}")),
+    }
+}
+
+/// The pass cap of a render limited by time or error when --spp is not given.
+const UNCAPPED_PASSES: u32 = 1 << 20;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render(args),
+        Command::Converge(args) => converge(args),
         Command::Info => info(),
     };
     match result {
@@ -112,6 +187,83 @@ fn info() -> anyhow::Result<()> {
     Ok(())
 }
 
+fn backend_choice(arg: BackendArg, adapter: usize) -> BackendChoice {
+    match arg {
+        BackendArg::Gpu => BackendChoice::Gpu { adapter },
+        BackendArg::Cpu => BackendChoice::Cpu,
+    }
+}
+
+fn converge(args: ConvergeArgs) -> anyhow::Result<()> {
+    use wgtrace::converge::{self, Config, Event};
+    let configs = if args.configs.is_empty() {
+        Config::defaults()
+    } else {
+        args.configs.clone()
+    };
+    let opts = converge::Options {
+        scene: args.scene.clone(),
+        overrides: Overrides {
+            width: args.width,
+            height: args.height,
+            max_depth: args.max_depth,
+            ..Default::default()
+        },
+        reference: args.reference.clone(),
+        reference_spp: args.reference_spp,
+        reference_backend: backend_choice(args.reference_backend, args.adapter),
+        spp_max: args.spp_max,
+        runs: args.runs,
+        configs,
+        backend: backend_choice(args.backend, args.adapter),
+        out: args.out.clone(),
+    };
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(1)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    let study = converge::run(&opts, |e| match e {
+        Event::Reference { spp, done } => {
+            bar.set_length(spp as u64);
+            bar.set_position(done as u64);
+            bar.set_message("reference passes");
+        }
+        Event::ReferenceReady { path, cached } => bar.suspend(|| {
+            eprintln!(
+                "reference: {}{}",
+                path.display(),
+                if cached { " (cached)" } else { "" }
+            )
+        }),
+        Event::Passes { done, total } => {
+            bar.set_length(total);
+            bar.set_position(done);
+        }
+        Event::Measured(m) => {
+            bar.set_message(format!(
+                "{} run {} spp {}: relMSE {:.2e}",
+                m.config, m.run, m.spp, m.rel_mse
+            ));
+        }
+    })?;
+    bar.finish_and_clear();
+    println!(
+        "{}: {} configurations, {} measurements on {}; {}",
+        args.scene.display(),
+        study.configs.len(),
+        study.measurements.len(),
+        study.device,
+        args.out.join("report.md").display()
+    );
+    Ok(())
+}
+
 fn default_output(scene: &Path) -> PathBuf {
     let stem = scene.file_stem().unwrap_or_default().to_string_lossy();
     PathBuf::from(format!("{stem}.png"))
@@ -124,6 +276,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| default_output(&args.scene));
     // Refuse a bad output name before spending time on the render.
     OutputFormat::from_path(&output)?;
+    if let Some(map) = &args.error_map {
+        OutputFormat::from_path(map)?;
+    }
     let overrides = Overrides {
         width: args.width,
         height: args.height,
@@ -135,7 +290,12 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         light_sampling: args.light_sampling,
     };
     let loading = std::time::Instant::now();
-    let scene = wgtrace::load_scene(&args.scene, &overrides)?;
+    let mut scene = wgtrace::load_scene(&args.scene, &overrides)?;
+    let limited = args.time_limit.is_some() || args.target_error.is_some();
+    if limited && args.spp.is_none() && scene.sampler != wgtrace::scene::records::SAMPLER_HAMMERSLEY
+    {
+        scene.spp = UNCAPPED_PASSES;
+    }
     if !args.quiet {
         eprintln!(
             "scene: {} primitives ({} unbounded), {} BVH nodes of depth {}, {:.2} s to load",
@@ -146,12 +306,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             loading.elapsed().as_secs_f64()
         );
     }
-    let choice = match args.backend {
-        BackendArg::Gpu => BackendChoice::Gpu {
-            adapter: args.adapter,
-        },
-        BackendArg::Cpu => BackendChoice::Cpu,
-    };
+    let choice = backend_choice(args.backend, args.adapter);
     let (mut engine, note) = Engine::open(&scene, choice)?;
     if let Some(note) = note {
         eprintln!("{note}");
@@ -176,7 +331,11 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         write_image(&output, w, h, &acc.to_rgb())?;
         Ok(())
     };
-    let done: Progress = render_progressive(&mut engine, &scene, |p, engine| {
+    let rule = StopRule {
+        time_limit: args.time_limit.map(std::time::Duration::from_secs_f64),
+        target_error: args.target_error,
+    };
+    let (done, stopped, estimate) = render_until(&mut engine, &scene, rule, |p, engine| {
         bar.set_position(p.passes_done as u64);
         bar.set_message(format!("{:.2} Msamples/s", p.samples_per_second() / 1e6));
         if let Some(n) = args.preview_every {
@@ -188,7 +347,14 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     })?;
     bar.finish_and_clear();
     write(&mut engine)?;
-    println!(
+    if let Some(map) = &args.error_map {
+        let acc = engine.accumulation()?;
+        let errors: Vec<f32> = (0..acc.pixel_count())
+            .map(|i| acc.pixel_rel_mse(i).sqrt() as f32)
+            .collect();
+        write_error_map(map, w, h, &errors)?;
+    }
+    let mut summary = format!(
         "{}: {}x{}, {} spp, {:.3} s, {:.3} Msamples/s",
         output.display(),
         w,
@@ -197,5 +363,15 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         done.elapsed.as_secs_f64(),
         done.samples_per_second() / 1e6
     );
+    if let Some(e) = estimate {
+        summary += &format!(", estimated relative error {e:.4}");
+    }
+    match stopped {
+        Stopped::TimeLimit => summary += " (time limit)",
+        Stopped::TargetError => summary += " (target error reached)",
+        Stopped::AllPasses if limited && args.spp.is_some() => summary += " (all passes)",
+        Stopped::AllPasses => {}
+    }
+    println!("{summary}");
     Ok(())
 }

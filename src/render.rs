@@ -129,7 +129,65 @@ impl Accumulation {
     pub fn to_rgb(&self) -> Vec<f32> {
         (0..self.pixel_count()).flat_map(|i| self.mean(i)).collect()
     }
+
+    /// Estimated relative squared error of pixel `i`'s mean, averaged over its channels:
+    /// (variance / n) / (mean^2 + 0.01), the relative MSE of the convergence reports with
+    /// the unknown true value replaced by the mean. Unbiased for independent samples;
+    /// the low-discrepancy samplers converge faster than the variance says, so for them
+    /// it is an overestimate.
+    pub fn pixel_rel_mse(&self, i: usize) -> f64 {
+        let (m, v, n) = (
+            self.mean(i),
+            self.variance(i),
+            self.samples(i).max(1.0) as f64,
+        );
+        (0..3)
+            .map(|c| v[c] as f64 / n / ((m[c] as f64).powi(2) + REL_MSE_EPSILON))
+            .sum::<f64>()
+            / 3.0
+    }
+
+    /// Estimated relative MSE of the whole image (`pixel_rel_mse` averaged over pixels).
+    pub fn estimated_rel_mse(&self) -> f64 {
+        (0..self.pixel_count())
+            .map(|i| self.pixel_rel_mse(i))
+            .sum::<f64>()
+            / self.pixel_count().max(1) as f64
+    }
+
+    /// Estimated relative error: the square root of `estimated_rel_mse`.
+    pub fn estimated_rel_error(&self) -> f64 {
+        self.estimated_rel_mse().sqrt()
+    }
 }
+
+/// The 0.01 in relative MSE, mean((x - r)^2 / (r^2 + 0.01)): keeps black pixels from
+/// dominating.
+pub const REL_MSE_EPSILON: f64 = 0.01;
+
+/// When a progressive render may stop before its last pass.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StopRule {
+    /// Start no pass that is not expected to end within this time.
+    pub time_limit: Option<Duration>,
+    /// Stop once the estimated relative error (`Accumulation::estimated_rel_error`) is at
+    /// most this.
+    pub target_error: Option<f64>,
+}
+
+/// Why a progressive render ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stopped {
+    /// Every pass of the scene's spp ran.
+    AllPasses,
+    TimeLimit,
+    TargetError,
+}
+
+/// Passes before the error estimate is trusted to stop a render: below this a pixel's
+/// sample variance is itself too noisy (a pixel whose few samples all missed a light reads
+/// as converged).
+pub const MIN_PASSES_FOR_ERROR: u32 = 16;
 
 /// Where a progressive render stands after a pass.
 #[derive(Debug, Clone, Copy)]
@@ -152,8 +210,26 @@ impl Progress {
 pub fn render_progressive<E>(
     engine: &mut Engine,
     scene: &FlatScene,
-    mut on_pass: impl FnMut(&Progress, &mut Engine) -> Result<(), E>,
+    on_pass: impl FnMut(&Progress, &mut Engine) -> Result<(), E>,
 ) -> Result<Progress, E>
+where
+    E: From<GpuError>,
+{
+    render_until(engine, scene, StopRule::default(), on_pass).map(|(p, _, _)| p)
+}
+
+/// As `render_progressive`, but ends early by `rule`. With a time limit, a pass starts only
+/// if the mean pass time so far says it ends within the limit (the first always runs). With
+/// a target error, the estimate is read back after `MIN_PASSES_FOR_ERROR` passes and then
+/// whenever the passes since the last look took as long as the look itself or the pass
+/// count is a power of two, so reading back costs at most about half the render. Returns
+/// the progress, why it ended, and the last error estimate (when a target was set).
+pub fn render_until<E>(
+    engine: &mut Engine,
+    scene: &FlatScene,
+    rule: StopRule,
+    mut on_pass: impl FnMut(&Progress, &mut Engine) -> Result<(), E>,
+) -> Result<(Progress, Stopped, Option<f64>), E>
 where
     E: From<GpuError>,
 {
@@ -165,14 +241,40 @@ where
         elapsed: Duration::ZERO,
         samples: 0,
     };
+    let mut estimate = None;
+    let mut look_cost = Duration::ZERO;
+    let mut last_look = Duration::ZERO;
     for pass in 0..scene.spp {
+        if let Some(limit) = rule.time_limit {
+            let mean_pass = progress.elapsed / pass.max(1);
+            if pass > 0 && start.elapsed() + mean_pass > limit {
+                return Ok((progress, Stopped::TimeLimit, estimate));
+            }
+        }
         engine.render_pass(pass)?;
         progress.passes_done = pass + 1;
         progress.samples = pixels * progress.passes_done as u64;
         progress.elapsed = start.elapsed();
         on_pass(&progress, engine)?;
+        if let Some(target) = rule.target_error {
+            let n = progress.passes_done;
+            let since = start.elapsed().saturating_sub(last_look);
+            if n >= MIN_PASSES_FOR_ERROR && (n.is_power_of_two() || since >= look_cost) {
+                let t0 = Instant::now();
+                let e = engine.accumulation()?.estimated_rel_error();
+                look_cost = t0.elapsed();
+                last_look = start.elapsed();
+                estimate = Some(e);
+                if e <= target {
+                    return Ok((progress, Stopped::TargetError, estimate));
+                }
+            }
+        }
     }
-    Ok(progress)
+    if rule.target_error.is_some() {
+        estimate = Some(engine.accumulation()?.estimated_rel_error());
+    }
+    Ok((progress, Stopped::AllPasses, estimate))
 }
 
 /// Renders a whole scene with no progress reporting: the final accumulation.
