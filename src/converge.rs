@@ -290,6 +290,10 @@ pub struct ReferenceInfo {
     pub light_sampling: String,
     pub backend: String,
     pub seconds: f64,
+    /// The reference's own estimated relative MSE (per-pixel variance): the floor under
+    /// every measured error.
+    #[serde(default)]
+    pub est_rel_mse: f64,
 }
 
 /// The sample counts measured: 1, 2, 4, ... up to `spp_max` (and `spp_max` itself).
@@ -346,6 +350,7 @@ pub fn reference(
             light_sampling: "given".into(),
             backend: "given".into(),
             seconds: 0.0,
+            est_rel_mse: 0.0,
         };
         event(Event::ReferenceReady { path, cached: true });
         let rgb = img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
@@ -392,7 +397,8 @@ pub fn reference(
         });
     }
     let seconds = start.elapsed().as_secs_f64();
-    let rgb = engine.accumulation()?.to_rgb();
+    let acc = engine.accumulation()?;
+    let rgb = acc.to_rgb();
     crate::image_io::write_image(&exr, scene.width, scene.height, &rgb)?;
     let info = ReferenceInfo {
         scene: opts.scene.display().to_string(),
@@ -405,6 +411,7 @@ pub fn reference(
         light_sampling: "mis".into(),
         backend: engine.name(),
         seconds,
+        est_rel_mse: acc.estimated_rel_mse(),
     };
     let text = toml::to_string(&info).map_err(|e| file_err(&meta, e))?;
     std::fs::write(&meta, text).map_err(|e| file_err(&meta, e))?;
@@ -611,7 +618,8 @@ pub const MAX_EXTRAPOLATION: f64 = 100.0;
 /// Samples and seconds a curve needs to reach `target` relative MSE: measured (interpolated)
 /// when it gets there (`Reach::Measured`); else extrapolated along the slope fitted to its
 /// points, up to `MAX_EXTRAPOLATION` times its last sample count (`Reach::Extrapolated`);
-/// `Reach::Never` when its last segment has levelled off (a slope in relMSE above -0.3:
+/// `Reach::Never` when it has levelled off (a slope in relMSE above -0.3 over its last three
+/// points or all of them:
 /// bias, such as a path too short for the reference) and `Reach::Beyond` past the range.
 pub fn to_reach(points: &[Measurement], target: f64) -> Reach {
     let by_spp: Vec<(f64, f64)> = points
@@ -628,12 +636,11 @@ pub fn to_reach(points: &[Measurement], target: f64) -> Reach {
     let (Some((slope, _)), Some(last)) = (fit_loglog(&by_spp), points.last()) else {
         return Reach::Never;
     };
-    if let [.., a, b] = by_spp.as_slice() {
-        let tail = (b.1.ln() - a.1.ln()) / (b.0.ln() - a.0.ln());
-        let levelled = |v: f64| v.is_nan() || v >= -0.3;
-        if levelled(tail) || levelled(slope) {
-            return Reach::Never;
-        }
+    // the slope over the last three points: one segment alone is too noisy to call
+    let tail = fit_loglog(&by_spp[by_spp.len().saturating_sub(3)..]).map_or(slope, |f| f.0);
+    let levelled = |v: f64| v.is_nan() || v >= -0.3;
+    if levelled(tail) || levelled(slope) {
+        return Reach::Never;
     }
     let factor = (target / last.rel_mse).powf(1.0 / slope);
     if factor > MAX_EXTRAPOLATION {
@@ -689,7 +696,7 @@ pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
     let _ = writeln!(md, "## {}\n", scene_name(&study.scene));
     let _ = writeln!(
         md,
-        "{}x{} pixels, max_depth {} (scene), device: {}. Reference: {} spp ({} / {}, max_depth {}, seed {:#x}, {:.0} s on {}).\n",
+        "{}x{} pixels, max_depth {} (scene), device: {}. Reference: {} spp ({} / {}, max_depth {}, seed {:#x}, {:.0} s on {}; its own estimated relMSE {:.1e}).\n",
         study.width,
         study.height,
         study.max_depth,
@@ -700,7 +707,8 @@ pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
         r.max_depth,
         r.seed,
         r.seconds,
-        r.backend
+        r.backend,
+        r.est_rel_mse
     );
     let _ = writeln!(
         md,
@@ -708,7 +716,7 @@ pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
          relMSE and seconds at the largest spp are means over runs; efficiency is 1 / (relMSE x seconds). \
          est/true: the renderer's own error estimate (per-pixel variance, what `--target-error` uses) over the true relMSE. \
          Time and spp to reach each relMSE are interpolated between measured points; `~` marks an extrapolation along the fitted slope \
-         (at most {MAX_EXTRAPOLATION}x the largest spp, `>` beyond), `never` a curve whose last segment has levelled off (bias).\n"
+         (at most {MAX_EXTRAPOLATION}x the largest spp, `>` beyond), `never` a curve that has levelled off over its last three points (bias).\n"
     );
     let mut header =
         "| configuration | slope | relMSE | seconds | Msamples/s | efficiency | est/true |"
@@ -756,6 +764,40 @@ pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
         md,
         "\n![RMSE against samples per pixel](rmse_vs_spp.svg)\n![RMSE against seconds](rmse_vs_seconds.svg)\n"
     );
+    // the estimate --target-error stops on, against the truth, along the ladder
+    let spps: Vec<u32> = ladder(study.measurements.iter().map(|m| m.spp).max().unwrap_or(1))
+        .into_iter()
+        .filter(|s| s.is_power_of_two() && *s >= 4 && s.trailing_zeros() % 2 == 0)
+        .collect();
+    let _ = writeln!(
+        md,
+        "### The error estimate against the truth\n\n\
+         Estimated relative error (the square root of the per-pixel variance estimate, what \
+         `--target-error` stops on) over the true relative error (the square root of relMSE \
+         against the reference), means over runs. 1 is exact; above 1 the estimate is \
+         conservative.\n"
+    );
+    let mut header = "| configuration |".to_string();
+    let mut rule = "|---|".to_string();
+    for spp in &spps {
+        let _ = write!(header, " {spp} spp |");
+        rule += "---|";
+    }
+    let _ = writeln!(md, "{header}\n{rule}");
+    for c in &study.configs {
+        let label = c.label();
+        let pts = curve(study, &label);
+        let mut row = format!("| {label} |");
+        for spp in &spps {
+            match pts.iter().find(|m| m.spp == *spp) {
+                Some(m) => {
+                    let _ = write!(row, " {:.2} |", (m.est_rel_mse / m.rel_mse).sqrt());
+                }
+                None => row += " - |",
+            }
+        }
+        let _ = writeln!(md, "{row}");
+    }
     let path = out.join("report.md");
     std::fs::write(&path, md).map_err(|e| file_err(&path, e))?;
     plot(study, out, false)?;
