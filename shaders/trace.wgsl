@@ -1,5 +1,6 @@
 // One sample per pixel per dispatch over one tile of the image: camera ray, then an
-// iterative bounce loop; the result is added to the accumulation buffer.
+// iterative bounce loop; the result is added to the accumulation buffer, or dropped and
+// counted when it is not finite.
 #import shared/bindings
 #import shared/intersect
 #import shared/lights
@@ -176,6 +177,18 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let jitter = sample_2d(pixel, sample, DIM_PIXEL);
     let lens = sample_2d(pixel, sample, DIM_LENS);
     let c = trace_path(pixel, sample, camera_ray(x, y, jitter, lens));
-    accum[2u * pixel] += vec4<f32>(c, 1.0);
-    accum[2u * pixel + 1u] += vec4<f32>(c * c, 0.0);
+    if (all_finite(c) && all_finite(c * c)) {
+        accum[2u * pixel] += vec4<f32>(c, 1.0);
+        accum[2u * pixel + 1u] += vec4<f32>(c * c, 0.0);
+    } else {
+        // dropped, and counted in the otherwise unused .w of the squares
+        accum[2u * pixel + 1u].w += 1.0;
+    }
+}
+
+// Whether every component is a finite number, judged by its bits (an exponent of all ones
+// is an infinity or a NaN): WGSL promises neither at run time, nor a way to test for them.
+fn all_finite(v: vec3<f32>) -> bool {
+    let e = bitcast<vec3<u32>>(v) & vec3<u32>(0x7f800000u);
+    return all(e != vec3<u32>(0x7f800000u));
 }

@@ -363,6 +363,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         done.elapsed.as_secs_f64(),
         done.samples_per_second() / 1e6
     );
+    // every sample that was not finite was dropped and counted; there should be none
+    let dropped = engine.accumulation()?.non_finite();
+    summary += &format!(", {dropped} non-finite");
     if let Some(e) = estimate {
         summary += &format!(", estimated relative error {e:.4}");
     }

@@ -89,7 +89,8 @@ impl Engine {
 }
 
 /// Per-pixel sums of samples: `data[2 i]` = (sum r, sum g, sum b, count),
-/// `data[2 i + 1]` = (sum r^2, sum g^2, sum b^2, 0), pixel i row-major from the top-left.
+/// `data[2 i + 1]` = (sum r^2, sum g^2, sum b^2, samples dropped as not finite), pixel i
+/// row-major from the top-left.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Accumulation {
     pub width: u32,
@@ -123,6 +124,13 @@ impl Accumulation {
             return [0.0; 3];
         }
         std::array::from_fn(|c| ((q[c] - s[c] * s[c] / n) / (n - 1.0)).max(0.0))
+    }
+
+    /// Samples dropped because they were not finite (NaN or infinite), over all pixels.
+    pub fn non_finite(&self) -> u64 {
+        (0..self.pixel_count())
+            .map(|i| self.data[2 * i + 1][3] as u64)
+            .sum()
     }
 
     /// Mean radiance of every pixel, as `width * height * 3` linear floats.

@@ -32,32 +32,50 @@ fn intersect_sphere(center: vec3<f32>, radius: f32, ray: Ray, t_max: f32) -> f32
     return FAR;
 }
 
-// Triangle (Moeller-Trumbore). Returns (t, b1, b2): distance and the barycentric weights of
+// Triangle, watertight (Woop, Benthin and Wald, "Watertight Ray/Triangle Intersection",
+// JCGT 2013): the vertices are moved into the ray's frame (origin at 0, the dominant axis
+// of the direction as z, sheared so that the ray runs along +z) and the 2D edge functions
+// U, V, W of the point (0, 0) decide the hit. An edge shared by two triangles gives both the
+// same value with opposite signs, and a zero counts as inside, so no ray slips between
+// them, whatever the rounding. Returns (t, b1, b2): distance and the barycentric weights of
 // v1 and v2; t = FAR on a miss or outside (0, t_max). Both sides are hit.
 fn intersect_triangle(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>, ray: Ray, t_max: f32) -> vec3<f32> {
-    let e1 = v1 - v0;
-    let e2 = v2 - v0;
-    let pv = cross(ray.dir, e2);
-    let det = dot(e1, pv);
+    let d = ray.dir;
+    let kz = argmax3(abs(d));
+    var kx = (kz + 1u) % 3u;
+    var ky = (kx + 1u) % 3u;
+    if (d[kz] < 0.0) {
+        let k = kx;
+        kx = ky;
+        ky = k;
+    }
+    let sz = 1.0 / d[kz];
+    let sx = d[kx] * sz;
+    let sy = d[ky] * sz;
+    let a = v0 - ray.origin;
+    let b = v1 - ray.origin;
+    let c = v2 - ray.origin;
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if ((u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0)) {
+        return vec3<f32>(FAR, 0.0, 0.0);
+    }
+    let det = u + v + w;
     if (det == 0.0) {
         return vec3<f32>(FAR, 0.0, 0.0);
     }
-    let inv_det = 1.0 / det;
-    let tv = ray.origin - v0;
-    let b1 = dot(tv, pv) * inv_det;
-    if (b1 < 0.0 || b1 > 1.0) {
+    let t = (u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz])) / det;
+    if (!(t > 0.0) || t >= t_max) {
         return vec3<f32>(FAR, 0.0, 0.0);
     }
-    let qv = cross(tv, e1);
-    let b2 = dot(ray.dir, qv) * inv_det;
-    if (b2 < 0.0 || b1 + b2 > 1.0) {
-        return vec3<f32>(FAR, 0.0, 0.0);
-    }
-    let t = dot(e2, qv) * inv_det;
-    if (t <= 0.0 || t >= t_max) {
-        return vec3<f32>(FAR, 0.0, 0.0);
-    }
-    return vec3<f32>(t, b1, b2);
+    return vec3<f32>(t, v / det, w / det);
 }
 
 // Plane through `point` with unit normal n: t = -((o - point) . n) / (d . n). The sign and

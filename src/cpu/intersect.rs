@@ -39,34 +39,43 @@ pub fn intersect_sphere(center: Vec3, radius: f32, ray: &Ray, t_max: f32) -> f32
     FAR
 }
 
-/// Triangle (Moeller-Trumbore). Returns (t, b1, b2); t = FAR on a miss. Both sides are hit.
+/// Triangle, watertight (Woop, Benthin and Wald 2013): edge functions in the ray's sheared
+/// frame, zero counting as inside. Returns (t, b1, b2); t = FAR on a miss. Both sides are hit.
 pub fn intersect_triangle(v0: Vec3, v1: Vec3, v2: Vec3, ray: &Ray, t_max: f32) -> Vec3 {
     let miss = Vec3::new(FAR, 0.0, 0.0);
-    let e1 = v1 - v0;
-    let e2 = v2 - v0;
-    let pv = ray.dir.cross(e2);
-    let det = e1.dot(pv);
+    let d = ray.dir;
+    let kz = argmax3(d.abs()) as usize;
+    let (mut kx, mut ky) = ((kz + 1) % 3, (kz + 2) % 3);
+    if d[kz] < 0.0 {
+        std::mem::swap(&mut kx, &mut ky);
+    }
+    let sz = 1.0 / d[kz];
+    let sx = d[kx] * sz;
+    let sy = d[ky] * sz;
+    let (a, b, c) = (v0 - ray.origin, v1 - ray.origin, v2 - ray.origin);
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return miss;
+    }
+    let det = u + v + w;
     if det == 0.0 {
         return miss;
     }
-    let inv_det = 1.0 / det;
-    let tv = ray.origin - v0;
-    let b1 = tv.dot(pv) * inv_det;
-    // Written as in WGSL (not `contains`), so a NaN takes the same branch on both backends.
-    #[allow(clippy::manual_range_contains)]
-    if b1 < 0.0 || b1 > 1.0 {
+    let t = (u * (sz * a[kz]) + v * (sz * b[kz]) + w * (sz * c[kz])) / det;
+    // Written as in WGSL, so a NaN takes the same branch on both backends.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(t > 0.0) || t >= t_max {
         return miss;
     }
-    let qv = tv.cross(e1);
-    let b2 = ray.dir.dot(qv) * inv_det;
-    if b2 < 0.0 || b1 + b2 > 1.0 {
-        return miss;
-    }
-    let t = e2.dot(qv) * inv_det;
-    if t <= 0.0 || t >= t_max {
-        return miss;
-    }
-    Vec3::new(t, b1, b2)
+    Vec3::new(t, v / det, w / det)
 }
 
 /// Plane through `point` with unit normal n; a ray parallel to it is a miss, t is finite.

@@ -207,6 +207,29 @@ pub fn trace_pixel(b: &Bindings, x: u32, y: u32) -> Vec3 {
     trace_path(b, pixel, sample, camera_ray(b, x, y, jitter, lens))
 }
 
+/// Whether every component is a finite number, judged by its bits as the shader does.
+pub fn all_finite(v: Vec3) -> bool {
+    v.to_array()
+        .iter()
+        .all(|x| x.to_bits() & 0x7f80_0000 != 0x7f80_0000)
+}
+
+/// Adds one sample to a pixel's two accumulation entries as the shader's `main` does: a
+/// sample that is not finite (or whose square is not) is dropped and counted in `sq[3]`.
+pub fn accumulate(sum: &mut [f32; 4], sq: &mut [f32; 4], c: Vec3) {
+    if all_finite(c) && all_finite(c * c) {
+        sum[0] += c.x;
+        sum[1] += c.y;
+        sum[2] += c.z;
+        sum[3] += 1.0;
+        sq[0] += c.x * c.x;
+        sq[1] += c.y * c.y;
+        sq[2] += c.z * c.z;
+    } else {
+        sq[3] += 1.0;
+    }
+}
+
 /// Progressive CPU renderer: one sample per pixel per pass, accumulated exactly as the GPU
 /// accumulates (two vec4 per pixel: sum and sum of squares, in f32, in pass order).
 pub struct CpuRenderer {
@@ -239,15 +262,8 @@ impl CpuRenderer {
             .for_each(|(y, row)| {
                 for x in 0..width {
                     let c = trace_pixel(&bindings, x as u32, y as u32);
-                    let sum = &mut row[2 * x];
-                    sum[0] += c.x;
-                    sum[1] += c.y;
-                    sum[2] += c.z;
-                    sum[3] += 1.0;
-                    let sq = &mut row[2 * x + 1];
-                    sq[0] += c.x * c.x;
-                    sq[1] += c.y * c.y;
-                    sq[2] += c.z * c.z;
+                    let (sum, sq) = row.split_at_mut(2 * x + 1);
+                    accumulate(&mut sum[2 * x], &mut sq[0], c);
                 }
             });
     }

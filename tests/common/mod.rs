@@ -29,7 +29,15 @@ pub fn render(mut engine: Engine, scene: &FlatScene) -> Accumulation {
         Ok::<(), wgtrace::gpu::GpuError>(())
     })
     .expect("render");
-    engine.accumulation().expect("readback")
+    let acc = engine.accumulation().expect("readback");
+    // the renderer drops and counts samples that are not finite: every test render has none
+    assert_eq!(
+        acc.non_finite(),
+        0,
+        "{} non-finite samples",
+        acc.non_finite()
+    );
+    acc
 }
 
 pub fn render_gpu(scene: &FlatScene) -> Accumulation {
