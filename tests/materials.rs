@@ -1,9 +1,9 @@
-//! Materials on the CPU reference, against physics: mirror reflection, Snell's law, Schlick's
+//! Materials on the CPU reference, against physics: mirror reflection, Snell's law, Fresnel's and Schlick's
 //! Fresnel, total internal reflection, absorption, and fuzz that never scatters under the
 //! surface. (tests/gpu.rs renders white furnaces of every material on both backends.)
 
 use glam::{Vec2, Vec3};
-use wgtrace::cpu::materials::{scatter, schlick};
+use wgtrace::cpu::materials::{fresnel_dielectric, scatter, schlick};
 use wgtrace::cpu::types::{Hit, Ray};
 use wgtrace::scene::records::{Material, MAT_DIELECTRIC, MAT_METAL};
 
@@ -80,14 +80,38 @@ fn metal_mirrors_exactly_and_fuzz_never_goes_under_the_surface() {
     );
 }
 
+/// The exact Fresnel reflectance: 0.04 at normal incidence into or out of glass, 0 at every
+/// angle at matched indices (where Schlick's approximation still reflects at grazing
+/// angles), only the s part at Brewster's angle, 1 at grazing incidence.
 #[test]
-fn dielectric_refracts_by_snell_reflects_by_schlick_and_conserves_energy() {
+fn fresnel_matches_its_closed_forms() {
+    let cos_t = |cos_i: f32, eta: f32| (1.0 - eta * eta * (1.0 - cos_i * cos_i)).sqrt();
+    assert!((fresnel_dielectric(1.0, 1.0, 1.0 / 1.5) - 0.04).abs() < 1e-6);
+    assert!((fresnel_dielectric(1.0, 1.0, 1.5) - 0.04).abs() < 1e-6);
+    for deg in [0.0f32, 30.0, 60.0, 85.0, 89.9] {
+        let c = deg.to_radians().cos();
+        // cos_t comes back from 1 - (1 - c^2) rounded in f32: near grazing that leaves
+        // a relative 1e-2 at 89.9 degrees, so F ~ 3e-5 there, not 0
+        assert!(fresnel_dielectric(c, cos_t(c, 1.0), 1.0) < 1e-4, "{deg}");
+    }
+    assert!(schlick(0.1, 1.0) > 0.5, "Schlick's reflects at eta = 1");
+    // Brewster: tan(theta_B) = 1.5; the p amplitude vanishes, F = r_s^2 / 2
+    let cb = 1.5f32.atan().cos();
+    let ct = cos_t(cb, 1.0 / 1.5);
+    let r_s = (cb / 1.5 - ct) / (cb / 1.5 + ct);
+    assert!((fresnel_dielectric(cb, ct, 1.0 / 1.5) - 0.5 * r_s * r_s).abs() < 1e-6);
+    assert!((fresnel_dielectric(1e-7, cos_t(1e-7, 1.0 / 1.5), 1.0 / 1.5) - 1.0).abs() < 1e-5);
+}
+
+#[test]
+fn dielectric_refracts_by_snell_reflects_by_fresnel_and_conserves_energy() {
     let glass = material(MAT_DIELECTRIC, 1.0, 1.5, 0.0);
     for angle in [0.0f32, 20.0, 45.0, 70.0, 89.0] {
         let t = angle.to_radians();
         let d = Vec3::new(t.sin(), 0.0, -t.cos());
         let (ray, hit) = hit_at_origin(d, -d);
-        let f = schlick(t.cos(), 1.0 / 1.5);
+        let cos_t = (1.0 - (t.sin() / 1.5).powi(2)).sqrt();
+        let f = fresnel_dielectric(t.cos(), cos_t, 1.0 / 1.5);
         let mut reflected = 0;
         for u in grid() {
             let s = scatter(&glass, &ray, &hit, u);
@@ -105,7 +129,7 @@ fn dielectric_refracts_by_snell_reflects_by_schlick_and_conserves_energy() {
                 assert!(s.dir.y.abs() < 1e-6 && s.dir.x >= 0.0);
             }
         }
-        // the reflected share is Schlick's F, up to the 1/32 grid of u
+        // the reflected share is the Fresnel reflectance, up to the 1/32 grid of u
         assert!(
             ((reflected as f32 / 1024.0) - f).abs() <= 1.0 / 32.0 + 1e-6,
             "angle {angle}: {reflected} vs F = {f}"

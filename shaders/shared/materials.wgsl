@@ -67,10 +67,20 @@ fn schlick(c: f32, eta: f32) -> f32 {
     return r0 + (1.0 - r0) * m * m * m * m * m;
 }
 
+// Fresnel reflectance of unpolarised light at a smooth dielectric boundary, exactly (the
+// average of the s and p amplitudes squared), for cosines cos_i and cos_t on the two sides
+// and eta = eta_i / eta_t. It is 0 at matched indices (eta = 1), where Schlick's
+// approximation still reflects (1 - cos)^5 at grazing angles.
+fn fresnel_dielectric(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
+    let r_pa = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let r_pe = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    return 0.5 * (r_pa * r_pa + r_pe * r_pe);
+}
+
 // Dielectric: eta = eta_i / eta_t (1 / ior entering, ior leaving, the normal turned toward
 // the incoming ray). Snell's law in vector form, t = eta d + (eta cos_i - cos_t) n; total
-// internal reflection when eta^2 sin^2(theta_i) >= 1; otherwise reflection with Schlick's
-// probability, evaluated with the cosine on the less dense side. Weight = tint, times the
+// internal reflection when eta^2 sin^2(theta_i) >= 1; otherwise reflection with the exact
+// Fresnel probability (fresnel_dielectric; ior 1 is invisible). Weight = tint, times the
 // Beer-Lambert transmittance exp(-absorption x distance) for a segment that ran inside.
 fn scatter_dielectric(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     let entering = hit.front_face;
@@ -86,7 +96,7 @@ fn scatter_dielectric(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
         return Scatter(true, reflect_dir(ray.dir, n), weight, 0.0, true);
     }
     let cos_t = sqrt(1.0 - sin2_t);
-    if (u.x < schlick(select(cos_i, cos_t, eta > 1.0), eta)) {
+    if (u.x < fresnel_dielectric(cos_i, cos_t, eta)) {
         return Scatter(true, reflect_dir(ray.dir, n), weight, 0.0, true);
     }
     return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), weight, 0.0, true);

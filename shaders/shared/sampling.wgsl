@@ -46,7 +46,7 @@ fn sample_cosine_hemisphere(n: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
 fn offset_ray(p: vec3<f32>, n: vec3<f32>, err: f32) -> vec3<f32> {
     let an = abs(n);
     let q = p + n * (err * (an.x + an.y + an.z));
-    let of_i = vec3<i32>(256.0 * n);
+    let of_i = vec3<i32>(4.0 * n);
     let q_i = bitcast<vec3<f32>>(bitcast<vec3<i32>>(q) + select(of_i, -of_i, q < vec3<f32>(0.0)));
     let q_f = q + (1.0 / 65536.0) * n;
     return select(q_i, q_f, abs(q) < vec3<f32>(1.0 / 32.0));

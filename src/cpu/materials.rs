@@ -90,7 +90,16 @@ pub fn schlick(c: f32, eta: f32) -> f32 {
     r0 + (1.0 - r0) * m * m * m * m * m
 }
 
-/// Dielectric: Snell refraction, total internal reflection, Schlick's Fresnel choice, tint
+/// Exact Fresnel reflectance of unpolarised light at a smooth dielectric boundary, for
+/// cosines on the two sides and eta = eta_i / eta_t; 0 at matched indices.
+#[inline]
+pub fn fresnel_dielectric(cos_i: f32, cos_t: f32, eta: f32) -> f32 {
+    let r_pa = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let r_pe = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    0.5 * (r_pa * r_pa + r_pe * r_pe)
+}
+
+/// Dielectric: Snell refraction, total internal reflection, exact Fresnel choice, tint
 /// and Beer-Lambert absorption inside.
 pub fn scatter_dielectric(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
     let entering = hit.front_face;
@@ -117,7 +126,7 @@ pub fn scatter_dielectric(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
         return reflected;
     }
     let cos_t = (1.0 - sin2_t).sqrt();
-    if u[0] < schlick(if eta > 1.0 { cos_t } else { cos_i }, eta) {
+    if u[0] < fresnel_dielectric(cos_i, cos_t, eta) {
         return reflected;
     }
     Scatter {

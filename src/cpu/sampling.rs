@@ -48,7 +48,7 @@ pub fn sample_cosine_hemisphere(n: Vec3, u: [f32; 2]) -> Vec3 {
 pub fn offset_ray(p: Vec3, n: Vec3, err: f32) -> Vec3 {
     let an = n.abs();
     let q = p + n * (err * (an.x + an.y + an.z));
-    let of_i = (256.0 * n).as_ivec3();
+    let of_i = (4.0 * n).as_ivec3();
     let bits = IVec3::new(
         q.x.to_bits() as i32,
         q.y.to_bits() as i32,
