@@ -246,7 +246,7 @@ pub enum MaterialDesc {
         #[serde(default)]
         two_sided: bool,
     },
-    /// Glass-like: reflection or refraction chosen by Schlick's Fresnel; `tint` multiplies
+    /// Glass-like: reflection or refraction chosen by the exact Fresnel reflectance; `tint` multiplies
     /// every scattering, `absorption` (per unit length, Beer-Lambert) acts inside.
     Dielectric {
         ior: f32,
