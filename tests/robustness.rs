@@ -870,3 +870,50 @@ material = "sky"
     let (m, _) = image_mean(&render_gpu(&below));
     assert!(m[0] > 0.8 && m[0] <= 1.0, "{m:?}");
 }
+
+/// A ground sphere of radius 1e4 with the camera 1 unit above it, under a uniform sky of
+/// radiance 1, at max_depth 2: a bounce ray leaving a convex sphere only sees the sky, so
+/// every pixel is exactly the albedo (ground) or 1 (sky) on both backends. A re-hit of the
+/// ground (acne) would show as a black speckle, a missed primary ray as a sky-coloured hole.
+#[test]
+fn a_huge_ground_sphere_under_the_camera_has_no_speckles() {
+    let src = r#"
+[render]
+width = 48
+height = 32
+spp = 4
+max_depth = 2
+[camera]
+look_from = [0, 1, 0]
+look_at = [0, 0.2, -10]
+vfov = 60
+[background]
+color = [1, 1, 1]
+[materials]
+ground = { type = "lambertian", albedo = [0.5, 0.5, 0.5] }
+[[objects]]
+type = "sphere"
+center = [0, -10000, 0]
+radius = 10000
+material = "ground"
+"#;
+    let scene = common::scene_from_str(src);
+    for (name, img) in [("gpu", render_gpu(&scene)), ("cpu", render_cpu(&scene))] {
+        let (mut ground, mut sky) = (0, 0);
+        for i in 0..img.pixel_count() {
+            let v = img.mean(i)[0];
+            if (v - 0.5).abs() < 1e-5 {
+                ground += 1;
+            } else if (v - 1.0).abs() < 1e-5 {
+                sky += 1;
+            } else {
+                // a pixel straddling the horizon mixes the two, never goes below the ground
+                assert!(v > 0.5 && v < 1.0, "{name}: pixel {i} = {v}");
+            }
+        }
+        assert!(
+            ground > 600 && sky > 300,
+            "{name}: {ground} ground, {sky} sky pixels"
+        );
+    }
+}
