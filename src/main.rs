@@ -31,6 +31,12 @@ enum Command {
     /// Measure how error falls with samples and seconds, per sampler and light-sampling
     /// strategy, against a reference; writes results.csv, report.md and plots.
     Converge(ConvergeArgs),
+    /// Print the features a scene uses, the shader defines they select, and the size of the
+    /// specialized shader against the full one.
+    Features {
+        /// Scene file (TOML).
+        scene: PathBuf,
+    },
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
 }
@@ -145,6 +151,10 @@ struct RenderArgs {
     /// Test every primitive on every ray instead of traversing the BVH (for comparisons).
     #[arg(long)]
     no_bvh: bool,
+    /// Run the full shader instead of one specialized to the scene's features (for
+    /// comparisons and debugging).
+    #[arg(long)]
+    no_specialize: bool,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -165,6 +175,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render(args),
         Command::Converge(args) => converge(args),
+        Command::Features { scene } => features(&scene),
         Command::Info => info(),
     };
     match result {
@@ -184,6 +195,30 @@ fn info() -> anyhow::Result<()> {
     for (i, a) in adapters.iter().enumerate() {
         println!("[{i}] {}", wgtrace::gpu::context::describe(a));
     }
+    Ok(())
+}
+
+fn features(path: &Path) -> anyhow::Result<()> {
+    use wgtrace::gpu::shader::{all_defines, scene_defines, trace_shader};
+    let scene = wgtrace::load_scene(path, &Overrides::default())?;
+    let defines = scene_defines(&scene);
+    let all = all_defines();
+    println!("{}: features", path.display());
+    for d in &all {
+        let name = d.trim_start_matches("HAS_").to_ascii_lowercase();
+        println!(
+            "  {:<16} {}",
+            name,
+            if defines.contains(d) { "yes" } else { "-" }
+        );
+    }
+    let size = |d| -> anyhow::Result<(usize, usize)> {
+        let wgsl = trace_shader(d)?;
+        Ok((wgsl.len(), wgsl.lines().count()))
+    };
+    let (sb, sl) = size(&defines)?;
+    let (fb, fl) = size(&all)?;
+    println!("trace shader: specialized {sb} bytes, {sl} lines; full {fb} bytes, {fl} lines");
     Ok(())
 }
 
@@ -288,6 +323,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         no_bvh: args.no_bvh,
         sampler: args.sampler,
         light_sampling: args.light_sampling,
+        no_specialize: args.no_specialize,
     };
     let loading = std::time::Instant::now();
     let mut scene = wgtrace::load_scene(&args.scene, &overrides)?;

@@ -193,3 +193,25 @@ fn info_lists_the_vulkan_adapters() {
     );
     assert!(s.contains("Vulkan"), "{s}");
 }
+
+/// `features` lists what a scene uses and the shader sizes; `--no-specialize` renders with
+/// the full shader.
+#[test]
+fn features_lists_the_scene_and_no_specialize_renders() {
+    let scene = cornell();
+    let o = wgtrace(&["features", &scene]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    for line in [
+        "triangle         yes",
+        "sphere           yes",
+        "box              -",
+        "metal            -",
+    ] {
+        assert!(text.contains(line), "{text}");
+    }
+    assert!(text.contains("trace shader: specialized"), "{text}");
+    let out = tmp_dir("full").join("f.png");
+    let o = render_to(&out, &["--no-specialize"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}

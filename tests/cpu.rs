@@ -265,6 +265,7 @@ fn overrides_replace_render_settings_and_are_validated() {
         no_bvh: false,
         sampler: None,
         light_sampling: Some(wgtrace::scene::format::LightSampling::Mixture),
+        no_specialize: true,
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
     assert_eq!(

@@ -242,25 +242,37 @@ fn transform_error(data: u32, p: vec3<f32>, err: f32) -> f32 {
 // One primitive in its own space: (t, u, v) as in Candidate.
 fn intersect_local(prim: Primitive, ray: Ray, t_max: f32) -> vec3<f32> {
     switch prim.tag {
+#ifdef HAS_SPHERE
         case PRIM_SPHERE: {
             return vec3<f32>(intersect_sphere(prim.a.xyz, prim.a.w, ray, t_max), 0.0, 0.0);
         }
+#endif
+#ifdef HAS_TRIANGLE
         case PRIM_TRIANGLE: {
             return intersect_triangle(prim.a.xyz, prim.b.xyz, prim.c.xyz, ray, t_max);
         }
+#endif
+#ifdef HAS_PLANE
         case PRIM_PLANE: {
             return vec3<f32>(intersect_plane(prim.a.xyz, prim.b.xyz, ray, t_max), 0.0, 0.0);
         }
+#endif
+#ifdef HAS_BOX
         case PRIM_BOX: {
             return vec3<f32>(intersect_box(prim.a.xyz, prim.b.xyz, ray, t_max), 0.0);
         }
+#endif
+#ifdef HAS_CYLINDER
         case PRIM_CYLINDER: {
             let caps = (prim.flags & PRIM_FLAG_CAPS) != 0u;
             return vec3<f32>(intersect_cylinder(prim.a.xyz, prim.b.xyz, prim.a.w, caps, ray, t_max), 0.0);
         }
+#endif
+#ifdef HAS_DISK
         case PRIM_DISK: {
             return vec3<f32>(intersect_disk(prim.a.xyz, prim.b.xyz, prim.a.w, ray, t_max), 0.0, 0.0);
         }
+#endif
         default: {
             return vec3<f32>(FAR, 0.0, 0.0);
         }
@@ -272,6 +284,9 @@ fn intersect_local(prim: Primitive, ray: Ray, t_max: f32) -> vec3<f32> {
 // direction's length.
 fn intersect_primitive(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
     let prim = primitives[i];
+#ifndef HAS_TRANSFORMS
+    return intersect_local(prim, ray, t_max);
+#else
     if ((prim.flags & PRIM_FLAG_TRANSFORM) == 0u) {
         return intersect_local(prim, ray, t_max);
     }
@@ -283,6 +298,7 @@ fn intersect_primitive(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
         return vec3<f32>(h.x / scale, h.y, h.z);
     }
     return h;
+#endif
 }
 
 // Primitive i tested against the closest hit so far; the closer of the two.
@@ -397,6 +413,7 @@ fn angle_uv(q: vec3<f32>, n: vec3<f32>) -> f32 {
 fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
     var s = Surface(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.0), 0.0);
     switch prim.tag {
+#ifdef HAS_SPHERE
         case PRIM_SPHERE: {
             let center = prim.a.xyz;
             let radius = prim.a.w;
@@ -408,6 +425,8 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
             s.uv = vec2<f32>(atan2(-n.z, n.x) * (0.5 / PI) + 0.5, acos(clamp(-n.y, -1.0, 1.0)) / PI);
             s.err = (max_abs(center) + radius) * (1.0 / 1048576.0);
         }
+#endif
+#ifdef HAS_TRIANGLE
         case PRIM_TRIANGLE: {
             let v0 = prim.a.xyz;
             let v1 = prim.b.xyz;
@@ -435,6 +454,8 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
                 }
             }
         }
+#endif
+#ifdef HAS_PLANE
         case PRIM_PLANE: {
             let point = prim.a.xyz;
             let n = prim.b.xyz;
@@ -447,6 +468,8 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
             s.uv = prim.a.w * vec2<f32>(dot(qp, tb[0]), dot(qp, tb[1]));
             s.err = (max_abs(point) + max_abs(qp)) * (1.0 / 1048576.0);
         }
+#endif
+#ifdef HAS_BOX
         case PRIM_BOX: {
             let lo = prim.a.xyz;
             let hi = prim.b.xyz;
@@ -465,6 +488,8 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
             // the face coordinate is exact; the others only move the point along the face
             s.err = max(max_abs(lo), max_abs(hi)) * (1.0 / 1048576.0);
         }
+#endif
+#ifdef HAS_CYLINDER
         case PRIM_CYLINDER: {
             let base = prim.a.xyz;
             let top = prim.b.xyz;
@@ -490,6 +515,8 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
             s.ns = s.ng;
             s.err = (max(max_abs(base), max_abs(top)) + radius) * (1.0 / 1048576.0);
         }
+#endif
+#ifdef HAS_DISK
         case PRIM_DISK: {
             let center = prim.a.xyz;
             let radius = prim.a.w;
@@ -502,6 +529,7 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
             s.uv = vec2<f32>(angle_uv(qp, n), length(qp) / radius);
             s.err = (max_abs(center) + radius) * (1.0 / 1048576.0);
         }
+#endif
         default: {}
     }
     return s;
@@ -511,6 +539,7 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
 fn surface_at(ray: Ray, cand: Candidate) -> Hit {
     let prim = primitives[cand.prim];
     var s: Surface;
+#ifdef HAS_TRANSFORMS
     if ((prim.flags & PRIM_FLAG_TRANSFORM) != 0u) {
         let r = ray_to_object(prim.data, ray);
         let scale = length(r.dir);
@@ -524,5 +553,8 @@ fn surface_at(ray: Ray, cand: Candidate) -> Hit {
     } else {
         s = surface_local(prim, ray, cand);
     }
+#else
+    s = surface_local(prim, ray, cand);
+#endif
     return Hit(s.p, s.ng, s.ns, s.uv, dot(ray.dir, s.ng) < 0.0, prim.material, s.err);
 }

@@ -200,13 +200,18 @@ fn light_pdf(i: u32, p: vec3<f32>, x: vec3<f32>, d: vec3<f32>) -> f32 {
     let e = emitters[i];
     var pdf = 0.0;
     switch e.kind {
+#ifdef HAS_TRIANGLE
         case LIGHT_TRIANGLE: {
             let n = normalize(cross(e.b.xyz - e.a.xyz, e.c.xyz - e.a.xyz));
             pdf = area_pdf(p, x, n, e.area);
         }
+#endif
+#ifdef HAS_DISK
         case LIGHT_DISK: {
             pdf = area_pdf(p, x, e.b.xyz, e.area);
         }
+#endif
+#ifdef HAS_SPHERE
         case LIGHT_SPHERE: {
             if (sphere_inside(p, e.a.xyz, e.a.w)) {
                 pdf = area_pdf(p, x, normalize(x - e.a.xyz), e.area);
@@ -214,9 +219,12 @@ fn light_pdf(i: u32, p: vec3<f32>, x: vec3<f32>, d: vec3<f32>) -> f32 {
                 pdf = 1.0 / (2.0 * PI * sphere_cone(e.a.w, dot(e.a.xyz - p, e.a.xyz - p)));
             }
         }
+#endif
+#ifdef HAS_ENV_MAP
         case LIGHT_ENVIRONMENT: {
             pdf = env_pdf(d);
         }
+#endif
         default: {}
     }
     return e.prob * pdf;
@@ -236,6 +244,7 @@ fn sample_light(p: vec3<f32>, u_light: f32, u: vec2<f32>) -> LightSample {
     var x = vec3<f32>(0.0);
     var pdf = 0.0;
     switch e.kind {
+#ifdef HAS_TRIANGLE
         case LIGHT_TRIANGLE: {
             let su = sqrt(u.x);
             let wa = 1.0 - su;
@@ -245,17 +254,23 @@ fn sample_light(p: vec3<f32>, u_light: f32, u: vec2<f32>) -> LightSample {
             pdf = area_pdf(p, x, n, e.area);
             ls.uv = vec2<f32>(wb, 1.0 - wa - wb);
         }
+#endif
+#ifdef HAS_DISK
         case LIGHT_DISK: {
             let d = sample_disk(u) * e.a.w;
             let tb = onb_tangents(e.b.xyz);
             x = e.a.xyz + d.x * tb[0] + d.y * tb[1];
             pdf = area_pdf(p, x, e.b.xyz, e.area);
         }
+#endif
+#ifdef HAS_SPHERE
         case LIGHT_SPHERE: {
             let s = sample_sphere_light(e.a.xyz, e.a.w, p, u);
             x = s.xyz;
             pdf = s.w;
         }
+#endif
+#ifdef HAS_ENV_MAP
         case LIGHT_ENVIRONMENT: {
             let tex = textures[params.env_texture];
             let row = sample_cdf(0u, tex.height, u.y);
@@ -268,6 +283,7 @@ fn sample_light(p: vec3<f32>, u_light: f32, u: vec2<f32>) -> LightSample {
             }
             return ls;
         }
+#endif
         default: {}
     }
     let v = x - p;
@@ -291,12 +307,17 @@ fn light_pdf_total(p: vec3<f32>, d: vec3<f32>) -> f32 {
         let e = emitters[i];
         var t = FAR;
         switch e.kind {
+#ifdef HAS_TRIANGLE
             case LIGHT_TRIANGLE: {
                 t = intersect_triangle(e.a.xyz, e.b.xyz, e.c.xyz, ray, FAR).x;
             }
+#endif
+#ifdef HAS_DISK
             case LIGHT_DISK: {
                 t = intersect_disk(e.a.xyz, e.b.xyz, e.a.w, ray, FAR);
             }
+#endif
+#ifdef HAS_SPHERE
             case LIGHT_SPHERE: {
                 if (sphere_inside(p, e.a.xyz, e.a.w)) {
                     // inside: the far root (the way out)
@@ -311,9 +332,12 @@ fn light_pdf_total(p: vec3<f32>, d: vec3<f32>) -> f32 {
                     t = intersect_sphere(e.a.xyz, e.a.w, ray, FAR);
                 }
             }
+#endif
+#ifdef HAS_ENV_MAP
             case LIGHT_ENVIRONMENT: {
                 t = 0.0;
             }
+#endif
             default: {}
         }
         if (t < FAR) {

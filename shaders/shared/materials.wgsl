@@ -243,18 +243,26 @@ fn scatter_microfacet(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
 
 fn scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     switch mat.tag {
+#ifdef HAS_LAMBERTIAN
         case MAT_LAMBERTIAN: {
             return scatter_lambertian(mat, hit, u);
         }
+#endif
+#ifdef HAS_METAL
         case MAT_METAL: {
             return scatter_metal(mat, ray, hit, u);
         }
+#endif
+#ifdef HAS_DIELECTRIC
         case MAT_DIELECTRIC: {
             return scatter_dielectric(mat, ray, hit, u);
         }
+#endif
+#ifdef HAS_MICROFACET
         case MAT_MICROFACET: {
             return scatter_microfacet(mat, ray, hit, u);
         }
+#endif
         default: {
             // emissive and unknown materials absorb
             return absorbed();
@@ -272,12 +280,16 @@ fn bsdf_eval(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> vec3<f32> {
     }
     let n = side * hit.ns;
     switch mat.tag {
+#ifdef HAS_LAMBERTIAN
         case MAT_LAMBERTIAN: {
             return mat.albedo.rgb * (max(0.0, dot(n, wi)) / PI);
         }
+#endif
+#ifdef HAS_MICROFACET
         case MAT_MICROFACET: {
             return microfacet_eval(mat, n, -ray.dir, wi);
         }
+#endif
         default: {
             return vec3<f32>(0.0);
         }
@@ -289,12 +301,16 @@ fn bsdf_eval(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> vec3<f32> {
 fn bsdf_pdf(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> f32 {
     let n = select(-hit.ns, hit.ns, hit.front_face);
     switch mat.tag {
+#ifdef HAS_LAMBERTIAN
         case MAT_LAMBERTIAN: {
             return max(0.0, dot(n, wi)) / PI;
         }
+#endif
+#ifdef HAS_MICROFACET
         case MAT_MICROFACET: {
             return microfacet_pdf(mat, n, -ray.dir, wi);
         }
+#endif
         default: {
             return 0.0;
         }

@@ -171,23 +171,69 @@ pub fn kernel_shader(defines: &BTreeSet<String>) -> Result<String, ShaderError> 
     preprocess("kernel", defines)
 }
 
-/// Every define a shader may be assembled with (the tests validate each).
-pub const FEATURE_DEFINES: &[&str] = &["HAS_TEXTURES", "HAS_LIGHT_SAMPLING", "HAS_ENV_MAP"];
+/// Every define a shader may be assembled with (the tests validate each alone, none and
+/// all). Each keeps the code of one feature: a primitive type, object-space transforms, a
+/// material type, textures, light sampling, an image background.
+pub const FEATURE_DEFINES: &[&str] = &[
+    "HAS_SPHERE",
+    "HAS_TRIANGLE",
+    "HAS_PLANE",
+    "HAS_BOX",
+    "HAS_CYLINDER",
+    "HAS_DISK",
+    "HAS_TRANSFORMS",
+    "HAS_LAMBERTIAN",
+    "HAS_METAL",
+    "HAS_DIELECTRIC",
+    "HAS_MICROFACET",
+    "HAS_TEXTURES",
+    "HAS_LIGHT_SAMPLING",
+    "HAS_ENV_MAP",
+];
+
+/// Every feature define: the full shader (`--no-specialize`).
+pub fn all_defines() -> BTreeSet<String> {
+    FEATURE_DEFINES.iter().map(|d| d.to_string()).collect()
+}
 
 /// The defines a scene's shaders are assembled with: code for features the scene does not
-/// use is left out.
+/// use is left out (llvmpipe runs untaken branches and switch cases under a mask, so absent
+/// code still costs time there). A scene flattened with `specialize` off gets them all.
 pub fn scene_defines(scene: &crate::scene::FlatScene) -> BTreeSet<String> {
+    use crate::scene::records as r;
+    if !scene.specialize {
+        return all_defines();
+    }
     let mut defines = BTreeSet::new();
-    if !scene.textures.is_empty() {
-        defines.insert("HAS_TEXTURES".to_string());
-    }
-    if scene.light_sampling != crate::scene::records::LIGHT_SAMPLING_BSDF
-        && !scene.emitters.is_empty()
-    {
-        defines.insert("HAS_LIGHT_SAMPLING".to_string());
-    }
-    if scene.env.is_some() {
-        defines.insert("HAS_ENV_MAP".to_string());
-    }
+    let mut add = |on: bool, name: &str| {
+        if on {
+            defines.insert(name.to_string());
+        }
+    };
+    let prim = |tag: u32| scene.primitives.iter().any(|p| p.tag == tag);
+    let mat = |tag: u32| scene.materials.iter().any(|m| m.tag == tag);
+    add(prim(r::PRIM_SPHERE), "HAS_SPHERE");
+    add(prim(r::PRIM_TRIANGLE), "HAS_TRIANGLE");
+    add(prim(r::PRIM_PLANE), "HAS_PLANE");
+    add(prim(r::PRIM_BOX), "HAS_BOX");
+    add(prim(r::PRIM_CYLINDER), "HAS_CYLINDER");
+    add(prim(r::PRIM_DISK), "HAS_DISK");
+    add(
+        scene
+            .primitives
+            .iter()
+            .any(|p| p.flags & r::PRIM_FLAG_TRANSFORM != 0),
+        "HAS_TRANSFORMS",
+    );
+    add(mat(r::MAT_LAMBERTIAN), "HAS_LAMBERTIAN");
+    add(mat(r::MAT_METAL), "HAS_METAL");
+    add(mat(r::MAT_DIELECTRIC), "HAS_DIELECTRIC");
+    add(mat(r::MAT_MICROFACET), "HAS_MICROFACET");
+    add(!scene.textures.is_empty(), "HAS_TEXTURES");
+    add(
+        scene.light_sampling != r::LIGHT_SAMPLING_BSDF && !scene.emitters.is_empty(),
+        "HAS_LIGHT_SAMPLING",
+    );
+    add(scene.env.is_some(), "HAS_ENV_MAP");
     defines
 }

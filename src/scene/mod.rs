@@ -34,6 +34,8 @@ pub struct Overrides {
     pub no_bvh: bool,
     pub sampler: Option<format::SamplerKind>,
     pub light_sampling: Option<format::LightSampling>,
+    /// Assemble the full shader instead of one specialized to the scene's features.
+    pub no_specialize: bool,
 }
 
 /// Largest image side accepted.
@@ -73,6 +75,8 @@ pub struct FlatScene {
     pub env: Option<EnvironmentMap>,
     /// `records::LIGHT_SAMPLING_*`.
     pub light_sampling: u32,
+    /// Assemble the GPU shader for the scene's features only (false: the full shader).
+    pub specialize: bool,
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
     /// The light list: emissive primitives that can be sampled, then the image background.
@@ -256,22 +260,27 @@ pub fn load_scene_str(
         return Err(invalid(problems));
     }
 
-    flatten::flatten(&file, &meshes, &images, !overrides.no_bvh).map_err(|objects| {
-        invalid(
-            objects
-                .into_iter()
-                .map(|i| {
-                    Problem::at(
-                        src,
-                        file.objects[i].span().start,
-                        format!("objects[{i}]"),
-                        "degenerates in f32 under its transform (a size, normal or matrix \
+    flatten::flatten(&file, &meshes, &images, !overrides.no_bvh)
+        .map(|scene| FlatScene {
+            specialize: !overrides.no_specialize,
+            ..scene
+        })
+        .map_err(|objects| {
+            invalid(
+                objects
+                    .into_iter()
+                    .map(|i| {
+                        Problem::at(
+                            src,
+                            file.objects[i].span().start,
+                            format!("objects[{i}]"),
+                            "degenerates in f32 under its transform (a size, normal or matrix \
                          becomes zero, infinite or NaN)",
-                    )
-                })
-                .collect(),
-        )
-    })
+                        )
+                    })
+                    .collect(),
+            )
+        })
 }
 
 /// Loads `rel` (relative to the scene's folder `dir`) with `load`; a failure becomes a
