@@ -22,8 +22,13 @@ fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
     let target_offset = forward * params.cam_forward.w
         + right * ((2.0 * s - 1.0) * params.cam_right.w)
         + up * ((1.0 - 2.0 * t) * params.cam_up.w);
+#ifdef HAS_DEFOCUS
     let d = sample_disk(lens) * params.cam_origin.w;
     let lens_offset = right * d.x + up * d.y;
+#else
+    // a pinhole: no lens sample is drawn
+    let lens_offset = vec3<f32>(0.0);
+#endif
     return Ray(params.cam_origin.xyz + lens_offset, normalize(target_offset - lens_offset));
 }
 
@@ -157,6 +162,10 @@ fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
             break;
         }
         throughput *= s.weight;
+        if (all(throughput == vec3<f32>(0.0))) {
+            // nothing further along this path can add to the pixel
+            break;
+        }
         prev_p = hit.p;
         prev_pdf = s.pdf;
         prev_delta = s.delta;
@@ -175,7 +184,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let pixel = y * params.width + x;
     let sample = params.sample_index;
     let jitter = sample_2d(pixel, sample, DIM_PIXEL);
+#ifdef HAS_DEFOCUS
     let lens = sample_2d(pixel, sample, DIM_LENS);
+#else
+    let lens = vec2<f32>(0.0);
+#endif
     let c = trace_path(pixel, sample, camera_ray(x, y, jitter, lens));
     if (all_finite(c) && all_finite(c * c)) {
         accum[2u * pixel] += vec4<f32>(c, 1.0);

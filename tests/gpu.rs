@@ -525,3 +525,34 @@ fn specialized_and_full_shaders_render_the_same_image() {
         );
     }
 }
+
+/// A thin-lens camera (aperture > 0) draws lens samples only in shaders that have the
+/// defocus feature: both backends agree on the blurred image, the specialized shader has
+/// the feature, and a pinhole scene's shader does not.
+#[test]
+fn a_thin_lens_renders_the_same_on_both_backends() {
+    let path = common::repo_path("scenes/spheres.toml");
+    let src = std::fs::read_to_string(&path).unwrap().replace(
+        "vfov = 35",
+        "vfov = 35\naperture = 0.3\nfocus_distance = 4.5",
+    );
+    assert!(src.contains("aperture = 0.3"));
+    let o = Overrides {
+        width: Some(48),
+        height: Some(32),
+        spp: Some(16),
+        ..Default::default()
+    };
+    let lens = wgtrace::load_scene_str(&src, &path, &o).unwrap();
+    let pinhole = wgtrace::load_scene(&path, &o).unwrap();
+    let defines = |s| wgtrace::gpu::shader::scene_defines(s);
+    assert!(defines(&lens).contains("HAS_DEFOCUS"));
+    assert!(!defines(&pinhole).contains("HAS_DEFOCUS"));
+    let c = compare(&render_gpu(&lens), &render_cpu(&lens), 8);
+    assert!(
+        c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
+        "{} tiles outside, {:.4} agree",
+        c.failed_tiles.len(),
+        c.agree_fraction
+    );
+}

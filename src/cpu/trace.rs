@@ -189,6 +189,10 @@ pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
             break;
         }
         throughput *= s.weight;
+        if throughput == Vec3::ZERO {
+            // nothing further along this path can add to the pixel
+            break;
+        }
         prev_p = hit.p;
         prev_pdf = s.pdf;
         prev_delta = s.delta;

@@ -173,7 +173,7 @@ pub fn kernel_shader(defines: &BTreeSet<String>) -> Result<String, ShaderError> 
 
 /// Every define a shader may be assembled with (the tests validate each alone, none and
 /// all). Each keeps the code of one feature: a primitive type, object-space transforms, a
-/// material type, textures, light sampling, an image background.
+/// material type, textures, light sampling, an image background, a lens (defocus).
 pub const FEATURE_DEFINES: &[&str] = &[
     "HAS_SPHERE",
     "HAS_TRIANGLE",
@@ -189,6 +189,7 @@ pub const FEATURE_DEFINES: &[&str] = &[
     "HAS_TEXTURES",
     "HAS_LIGHT_SAMPLING",
     "HAS_ENV_MAP",
+    "HAS_DEFOCUS",
 ];
 
 /// Every feature define: the full shader (`--no-specialize`).
@@ -235,5 +236,6 @@ pub fn scene_defines(scene: &crate::scene::FlatScene) -> BTreeSet<String> {
         "HAS_LIGHT_SAMPLING",
     );
     add(scene.env.is_some(), "HAS_ENV_MAP");
+    add(scene.camera.lens_radius > 0.0, "HAS_DEFOCUS");
     defines
 }
