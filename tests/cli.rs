@@ -5,18 +5,10 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn wgtrace(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_wgtrace"))
-        .args(args)
-        .output()
-        .expect("run wgtrace")
-}
+use common::wgtrace;
 
 fn tmp_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("wgtrace-cli-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    common::tmp_dir(&format!("cli-{name}"))
 }
 
 fn cornell() -> String {

@@ -165,18 +165,10 @@ fn the_error_estimate_is_within_a_factor_of_two_of_the_truth() {
     }
 }
 
-fn wgtrace(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_wgtrace"))
-        .args(args)
-        .output()
-        .expect("run wgtrace")
-}
+use common::wgtrace;
 
 fn tmp_dir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("wgtrace-converge-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::tmp_dir(&format!("converge-{name}"))
 }
 
 /// `--time-limit` renders as many passes as fit and stops (a behaviour test with a

@@ -136,13 +136,6 @@ fn agree(g: &KernelHit, c: &KernelHit) -> Result<(), String> {
     }
 }
 
-fn to_kernel(r: &Ray) -> KernelRay {
-    KernelRay {
-        origin: r.origin.extend(0.0).to_array(),
-        dir: r.dir.extend(0.0).to_array(),
-    }
-}
-
 #[test]
 fn gpu_kernel_matches_cpu_ray_by_ray_for_every_primitive() {
     let ctx = common::gpu_context();
@@ -150,7 +143,7 @@ fn gpu_kernel_matches_cpu_ray_by_ray_for_every_primitive() {
     for (i, &(name, object, center, radius)) in OBJECTS.iter().enumerate() {
         let s = scene(object);
         let batch = rays(center.into(), radius, N, 0x9e37 + i as u32);
-        let kernel: Vec<KernelRay> = batch.iter().map(to_kernel).collect();
+        let kernel: Vec<KernelRay> = batch.iter().map(common::to_kernel).collect();
         let gpu = intersect_rays(&ctx, &s, &kernel).expect("kernel dispatch");
         let mut hits = 0;
         let mut disagree = Vec::new();
@@ -211,7 +204,7 @@ fn gpu_bvh_and_brute_force_find_the_same_hits() {
     let without = common::scene_without_bvh(&src);
     let batch: Vec<KernelRay> = rays(Vec3::ZERO, 4.0, 8192, 77)
         .iter()
-        .map(to_kernel)
+        .map(common::to_kernel)
         .collect();
     let a = intersect_rays(&ctx, &with, &batch).unwrap();
     let b = intersect_rays(&ctx, &without, &batch).unwrap();

@@ -28,9 +28,7 @@ fn ray(o: Vec3, d: Vec3) -> Ray {
 }
 
 fn tmp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wgtrace-robust-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    common::tmp_dir(&format!("robust-{name}"))
 }
 
 fn load(src: &str, dir: &Path, o: Overrides) -> FlatScene {
@@ -166,13 +164,7 @@ material = "wall"
         .iter()
         .filter(|r| intersect_scene(&b, r, FAR).prim == NO_HIT)
         .count();
-    let kernel: Vec<KernelRay> = rays
-        .iter()
-        .map(|r| KernelRay {
-            origin: r.origin.extend(0.0).to_array(),
-            dir: r.dir.extend(0.0).to_array(),
-        })
-        .collect();
+    let kernel: Vec<KernelRay> = rays.iter().map(common::to_kernel).collect();
     let gpu = intersect_rays(&common::gpu_context(), &scene, &kernel).unwrap();
     let gpu_miss = gpu.iter().filter(|h| h.prim == NO_HIT).count();
     let mt_miss = rays
@@ -298,13 +290,7 @@ material = "m"
             want.push(hit);
         }
     }
-    let kernel: Vec<KernelRay> = rays
-        .iter()
-        .map(|r| KernelRay {
-            origin: r.origin.extend(0.0).to_array(),
-            dir: r.dir.extend(0.0).to_array(),
-        })
-        .collect();
+    let kernel: Vec<KernelRay> = rays.iter().map(common::to_kernel).collect();
     let gpu = intersect_rays(&common::gpu_context(), &scene, &kernel).unwrap();
     for ((r, w), g) in rays.iter().zip(&want).zip(&gpu) {
         let h = intersect_scene(&b, r, FAR);

@@ -252,3 +252,27 @@ pub fn sample_variance(img: &Accumulation) -> f64 {
         .sum::<f64>()
         / n as f64
 }
+
+/// Runs the `wgtrace` binary with `args` and returns its output.
+pub fn wgtrace(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+        .args(args)
+        .output()
+        .expect("run wgtrace")
+}
+
+/// An empty folder for one test: `wgtrace-<name>-<pid>` in the system's temporary folder.
+pub fn tmp_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("wgtrace-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A CPU ray as the intersection kernel's input record.
+pub fn to_kernel(r: &wgtrace::cpu::types::Ray) -> wgtrace::scene::records::KernelRay {
+    wgtrace::scene::records::KernelRay {
+        origin: r.origin.extend(0.0).to_array(),
+        dir: r.dir.extend(0.0).to_array(),
+    }
+}
