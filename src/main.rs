@@ -199,7 +199,7 @@ fn info() -> anyhow::Result<()> {
 }
 
 fn features(path: &Path) -> anyhow::Result<()> {
-    use wgtrace::gpu::shader::{all_defines, scene_defines, trace_shader};
+    use wgtrace::gpu::shader::{all_defines, scene_defines, trace_shader, used_bindings};
     let scene = wgtrace::load_scene(path, &Overrides::default())?;
     let defines = scene_defines(&scene);
     let all = all_defines();
@@ -212,13 +212,17 @@ fn features(path: &Path) -> anyhow::Result<()> {
             if defines.contains(d) { "yes" } else { "-" }
         );
     }
-    let size = |d| -> anyhow::Result<(usize, usize)> {
+    let size = |d| -> anyhow::Result<(usize, usize, usize)> {
         let wgsl = trace_shader(d)?;
-        Ok((wgsl.len(), wgsl.lines().count()))
+        let bindings = used_bindings("trace", &wgsl, "main", 0)?.len();
+        Ok((wgsl.len(), wgsl.lines().count(), bindings))
     };
-    let (sb, sl) = size(&defines)?;
-    let (fb, fl) = size(&all)?;
-    println!("trace shader: specialized {sb} bytes, {sl} lines; full {fb} bytes, {fl} lines");
+    let (sb, sl, sn) = size(&defines)?;
+    let (fb, fl, fn_) = size(&all)?;
+    println!(
+        "trace shader: specialized {sb} bytes, {sl} lines, {sn} bindings; \
+         full {fb} bytes, {fl} lines, {fn_} bindings"
+    );
     Ok(())
 }
 

@@ -24,7 +24,7 @@ pub enum Engine {
 impl Engine {
     /// Opens the GPU backend; fails when no Vulkan adapter exists.
     pub fn gpu(scene: &FlatScene, adapter: usize) -> Result<Self, GpuError> {
-        let ctx = GpuContext::new(adapter)?;
+        let ctx = GpuContext::shared(adapter)?;
         Ok(Engine::Gpu(Box::new(GpuRenderer::new(ctx, scene)?)))
     }
 

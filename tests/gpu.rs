@@ -488,18 +488,38 @@ fn renders_are_bit_identical_for_the_same_seed() {
 }
 
 /// The shader specialized to each scene's features and the full shader render the same
-/// image from the same seed on every scene: the taken code is the same, so pixels agree
-/// bit for bit unless the compiler arranged the arithmetic differently (printed), and
-/// every tile agrees within the statistical bound.
+/// image from the same seed on every scene (and on two scenes under every sampler, every
+/// light-sampling strategy and without the BVH): the taken code is the same, so pixels
+/// agree bit for bit unless the compiler arranged the arithmetic differently (printed),
+/// and every tile agrees within the statistical bound.
 #[test]
 fn specialized_and_full_shaders_render_the_same_image() {
-    for path in common::scene_files() {
+    use wgtrace::scene::format::{LightSampling as L, SamplerKind as S};
+    // sampler, light sampling, no BVH
+    type Variant = Option<(S, L, bool)>;
+    let mut cases: Vec<(std::path::PathBuf, Variant)> = common::scene_files()
+        .into_iter()
+        .map(|p| (p, None))
+        .collect();
+    for scene in ["scenes/cornell.toml", "scenes/lights.toml"] {
+        for variant in [
+            (S::Random, L::Bsdf, true),
+            (S::Jittered, L::Mixture, false),
+            (S::Hammersley, L::Mis, true),
+        ] {
+            cases.push((common::repo_path(scene), Some(variant)));
+        }
+    }
+    for (path, variant) in cases {
         let o = |no_specialize| Overrides {
             width: Some(32),
             height: Some(24),
             spp: Some(4),
             seed: Some(11),
             no_specialize,
+            sampler: variant.map(|v| v.0),
+            light_sampling: variant.map(|v| v.1),
+            no_bvh: variant.is_some_and(|v| v.2),
             ..Default::default()
         };
         let special = wgtrace::load_scene(&path, &o(false)).unwrap();
@@ -510,33 +530,82 @@ fn specialized_and_full_shaders_render_the_same_image() {
             .count() as f64
             / a.pixel_count() as f64;
         let c = compare(&a, &b, 8);
+        let name = format!("{} {variant:?}", path.display());
         eprintln!(
-            "{}: {:.4} of pixels bit-identical, {} of {} tiles outside the bound",
-            path.display(),
-            identical,
+            "{name}: {identical:.4} of pixels bit-identical, {} of {} tiles outside the bound",
             c.failed_tiles.len(),
             c.tiles
         );
         assert!(
             c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
-            "{}: specialized and full shaders differ:\n{}",
-            path.display(),
+            "{name}: specialized and full shaders differ:\n{}",
             c.failed_tiles.join("\n")
         );
     }
 }
 
-/// A thin-lens camera (aperture > 0) draws lens samples only in shaders that have the
-/// defocus feature: both backends agree on the blurred image, the specialized shader has
-/// the feature, and a pinhole scene's shader does not.
+/// A scene where nothing emits renders black without tracing a path (its shader has no
+/// HAS_EMISSION and binds only the parameters and the sums), as the full shader does.
+#[test]
+fn a_scene_without_emission_renders_black() {
+    let src = r#"
+[camera]
+look_from = [0, 0, 3]
+look_at = [0, 0, 0]
+[render]
+width = 16
+height = 16
+spp = 2
+[materials.grey]
+type = "lambertian"
+albedo = [0.5, 0.5, 0.5]
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "grey"
+"#;
+    let scene = common::scene_from_str(src);
+    assert!(!wgtrace::gpu::shader::scene_defines(&scene).contains("HAS_EMISSION"));
+    let mut full = scene.clone();
+    full.specialize = false;
+    for acc in [render_gpu(&scene), render_gpu(&full)] {
+        assert!((0..acc.pixel_count()).all(|i| acc.mean(i) == [0.0; 3]));
+    }
+}
+
+/// Renders in one process share one device, and a feature set's pipeline is compiled once:
+/// a second request gets the same pipeline, another feature set another one.
+#[test]
+fn pipelines_are_compiled_once_per_feature_set_and_process() {
+    use std::sync::Arc;
+    use wgtrace::gpu::shader::{all_defines, scene_defines};
+    let ctx = wgtrace::gpu::GpuContext::shared(0)
+        .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter: {e}"));
+    assert!(Arc::ptr_eq(
+        &ctx,
+        &wgtrace::gpu::GpuContext::shared(0).unwrap()
+    ));
+    let scene =
+        wgtrace::load_scene(&common::repo_path("scenes/box.toml"), &Overrides::default()).unwrap();
+    let a = ctx.trace_pipeline(&scene_defines(&scene)).unwrap();
+    let b = ctx.trace_pipeline(&scene_defines(&scene)).unwrap();
+    let full = ctx.trace_pipeline(&all_defines()).unwrap();
+    assert!(Arc::ptr_eq(&a, &b));
+    assert!(!Arc::ptr_eq(&a, &full));
+    assert!(a.shader_bytes < full.shader_bytes && a.bindings.len() < full.bindings.len());
+}
+
+/// A thin-lens camera (aperture > 0): both backends agree on the blurred image, and it
+/// differs from the pinhole's.
 #[test]
 fn a_thin_lens_renders_the_same_on_both_backends() {
     let path = common::repo_path("scenes/spheres.toml");
     let src = std::fs::read_to_string(&path).unwrap().replace(
         "vfov = 35",
-        "vfov = 35\naperture = 0.3\nfocus_distance = 4.5",
+        "vfov = 35\naperture = 0.5\nfocus_distance = 1.5",
     );
-    assert!(src.contains("aperture = 0.3"));
+    assert!(src.contains("aperture = 0.5"));
     let o = Overrides {
         width: Some(48),
         height: Some(32),
@@ -545,14 +614,19 @@ fn a_thin_lens_renders_the_same_on_both_backends() {
     };
     let lens = wgtrace::load_scene_str(&src, &path, &o).unwrap();
     let pinhole = wgtrace::load_scene(&path, &o).unwrap();
-    let defines = |s| wgtrace::gpu::shader::scene_defines(s);
-    assert!(defines(&lens).contains("HAS_DEFOCUS"));
-    assert!(!defines(&pinhole).contains("HAS_DEFOCUS"));
-    let c = compare(&render_gpu(&lens), &render_cpu(&lens), 8);
+    let blurred = render_gpu(&lens);
+    let c = compare(&blurred, &render_cpu(&lens), 8);
     assert!(
         c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
         "{} tiles outside, {:.4} agree",
         c.failed_tiles.len(),
         c.agree_fraction
+    );
+    let sharp = compare(&blurred, &render_gpu(&pinhole), 2);
+    assert!(
+        !sharp.failed_tiles.is_empty(),
+        "the lens changed nothing: {} of {} tiles differ",
+        sharp.failed_tiles.len(),
+        sharp.tiles
     );
 }

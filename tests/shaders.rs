@@ -1,10 +1,17 @@
 //! Shaders validate with naga, the preprocessor behaves, and every record shared with WGSL
 //! has the layout naga gives the shader's struct. No GPU needed.
 
+mod common;
+
 use std::collections::BTreeSet;
 
-use wgtrace::gpu::shader::{preprocess, validate, ENTRY_SHADERS, FEATURE_DEFINES, SHADER_FILES};
+use wgtrace::gpu::shader::{
+    all_defines, preprocess, scene_defines, used_bindings, validate, ENTRY_SHADERS,
+    FEATURE_DEFINES, SHADER_FILES,
+};
+use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::scene::records::record_layouts;
+use wgtrace::Overrides;
 
 #[test]
 fn every_entry_shader_validates_with_naga() {
@@ -22,6 +29,82 @@ fn every_entry_shader_validates_with_naga() {
             validate(entry, &src).unwrap_or_else(|e| panic!("{defines:?}: {e}"));
         }
     }
+}
+
+/// Every feature set that a scene in `scenes/` reaches, under each sampler and each
+/// light-sampling strategy, with and without the BVH, validates with naga; and a trace
+/// shader binds only the scene records it reads.
+#[test]
+fn every_feature_set_the_scenes_reach_validates_and_binds_only_what_it_uses() {
+    let mut sets = BTreeSet::new();
+    for path in common::scene_files() {
+        for sampler in [
+            SamplerKind::Random,
+            SamplerKind::Jittered,
+            SamplerKind::Hammersley,
+            SamplerKind::Sobol,
+        ] {
+            for light_sampling in [
+                LightSampling::Bsdf,
+                LightSampling::Mixture,
+                LightSampling::Mis,
+            ] {
+                for no_bvh in [false, true] {
+                    let o = Overrides {
+                        sampler: Some(sampler),
+                        light_sampling: Some(light_sampling),
+                        no_bvh,
+                        ..Default::default()
+                    };
+                    let scene = wgtrace::load_scene(&path, &o).unwrap();
+                    sets.insert(scene_defines(&scene));
+                }
+            }
+        }
+    }
+    assert!(sets.len() > 100, "only {} feature sets", sets.len());
+    let mut bound = BTreeSet::new();
+    for defines in &sets {
+        for entry in ENTRY_SHADERS {
+            let src = preprocess(entry, defines).unwrap();
+            validate(entry, &src).unwrap_or_else(|e| panic!("{defines:?}: {e}"));
+        }
+        let src = preprocess("trace", defines).unwrap();
+        bound.insert(used_bindings("trace", &src, "main", 0).unwrap());
+    }
+    // binding numbers of shaders/shared/bindings.wgsl
+    let (emitters, bvh, textures, texels) = (3, 5, 7, 8);
+    let full = preprocess("trace", &all_defines()).unwrap();
+    assert_eq!(
+        used_bindings("trace", &full, "main", 0).unwrap(),
+        (0..=8).collect::<Vec<u32>>()
+    );
+    let defines = |names: &[&str]| names.iter().map(|s| s.to_string()).collect();
+    let cornell = defines(&[
+        "HAS_BVH",
+        "HAS_EMISSION",
+        "HAS_LAMBERTIAN",
+        "HAS_SOBOL",
+        "HAS_SPHERE",
+        "HAS_TRIANGLE",
+    ]);
+    let used = |d: &BTreeSet<String>| {
+        used_bindings("trace", &preprocess("trace", d).unwrap(), "main", 0).unwrap()
+    };
+    // without light sampling or textures, their records are not bound
+    for absent in [emitters, textures, texels] {
+        assert!(!used(&cornell).contains(&absent), "{:?}", used(&cornell));
+    }
+    let mut no_bvh = cornell.clone();
+    no_bvh.remove("HAS_BVH");
+    no_bvh.insert("HAS_PRIMITIVE_LOOP".into());
+    assert!(used(&cornell).contains(&bvh) && !used(&no_bvh).contains(&bvh));
+    let mut mis = cornell.clone();
+    mis.insert("HAS_MIS".into());
+    assert!(used(&mis).contains(&emitters));
+    // nothing emits: no path is traced, and only the parameters and the sums are bound
+    assert_eq!(used(&BTreeSet::new()), vec![0, 4]);
+    assert!(bound.len() > 4, "{bound:?}");
 }
 
 #[test]

@@ -332,18 +332,22 @@ const BOX_WIDEN: f32 = 1.0000003576278687;
 // Closest hit along the ray before t_max (FAR: anywhere; a shadow ray's length: whether
 // anything lies in between): every unbounded primitive (planes), then the BVH in order
 // (nearer child first, a far child pushed with its entry distance and skipped when the
-// closest hit is already nearer), or every bounded primitive when use_bvh = 0.
+// closest hit is already nearer), or every bounded primitive when use_bvh = 0. A shader
+// holds the BVH walk (HAS_BVH), the plain loop (HAS_PRIMITIVE_LOOP), or both.
 fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     var best = Candidate(t_max, NO_HIT, 0.0, 0.0);
     for (var i = 0u; i < params.num_unbounded; i++) {
         best = closer(best, i, ray);
     }
+#ifdef HAS_PRIMITIVE_LOOP
     if (params.use_bvh == 0u) {
         for (var i = params.num_unbounded; i < params.num_primitives; i++) {
             best = closer(best, i, ray);
         }
         return best;
     }
+#endif
+#ifdef HAS_BVH
     if (params.num_primitives == params.num_unbounded) {
         return best;
     }
@@ -387,6 +391,7 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
         node = stack_node[sp];
         t_node = stack_t[sp];
     }
+#endif
     return best;
 }
 

@@ -87,19 +87,25 @@ fn hammersley(pixel: u32, sample: u32) -> vec2<f32> {
 // The 2D point of pair `dim` for sample `sample` of `pixel` at the first bounce.
 fn sample_2d(pixel: u32, sample: u32, dim: u32) -> vec2<f32> {
     switch params.sampler {
+#ifdef HAS_JITTERED
         case SAMPLER_JITTERED: {
             if (dim == DIM_PIXEL) {
                 return jittered(pixel, sample);
             }
         }
+#endif
+#ifdef HAS_HAMMERSLEY
         case SAMPLER_HAMMERSLEY: {
             if (dim == DIM_PIXEL) {
                 return hammersley(pixel, sample);
             }
         }
+#endif
+#ifdef HAS_SOBOL
         case SAMPLER_SOBOL: {
             return sobol_owen(pixel, sample, dim);
         }
+#endif
         default: {}
     }
     return rand_2d(pixel, sample, 0u, dim, params.seed);

@@ -1,4 +1,12 @@
 //! Adapter and device: the first Vulkan adapter, preferring real GPUs over software ones.
+//! One device per adapter is shared by every render of a process, so pipelines compiled
+//! for one render serve the next.
+
+use std::collections::{BTreeSet, HashMap};
+use std::path::PathBuf;
+use std::sync::{Arc, Mutex, OnceLock};
+
+use super::pipeline::TracePipeline;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -45,12 +53,43 @@ pub enum GpuError {
     Shader(#[from] super::shader::ShaderError),
 }
 
-/// An open device on one adapter.
+/// An open device on one adapter, with the trace pipelines compiled on it so far (one per
+/// feature set) and, where the driver supports one, a pipeline cache kept on disk.
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    pub(crate) pipelines: Mutex<HashMap<BTreeSet<String>, Arc<TracePipeline>>>,
+    pub(crate) disk_cache: Option<DiskCache>,
+}
+
+/// A driver pipeline cache and the file it is loaded from and saved to.
+pub(crate) struct DiskCache {
+    pub cache: wgpu::PipelineCache,
+    pub path: PathBuf,
+}
+
+/// Where compiled pipelines persist between runs: `$WGTRACE_CACHE_DIR` (empty or `off`:
+/// nowhere), else `$XDG_CACHE_HOME/wgtrace`, else `~/.cache/wgtrace`.
+pub fn cache_dir() -> Option<PathBuf> {
+    if let Some(dir) = std::env::var_os("WGTRACE_CACHE_DIR") {
+        if dir.is_empty() || dir == "off" {
+            return None;
+        }
+        return Some(PathBuf::from(dir));
+    }
+    let base = std::env::var_os("XDG_CACHE_HOME")
+        .filter(|d| !d.is_empty())
+        .map(PathBuf::from)
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache")))?;
+    Some(base.join("wgtrace"))
+}
+
+/// The open contexts of this process, by adapter index.
+fn shared_contexts() -> &'static Mutex<HashMap<usize, Arc<GpuContext>>> {
+    static CONTEXTS: OnceLock<Mutex<HashMap<usize, Arc<GpuContext>>>> = OnceLock::new();
+    CONTEXTS.get_or_init(Default::default)
 }
 
 fn instance() -> wgpu::Instance {
@@ -96,7 +135,19 @@ pub fn describe(info: &wgpu::AdapterInfo) -> String {
 }
 
 impl GpuContext {
-    /// Opens adapter `index` of [`list_adapters`] (0: the preferred one).
+    /// The process's context on adapter `index` of [`list_adapters`], opened on first use.
+    pub fn shared(index: usize) -> Result<Arc<Self>, GpuError> {
+        let mut contexts = shared_contexts().lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(ctx) = contexts.get(&index) {
+            return Ok(ctx.clone());
+        }
+        let ctx = Arc::new(Self::new(index)?);
+        contexts.insert(index, ctx.clone());
+        Ok(ctx)
+    }
+
+    /// Opens adapter `index` of [`list_adapters`] (0: the preferred one) on a device of its
+    /// own.
     pub fn new(index: usize) -> Result<Self, GpuError> {
         let mut list = adapters();
         if list.is_empty() {
@@ -110,17 +161,71 @@ impl GpuContext {
         }
         let adapter = list.swap_remove(index);
         let info = adapter.get_info();
+        let cache_file = cache_dir()
+            .zip(wgpu::util::pipeline_cache_key(&info))
+            .filter(|_| adapter.features().contains(wgpu::Features::PIPELINE_CACHE))
+            .map(|(dir, key)| dir.join(format!("{key}.bin")));
+        let required_features = if cache_file.is_some() {
+            wgpu::Features::PIPELINE_CACHE
+        } else {
+            wgpu::Features::empty()
+        };
         let (device, queue) =
             pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
                 label: Some("wgtrace"),
+                required_features,
                 required_limits: adapter.limits(),
                 ..Default::default()
             }))?;
+        let disk_cache = cache_file.map(|path| {
+            let data = std::fs::read(&path).ok();
+            // SAFETY: the data was written by `get_data` of a cache with the same key (the
+            // adapter's vendor and device), or is unreadable and then ignored: with
+            // `fallback` the driver validates it and starts empty when it does not match.
+            let cache = unsafe {
+                device.create_pipeline_cache(&wgpu::PipelineCacheDescriptor {
+                    label: Some("wgtrace pipelines"),
+                    data: data.as_deref(),
+                    fallback: true,
+                })
+            };
+            DiskCache { cache, path }
+        });
         Ok(Self {
             adapter,
             device,
             queue,
             info,
+            pipelines: Mutex::new(HashMap::new()),
+            disk_cache,
         })
+    }
+
+    /// Writes the pipeline cache back to its file (write then rename, so a reader never sees
+    /// half a file). Failures are ignored: the cache only saves time.
+    pub(crate) fn save_disk_cache(&self) {
+        let Some(disk) = &self.disk_cache else {
+            return;
+        };
+        let Some(data) = disk.cache.get_data() else {
+            return;
+        };
+        let tmp = disk
+            .path
+            .with_extension(format!("tmp{}", std::process::id()));
+        let written = disk
+            .path
+            .parent()
+            .map_or(Ok(()), std::fs::create_dir_all)
+            .and_then(|_| std::fs::write(&tmp, &data))
+            .and_then(|_| std::fs::rename(&tmp, &disk.path));
+        if written.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+    }
+
+    /// Whether compiled pipelines persist on disk between runs on this adapter.
+    pub fn has_disk_cache(&self) -> bool {
+        self.disk_cache.is_some()
     }
 }

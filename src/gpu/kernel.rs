@@ -6,7 +6,7 @@ use wgpu::util::DeviceExt;
 
 use super::context::{GpuContext, GpuError};
 use super::render::{
-    check_loop_limit, check_scene_fits, read_mapped, scene_bindings, scene_layout,
+    all_bindings, check_loop_limit, check_scene_fits, read_mapped, scene_bindings, scene_layout,
 };
 use super::shader;
 use crate::scene::records::{KernelHit, KernelRay, TextureLookup};
@@ -54,7 +54,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
             shader::kernel_shader(&shader::scene_defines(scene))?.into(),
         ),
     });
-    let scene_bgl = scene_layout(device);
+    let scene_bgl = scene_layout(device, &all_bindings());
     let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -90,7 +90,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let scene_group = scene_bindings(device, &scene_bgl, scene, &accum);
+    let scene_group = scene_bindings(device, &scene_bgl, &all_bindings(), scene, &accum);
     let params = scene.params(0, scene.full_tile());
     ctx.queue
         .write_buffer(&scene_group.params, 0, bytemuck::bytes_of(&params));

@@ -3,7 +3,10 @@
 
 use wgpu::util::DeviceExt;
 
+use std::sync::Arc;
+
 use super::context::{GpuContext, GpuError};
+use super::pipeline::TracePipeline;
 use super::shader;
 use crate::scene::records::{self, Params};
 use crate::scene::{FlatScene, Tile};
@@ -31,9 +34,9 @@ const BINDINGS: [(u32, wgpu::BufferBindingType); 9] = [
 ];
 
 pub struct GpuRenderer {
-    ctx: GpuContext,
+    ctx: Arc<GpuContext>,
     scene: FlatScene,
-    pipeline: wgpu::ComputePipeline,
+    pipeline: Arc<TracePipeline>,
     bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
     accum: wgpu::Buffer,
@@ -72,7 +75,20 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
 }
 
 impl GpuRenderer {
-    pub fn new(ctx: GpuContext, scene: &FlatScene) -> Result<Self, GpuError> {
+    /// Uploads `scene` and gets the trace pipeline for its feature set (compiled now, or
+    /// already by an earlier render in this process).
+    pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene) -> Result<Self, GpuError> {
+        let pipeline = ctx.trace_pipeline(&shader::scene_defines(scene))?;
+        Self::with_pipeline(ctx, scene, pipeline)
+    }
+
+    /// Uploads `scene` to render with a given trace pipeline (one compiled for the scene's
+    /// feature set or a superset of it; benchmarks time the compilation apart).
+    pub fn with_pipeline(
+        ctx: Arc<GpuContext>,
+        scene: &FlatScene,
+        pipeline: Arc<TracePipeline>,
+    ) -> Result<Self, GpuError> {
         let device = &ctx.device;
         // wgpu zero-initialises new buffers, so the sums start at 0.
         let accum_size = scene.width as u64 * scene.height as u64 * ACCUM_BYTES_PER_PIXEL;
@@ -90,25 +106,6 @@ impl GpuRenderer {
         }
         check_scene_fits(device, scene)?;
         check_loop_limit(&ctx, scene, true)?;
-        let wgsl = shader::trace_shader(&shader::scene_defines(scene))?;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("trace.wgsl"),
-            source: wgpu::ShaderSource::Wgsl(wgsl.into()),
-        });
-        let bgl = scene_layout(device);
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("trace layout"),
-            bind_group_layouts: &[Some(&bgl)],
-            immediate_size: 0,
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("trace"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
 
         let accum = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulation"),
@@ -125,7 +122,7 @@ impl GpuRenderer {
         let SceneBindings {
             params,
             group: bind_group,
-        } = scene_bindings(device, &bgl, scene, &accum);
+        } = scene_bindings(device, &pipeline.layout, &pipeline.bindings, scene, &accum);
         Ok(Self {
             tiles: tiles(scene.width, scene.height),
             scene: scene.clone(),
@@ -166,7 +163,7 @@ impl GpuRenderer {
                     label: Some("trace pass"),
                     timestamp_writes: None,
                 });
-                pass.set_pipeline(&self.pipeline);
+                pass.set_pipeline(&self.pipeline.pipeline);
                 pass.set_bind_group(0, &self.bind_group, &[]);
                 pass.dispatch_workgroups(
                     tile.width.div_ceil(WORKGROUP),
@@ -272,10 +269,17 @@ pub(crate) fn check_scene_fits(device: &wgpu::Device, scene: &FlatScene) -> Resu
     Ok(())
 }
 
-/// The layout of group 0, `shaders/shared/bindings.wgsl`, shared by every pipeline.
-pub(crate) fn scene_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+/// Every binding of group 0, `shaders/shared/bindings.wgsl`.
+pub(crate) fn all_bindings() -> Vec<u32> {
+    BINDINGS.iter().map(|&(b, _)| b).collect()
+}
+
+/// The layout of group 0 (`shaders/shared/bindings.wgsl`) with `bindings` only: those a
+/// specialized shader uses.
+pub(crate) fn scene_layout(device: &wgpu::Device, bindings: &[u32]) -> wgpu::BindGroupLayout {
     let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = BINDINGS
         .iter()
+        .filter(|(binding, _)| bindings.contains(binding))
         .map(|&(binding, ty)| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
@@ -299,10 +303,12 @@ pub(crate) struct SceneBindings {
     pub group: wgpu::BindGroup,
 }
 
-/// Uploads a scene's records and binds them, with `accum` as the accumulation buffer.
+/// Uploads the scene records that `bindings` name and binds them, with `accum` as the
+/// accumulation buffer; records the shader does not use are neither uploaded nor bound.
 pub(crate) fn scene_bindings(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
+    bindings: &[u32],
     scene: &FlatScene,
     accum: &wgpu::Buffer,
 ) -> SceneBindings {
@@ -312,29 +318,28 @@ pub(crate) fn scene_bindings(
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let primitives = storage_buffer(device, "primitives", &scene.primitives);
-    let materials = storage_buffer(device, "materials", &scene.materials);
-    let emitters = storage_buffer(device, "emitters", &scene.emitters);
-    let bvh = storage_buffer(device, "bvh", &scene.bvh);
-    let shape_data = storage_buffer(device, "shape_data", &scene.shape_data);
-    let textures = storage_buffer(device, "textures", &scene.textures);
-    let texels = storage_buffer(device, "texels", &scene.texels);
-    let buffers = [
-        &params,
-        &primitives,
-        &materials,
-        &emitters,
-        accum,
-        &bvh,
-        &shape_data,
-        &textures,
-        &texels,
-    ];
-    let entries: Vec<wgpu::BindGroupEntry> = BINDINGS
+    let buffers: Vec<(u32, wgpu::Buffer)> = bindings
         .iter()
-        .zip(buffers)
-        .map(|(&(binding, _), buf)| wgpu::BindGroupEntry {
-            binding,
+        .map(|&binding| {
+            let buffer = match binding {
+                0 => params.clone(),
+                1 => storage_buffer(device, "primitives", &scene.primitives),
+                2 => storage_buffer(device, "materials", &scene.materials),
+                3 => storage_buffer(device, "emitters", &scene.emitters),
+                4 => accum.clone(),
+                5 => storage_buffer(device, "bvh", &scene.bvh),
+                6 => storage_buffer(device, "shape_data", &scene.shape_data),
+                7 => storage_buffer(device, "textures", &scene.textures),
+                8 => storage_buffer(device, "texels", &scene.texels),
+                _ => unreachable!("binding {binding} is not in BINDINGS"),
+            };
+            (binding, buffer)
+        })
+        .collect();
+    let entries: Vec<wgpu::BindGroupEntry> = buffers
+        .iter()
+        .map(|(binding, buf)| wgpu::BindGroupEntry {
+            binding: *binding,
             resource: buf.as_entire_binding(),
         })
         .collect();

@@ -147,18 +147,56 @@ fn expand(
 
 /// Parses and validates assembled WGSL with naga, as wgpu will.
 pub fn validate(name: &str, wgsl: &str) -> Result<naga::Module, ShaderError> {
+    Ok(validate_with_info(name, wgsl)?.0)
+}
+
+fn validate_with_info(
+    name: &str,
+    wgsl: &str,
+) -> Result<(naga::Module, naga::valid::ModuleInfo), ShaderError> {
     let invalid = |message: String| ShaderError::Invalid {
         name: name.to_string(),
         message,
     };
     let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| invalid(e.emit_to_string(wgsl)))?;
-    naga::valid::Validator::new(
+    let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
         naga::valid::Capabilities::default(),
     )
     .validate(&module)
     .map_err(|e| invalid(e.emit_to_string(wgsl)))?;
-    Ok(module)
+    Ok((module, info))
+}
+
+/// The bindings of `group` that entry point `entry` of the assembled shader uses (reads,
+/// writes or queries), in increasing order: what its pipeline layout must hold. A
+/// resource declared but reached only from code the defines left out is not among them.
+pub fn used_bindings(
+    name: &str,
+    wgsl: &str,
+    entry: &str,
+    group: u32,
+) -> Result<Vec<u32>, ShaderError> {
+    let (module, info) = validate_with_info(name, wgsl)?;
+    let index = module
+        .entry_points
+        .iter()
+        .position(|e| e.name == entry)
+        .ok_or_else(|| ShaderError::Invalid {
+            name: name.to_string(),
+            message: format!("no entry point {entry}"),
+        })?;
+    let uses = info.get_entry_point(index);
+    let mut bindings: Vec<u32> = module
+        .global_variables
+        .iter()
+        .filter(|&(handle, _)| !uses[handle].is_empty())
+        .filter_map(|(_, var)| var.binding.as_ref())
+        .filter(|b| b.group == group)
+        .map(|b| b.binding)
+        .collect();
+    bindings.sort_unstable();
+    Ok(bindings)
 }
 
 /// The trace shader for a scene.
@@ -172,8 +210,12 @@ pub fn kernel_shader(defines: &BTreeSet<String>) -> Result<String, ShaderError> 
 }
 
 /// Every define a shader may be assembled with (the tests validate each alone, none and
-/// all). Each keeps the code of one feature: a primitive type, object-space transforms, a
-/// material type, textures, light sampling, an image background, a lens (defocus).
+/// all, and every set a scene in `scenes/` reaches). Each keeps the code of one feature:
+/// a primitive type, object-space transforms, the BVH walk or the plain loop over
+/// primitives, a material type, textures, a pixel sampler (random is always there), a
+/// light-sampling strategy (bsdf is always there), an image background, and emission at
+/// all (without it no path is traced). The thin lens is always there: a pinhole without it
+/// measured slower on llvmpipe (`docs/specialization.md`).
 pub const FEATURE_DEFINES: &[&str] = &[
     "HAS_SPHERE",
     "HAS_TRIANGLE",
@@ -182,19 +224,39 @@ pub const FEATURE_DEFINES: &[&str] = &[
     "HAS_CYLINDER",
     "HAS_DISK",
     "HAS_TRANSFORMS",
+    "HAS_BVH",
+    "HAS_PRIMITIVE_LOOP",
     "HAS_LAMBERTIAN",
     "HAS_METAL",
     "HAS_DIELECTRIC",
     "HAS_MICROFACET",
     "HAS_TEXTURES",
-    "HAS_LIGHT_SAMPLING",
+    "HAS_JITTERED",
+    "HAS_HAMMERSLEY",
+    "HAS_SOBOL",
+    "HAS_MIS",
+    "HAS_MIXTURE",
     "HAS_ENV_MAP",
-    "HAS_DEFOCUS",
+    "HAS_EMISSION",
 ];
 
-/// Every feature define: the full shader (`--no-specialize`).
+/// Every feature define: the full shader (`--no-specialize`), which picks the sampler,
+/// the light-sampling strategy and BVH or not at run time from `Params`.
 pub fn all_defines() -> BTreeSet<String> {
     FEATURE_DEFINES.iter().map(|d| d.to_string()).collect()
+}
+
+/// Whether anything in the scene gives off light: an emitting material (a colour or an
+/// emission texture) or a background that is not black.
+pub fn scene_emits(scene: &crate::scene::FlatScene) -> bool {
+    let bright = |c: &[f32]| c.iter().any(|&x| x > 0.0);
+    scene
+        .materials
+        .iter()
+        .any(|m| bright(&m.emission[..3]) || m.tex_emission != crate::scene::records::NO_TEXTURE)
+        || bright(&scene.background)
+        || scene.background_top.is_some_and(|t| bright(&t))
+        || scene.env.is_some()
 }
 
 /// The defines a scene's shaders are assembled with: code for features the scene does not
@@ -226,16 +288,29 @@ pub fn scene_defines(scene: &crate::scene::FlatScene) -> BTreeSet<String> {
             .any(|p| p.flags & r::PRIM_FLAG_TRANSFORM != 0),
         "HAS_TRANSFORMS",
     );
+    let bounded = scene.primitives.len() > scene.num_unbounded as usize;
+    add(bounded && scene.use_bvh, "HAS_BVH");
+    add(bounded && !scene.use_bvh, "HAS_PRIMITIVE_LOOP");
     add(mat(r::MAT_LAMBERTIAN), "HAS_LAMBERTIAN");
     add(mat(r::MAT_METAL), "HAS_METAL");
     add(mat(r::MAT_DIELECTRIC), "HAS_DIELECTRIC");
     add(mat(r::MAT_MICROFACET), "HAS_MICROFACET");
     add(!scene.textures.is_empty(), "HAS_TEXTURES");
+    add(scene.sampler == r::SAMPLER_JITTERED, "HAS_JITTERED");
+    add(scene.sampler == r::SAMPLER_HAMMERSLEY, "HAS_HAMMERSLEY");
+    add(scene.sampler == r::SAMPLER_SOBOL, "HAS_SOBOL");
+    // lights are sampled only toward surfaces with a lobe that is not a delta
+    // (`nee_applies`: Lambertian or microfacet), and only when there are lights
+    let lit = !scene.emitters.is_empty() && (mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET));
     add(
-        scene.light_sampling != r::LIGHT_SAMPLING_BSDF && !scene.emitters.is_empty(),
-        "HAS_LIGHT_SAMPLING",
+        lit && scene.light_sampling == r::LIGHT_SAMPLING_MIS,
+        "HAS_MIS",
+    );
+    add(
+        lit && scene.light_sampling == r::LIGHT_SAMPLING_MIXTURE,
+        "HAS_MIXTURE",
     );
     add(scene.env.is_some(), "HAS_ENV_MAP");
-    add(scene.camera.lens_radius > 0.0, "HAS_DEFOCUS");
+    add(scene_emits(scene), "HAS_EMISSION");
     defines
 }
