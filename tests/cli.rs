@@ -211,3 +211,62 @@ fn features_lists_the_scene_and_no_specialize_renders() {
     let o = render_to(&out, &["--no-specialize"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
+
+/// A render saves the driver's pipeline cache in `WGTRACE_CACHE_DIR` when the adapter
+/// offers one (lavapipe does), whole (no temporary file left); `off` saves nothing.
+#[test]
+fn the_pipeline_cache_is_saved_where_wgtrace_cache_dir_says() {
+    let ctx = wgtrace::gpu::GpuContext::shared(0)
+        .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter: {e}"));
+    let offered = ctx
+        .adapter
+        .features()
+        .contains(wgpu::Features::PIPELINE_CACHE);
+    let dir = tmp_dir("pipeline-cache");
+    let out = dir.join("c.png");
+    let render = |cache: &Path| {
+        let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+            .args([
+                "render",
+                &cornell(),
+                "--width",
+                "8",
+                "--height",
+                "8",
+                "--spp",
+                "1",
+            ])
+            .arg("-o")
+            .arg(&out)
+            .env("WGTRACE_CACHE_DIR", cache)
+            .output()
+            .expect("run wgtrace");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let files = |d: &Path| -> Vec<String> {
+        std::fs::read_dir(d)
+            .map(|r| {
+                r.map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    let cache = dir.join("cache");
+    render(&cache);
+    let saved = files(&cache);
+    if offered {
+        assert_eq!(saved.len(), 1, "{saved:?}");
+        assert!(
+            saved[0].starts_with("wgpu_pipeline_cache_vulkan_") && saved[0].ends_with(".bin"),
+            "{saved:?}"
+        );
+        // a second run loads it and saves it again
+        render(&cache);
+        assert_eq!(files(&cache), saved);
+    } else {
+        assert!(saved.is_empty(), "{saved:?}");
+    }
+    // `off` is a word, not a folder name: no folder `off` appears beside the test
+    render(Path::new("off"));
+    assert!(!Path::new("off").exists());
+}

@@ -127,12 +127,16 @@ fn checker_odd(tex: Texture, uv: vec2<f32>, p: vec3<f32>) -> bool {
 fn texture_leaf(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
     let tex = textures[index];
     switch tex.tag {
+#ifdef HAS_IMAGE_TEXTURE
         case TEX_IMAGE: {
             return image_value(tex, uv);
         }
+#endif
+#ifdef HAS_NOISE_TEXTURE
         case TEX_NOISE: {
             return noise_value(tex, p);
         }
+#endif
         default: {
             return tex.color0.rgb;
         }
@@ -143,6 +147,7 @@ fn texture_leaf(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
 // are colours or textures that are not checkers (the scene loader enforces it), so this
 // needs no recursion.
 fn texture_value(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
+#ifdef HAS_CHECKER_TEXTURE
     let tex = textures[index];
     if (tex.tag != TEX_CHECKER) {
         return texture_leaf(index, uv, p);
@@ -153,6 +158,9 @@ fn texture_value(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
         return select(tex.color0.rgb, tex.color1.rgb, odd);
     }
     return texture_leaf(cell, uv, p);
+#else
+    return texture_leaf(index, uv, p);
+#endif
 }
 
 // The material at a hit with its textured colours looked up; reflectances (albedo, tint,

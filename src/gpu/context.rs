@@ -210,9 +210,12 @@ impl GpuContext {
         let Some(data) = disk.cache.get_data() else {
             return;
         };
+        // unique per process and per save, as renders on several threads may save at once
+        static SAVES: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+        let n = SAVES.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let tmp = disk
             .path
-            .with_extension(format!("tmp{}", std::process::id()));
+            .with_extension(format!("tmp{}-{n}", std::process::id()));
         let written = disk
             .path
             .parent()

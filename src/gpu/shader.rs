@@ -212,10 +212,10 @@ pub fn kernel_shader(defines: &BTreeSet<String>) -> Result<String, ShaderError> 
 /// Every define a shader may be assembled with (the tests validate each alone, none and
 /// all, and every set a scene in `scenes/` reaches). Each keeps the code of one feature:
 /// a primitive type, object-space transforms, the BVH walk or the plain loop over
-/// primitives, a material type, textures, a pixel sampler (random is always there), a
-/// light-sampling strategy (bsdf is always there), an image background, and emission at
-/// all (without it no path is traced). The thin lens is always there: a pinhole without it
-/// measured slower on llvmpipe (`docs/specialization.md`).
+/// primitives, a material type, textures and each texture type, a pixel sampler (random
+/// is always there), a light-sampling strategy (bsdf is always there), an image
+/// background, and emission at all (without it no path is traced). The thin lens is always
+/// there: a pinhole without it measured slower on llvmpipe (ARCHITECTURE.md, Known costs).
 pub const FEATURE_DEFINES: &[&str] = &[
     "HAS_SPHERE",
     "HAS_TRIANGLE",
@@ -231,6 +231,9 @@ pub const FEATURE_DEFINES: &[&str] = &[
     "HAS_DIELECTRIC",
     "HAS_MICROFACET",
     "HAS_TEXTURES",
+    "HAS_IMAGE_TEXTURE",
+    "HAS_NOISE_TEXTURE",
+    "HAS_CHECKER_TEXTURE",
     "HAS_JITTERED",
     "HAS_HAMMERSLEY",
     "HAS_SOBOL",
@@ -296,6 +299,10 @@ pub fn scene_defines(scene: &crate::scene::FlatScene) -> BTreeSet<String> {
     add(mat(r::MAT_DIELECTRIC), "HAS_DIELECTRIC");
     add(mat(r::MAT_MICROFACET), "HAS_MICROFACET");
     add(!scene.textures.is_empty(), "HAS_TEXTURES");
+    let texture = |tag: u32| scene.textures.iter().any(|t| t.tag == tag);
+    add(texture(r::TEX_IMAGE), "HAS_IMAGE_TEXTURE");
+    add(texture(r::TEX_NOISE), "HAS_NOISE_TEXTURE");
+    add(texture(r::TEX_CHECKER), "HAS_CHECKER_TEXTURE");
     add(scene.sampler == r::SAMPLER_JITTERED, "HAS_JITTERED");
     add(scene.sampler == r::SAMPLER_HAMMERSLEY, "HAS_HAMMERSLEY");
     add(scene.sampler == r::SAMPLER_SOBOL, "HAS_SOBOL");
