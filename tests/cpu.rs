@@ -249,7 +249,31 @@ material = "nope"
     let e = load_err("[camera]\nlook_from = [0, 0, 5\n");
     assert!(e.starts_with("bad.toml:2:"), "{e}");
     let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[render]\nspp = 0\n");
-    assert!(e.contains("render.spp: must be >= 1, got 0"), "{e}");
+    assert!(
+        e.contains("render.spp: must be in 1..=16777216, got 0"),
+        "{e}"
+    );
+    let e = load_err(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[render]\nspp = 16777217\n",
+    );
+    assert!(
+        e.contains("render.spp: must be in 1..=16777216, got 16777217"),
+        "{e}"
+    );
+    // a near miss of a key or a variant gets a suggestion, a far one does not
+    let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[render]\nwidht = 8\n");
+    assert!(
+        e.starts_with("bad.toml:5:1: unknown field `widht`")
+            && e.ends_with("did you mean `width`?"),
+        "{e}"
+    );
+    let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\nm = { type = \"lambertain\" }\n");
+    assert!(e.ends_with("did you mean `lambertian`?"), "{e}");
+    let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[render]\nzzz = 8\n");
+    assert!(
+        e.contains("unknown field `zzz`") && !e.contains("did you mean"),
+        "{e}"
+    );
     let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\nm = { type = \"lambertian\", albedo = [1, 1, 1] }\n[[objects]]\ntype = \"polygon\"\nvertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0.2, 0.5, 0], [0, 1, 0]]\nmaterial = \"m\"\n");
     assert!(e.contains("convex"), "{e}");
 }

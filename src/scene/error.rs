@@ -111,3 +111,19 @@ pub fn line_col(src: &str, offset: usize) -> (usize, usize) {
     let col = before.rfind('\n').map_or(offset, |nl| offset - nl - 1) + 1;
     (line, col)
 }
+
+/// For serde's "unknown field `x`, expected one of `a`, `b`" (and "unknown variant"): the
+/// expected name nearest to the unknown one, when it is close enough to be a typo (edit
+/// distance at most a third of its length, and at least 1).
+pub fn did_you_mean(message: &str) -> Option<String> {
+    let rest = message
+        .strip_prefix("unknown field `")
+        .or_else(|| message.strip_prefix("unknown variant `"))?;
+    let (unknown, rest) = rest.split_once('`')?;
+    let expected = rest.split_once("expected")?.1;
+    let candidates = expected.split('`').skip(1).step_by(2);
+    let (best, distance) = candidates
+        .map(|c| (c, strsim::damerau_levenshtein(unknown, c)))
+        .min_by_key(|&(_, d)| d)?;
+    (distance <= (unknown.chars().count() / 3).max(1)).then(|| best.to_string())
+}

@@ -40,6 +40,9 @@ pub struct Overrides {
 
 /// Largest image side accepted.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Most samples per pixel accepted (2^24): sample indices stay exact in f32 and far from
+/// the u32 limit of the random streams.
+pub const MAX_SPP: u32 = 1 << 24;
 /// Longest path accepted (rays per path).
 pub const MAX_DEPTH_LIMIT: u32 = 1024;
 
@@ -216,7 +219,12 @@ pub fn load_scene_str(
     };
     let mut file: SceneFile = toml::from_str(src).map_err(|e| {
         let offset = e.span().map_or(0, |s| s.start);
-        invalid(vec![Problem::at(src, offset, "", e.message().trim())])
+        let message = e.message().trim();
+        let message = match error::did_you_mean(message) {
+            Some(name) => format!("{message}; did you mean `{name}`?"),
+            None => message.to_string(),
+        };
+        invalid(vec![Problem::at(src, offset, "", message)])
     })?;
     apply_overrides(&mut file, overrides);
     let problems = validate::validate(&file, src);

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use super::error::Problem;
 use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TextureDesc, TransformDesc};
-use super::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE};
+use super::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE, MAX_SPP};
 
 /// Collects every problem of a parsed scene (not only the first).
 pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
@@ -25,7 +25,7 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
     let r = &file.render;
     v.range_u32("render.width", r.width, 1, MAX_IMAGE_SIDE, 0);
     v.range_u32("render.height", r.height, 1, MAX_IMAGE_SIDE, 0);
-    v.range_u32("render.spp", r.spp, 1, u32::MAX, 0);
+    v.range_u32("render.spp", r.spp, 1, MAX_SPP, 0);
     v.range_u32("render.max_depth", r.max_depth, 1, MAX_DEPTH_LIMIT, 0);
 
     let c = &file.camera;
