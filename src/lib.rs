@@ -4,6 +4,7 @@
 //! Data flows one way: scene file -> [`scene`] (parse, validate, flatten into records) ->
 //! a backend ([`gpu`] or [`cpu`]) -> [`render::Accumulation`] -> [`image_io`].
 
+pub mod checkpoint;
 pub mod converge;
 pub mod cpu;
 pub mod gpu;

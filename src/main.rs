@@ -7,8 +7,9 @@ use anyhow::Context;
 use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
+use wgtrace::checkpoint::Checkpoint;
 use wgtrace::image_io::{write_error_map, write_image, OutputFormat};
-use wgtrace::render::{render_until, StopRule, Stopped};
+use wgtrace::render::{render_from, StopRule, Stopped};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::{BackendChoice, Engine, Overrides};
 
@@ -155,10 +156,31 @@ struct RenderArgs {
     /// comparisons and debugging).
     #[arg(long)]
     no_specialize: bool,
+    /// Keep the render's state in this checkpoint file (written whole: temporary file,
+    /// then rename) every --checkpoint-every seconds and at the end; `--resume` continues
+    /// from it. Ctrl-C or SIGTERM always writes one (here, or beside the image as .ckpt).
+    #[arg(long, value_name = "PATH")]
+    checkpoint: Option<PathBuf>,
+    /// Seconds between checkpoints (0: after every pass).
+    #[arg(long, value_name = "SECONDS", default_value_t = 60.0)]
+    checkpoint_every: f64,
+    /// Continue the render in this checkpoint (same scene and settings; --spp may ask for
+    /// more samples). The result equals an uninterrupted render, bit for bit on the same
+    /// backend.
+    #[arg(long, value_name = "PATH")]
+    resume: Option<PathBuf>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
 }
+
+/// Set by Ctrl-C (SIGINT) or SIGTERM: the render stops after the current pass.
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// A render that Ctrl-C or SIGTERM stopped, its image and checkpoint written.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted")]
+struct Interrupted;
 
 fn positive_f64(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
@@ -180,6 +202,8 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
+        // 128 + SIGINT, as a shell reports a command that Ctrl-C stopped
+        Err(e) if e.is::<Interrupted>() => ExitCode::from(130),
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
@@ -352,6 +376,26 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         eprintln!("{note}");
     }
     eprintln!("device: {}", engine.name());
+    let mut first = 0;
+    if let Some(path) = &args.resume {
+        let ckpt = Checkpoint::read(path)?;
+        ckpt.check(&scene, path)?;
+        engine.set_accumulation(&ckpt.accumulation)?;
+        first = ckpt.passes;
+        eprintln!("resuming {} at {first} spp", path.display());
+    }
+    let checkpoint_path = args
+        .checkpoint
+        .clone()
+        .or_else(|| args.resume.clone())
+        .unwrap_or_else(|| output.with_extension("ckpt"));
+    let save = |engine: &mut Engine, passes: u32| -> anyhow::Result<()> {
+        let ckpt = Checkpoint::new(&scene, passes, engine.accumulation()?);
+        ckpt.write(&checkpoint_path)
+            .with_context(|| format!("writing checkpoint {}", checkpoint_path.display()))
+    };
+    ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst))
+        .context("installing the Ctrl-C handler")?;
 
     let bar = if args.quiet {
         ProgressBar::hidden()
@@ -375,7 +419,10 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         time_limit: args.time_limit.map(std::time::Duration::from_secs_f64),
         target_error: args.target_error,
     };
-    let (done, stopped, estimate) = render_until(&mut engine, &scene, rule, |p, engine| {
+    let mut passes_done = first;
+    let mut last_save = std::time::Instant::now();
+    let result = render_from(&mut engine, &scene, rule, first, |p, engine| {
+        passes_done = p.passes_done;
         bar.set_position(p.passes_done as u64);
         bar.set_message(format!("{:.2} Msamples/s", p.samples_per_second() / 1e6));
         if let Some(n) = args.preview_every {
@@ -383,10 +430,36 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
                 write(engine).context("writing preview")?;
             }
         }
+        if INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst) {
+            return Err(Interrupted.into());
+        }
+        if args.checkpoint.is_some() && last_save.elapsed().as_secs_f64() >= args.checkpoint_every {
+            save(engine, p.passes_done)?;
+            last_save = std::time::Instant::now();
+        }
         Ok::<(), anyhow::Error>(())
-    })?;
+    });
     bar.finish_and_clear();
+    let (done, stopped, estimate) = match result {
+        Err(e) if e.is::<Interrupted>() => {
+            write(&mut engine)?;
+            save(&mut engine, passes_done)?;
+            eprintln!(
+                "interrupted after {passes_done} spp: wrote {} and checkpoint {}; continue with\n  \
+                 wgtrace render {} --resume {} (and the same options)",
+                output.display(),
+                checkpoint_path.display(),
+                args.scene.display(),
+                checkpoint_path.display()
+            );
+            return Err(e);
+        }
+        r => r?,
+    };
     write(&mut engine)?;
+    if args.checkpoint.is_some() || args.resume.is_some() {
+        save(&mut engine, done.passes_done)?;
+    }
     if let Some(map) = &args.error_map {
         let acc = engine.accumulation()?;
         let errors: Vec<f32> = (0..acc.pixel_count())

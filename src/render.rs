@@ -74,6 +74,18 @@ impl Engine {
         }
     }
 
+    /// Replaces the accumulated sums with `acc` (of this engine's size): a resumed render
+    /// continues from them.
+    pub fn set_accumulation(&mut self, acc: &Accumulation) -> Result<(), GpuError> {
+        match self {
+            Engine::Gpu(g) => g.set_accumulation(&acc.data),
+            Engine::Cpu(c) => {
+                c.set_accumulation(&acc.data);
+                Ok(())
+            }
+        }
+    }
+
     /// The accumulated samples so far.
     pub fn accumulation(&mut self) -> Result<Accumulation, GpuError> {
         let ((width, height), data) = match self {
@@ -236,6 +248,22 @@ pub fn render_until<E>(
     engine: &mut Engine,
     scene: &FlatScene,
     rule: StopRule,
+    on_pass: impl FnMut(&Progress, &mut Engine) -> Result<(), E>,
+) -> Result<(Progress, Stopped, Option<f64>), E>
+where
+    E: From<GpuError>,
+{
+    render_from(engine, scene, rule, 0, on_pass)
+}
+
+/// [`render_until`] for an engine that already holds passes `0..first` (a resumed render):
+/// runs passes `first..scene.spp`. `Progress` counts every pass, the time and samples of
+/// this run only.
+pub fn render_from<E>(
+    engine: &mut Engine,
+    scene: &FlatScene,
+    rule: StopRule,
+    first: u32,
     mut on_pass: impl FnMut(&Progress, &mut Engine) -> Result<(), E>,
 ) -> Result<(Progress, Stopped, Option<f64>), E>
 where
@@ -244,7 +272,7 @@ where
     let start = Instant::now();
     let pixels = scene.width as u64 * scene.height as u64;
     let mut progress = Progress {
-        passes_done: 0,
+        passes_done: first,
         passes_total: scene.spp,
         elapsed: Duration::ZERO,
         samples: 0,
@@ -252,16 +280,16 @@ where
     let mut estimate = None;
     let mut look_cost = Duration::ZERO;
     let mut last_look = Duration::ZERO;
-    for pass in 0..scene.spp {
+    for pass in first..scene.spp {
         if let Some(limit) = rule.time_limit {
-            let mean_pass = progress.elapsed / pass.max(1);
-            if pass > 0 && start.elapsed() + mean_pass > limit {
+            let mean_pass = progress.elapsed / (pass - first).max(1);
+            if pass > first && start.elapsed() + mean_pass > limit {
                 return Ok((progress, Stopped::TimeLimit, estimate));
             }
         }
         engine.render_pass(pass)?;
         progress.passes_done = pass + 1;
-        progress.samples = pixels * progress.passes_done as u64;
+        progress.samples = pixels * (progress.passes_done - first) as u64;
         progress.elapsed = start.elapsed();
         on_pass(&progress, engine)?;
         if let Some(target) = rule.target_error {

@@ -270,3 +270,149 @@ fn the_pipeline_cache_is_saved_where_wgtrace_cache_dir_says() {
     render(Path::new("off"));
     assert!(!Path::new("off").exists());
 }
+
+/// Ctrl-C (SIGINT) stops a render after the current pass, writes the image and a
+/// checkpoint, exits 130 and says how to resume; `--resume` with more samples then gives
+/// the same file, byte for byte, as one uninterrupted render, on each backend.
+#[test]
+fn an_interrupted_render_resumes_to_the_uninterrupted_image() {
+    for backend in ["gpu", "cpu"] {
+        let dir = tmp_dir(&format!("resume-{backend}"));
+        let (ckpt, resumed, whole) = (dir.join("r.ckpt"), dir.join("r.exr"), dir.join("w.exr"));
+        let base = [
+            "render",
+            &cornell(),
+            "--backend",
+            backend,
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-q",
+        ];
+        let child = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+            .args(base)
+            .args([
+                "--spp",
+                "1000000",
+                "--checkpoint-every",
+                "0",
+                "--checkpoint",
+            ])
+            .arg(&ckpt)
+            .arg("-o")
+            .arg(&resumed)
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .expect("run wgtrace");
+        let start = std::time::Instant::now();
+        while !ckpt.exists() {
+            assert!(start.elapsed().as_secs() < 120, "no checkpoint appeared");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        // the shell's own kill: no procps needed
+        let kill = Command::new("sh")
+            .args(["-c", &format!("kill -INT {}", child.id())])
+            .status()
+            .expect("run sh");
+        assert!(kill.success());
+        let out = child.wait_with_output().expect("wait for wgtrace");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "{stderr}");
+        assert!(stderr.contains("--resume") && resumed.exists(), "{stderr}");
+        let passes = wgtrace::checkpoint::Checkpoint::read(&ckpt).unwrap().passes;
+        assert!(passes >= 1);
+        let spp = (passes + 8).to_string();
+        let run = |extra: &[&str], out: &Path| {
+            let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+                .args(base)
+                .args(["--spp", &spp])
+                .args(extra)
+                .arg("-o")
+                .arg(out)
+                .output()
+                .expect("run wgtrace");
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        };
+        run(&["--resume", &ckpt.display().to_string()], &resumed);
+        run(&[], &whole);
+        assert!(
+            std::fs::read(&resumed).unwrap() == std::fs::read(&whole).unwrap(),
+            "{backend}: resumed after {passes} passes differs from the uninterrupted render"
+        );
+    }
+}
+
+/// A checkpoint that is not whole, or from another scene, settings, size or version, or
+/// with more samples than asked for, is refused with a message naming it.
+#[test]
+fn a_corrupt_or_mismatched_checkpoint_is_refused() {
+    let dir = tmp_dir("bad-checkpoint");
+    let ckpt = dir.join("c.ckpt");
+    let out = dir.join("c.png");
+    let render_sized = |scene: &str, width: &str, extra: &[&str]| {
+        let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+            .args([
+                "render",
+                scene,
+                "--width",
+                width,
+                "--height",
+                "8",
+                "-q",
+                "--backend",
+            ])
+            .args(["cpu", "-o"])
+            .arg(&out)
+            .args(extra)
+            .output()
+            .expect("run wgtrace");
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let render = |scene: &str, extra: &[&str]| render_sized(scene, "8", extra);
+    let c = ckpt.display().to_string();
+    let (ok, _) = render(&cornell(), &["--spp", "4", "--checkpoint", &c]);
+    assert!(ok);
+    let good = std::fs::read(&ckpt).unwrap();
+    let refused = |extra: &[&str], scene: &str, needle: &str| {
+        let (ok, err) = render(scene, extra);
+        assert!(!ok && err.contains(&c) && err.contains(needle), "{err}");
+    };
+    let resume = ["--resume", c.as_str()];
+    let spheres = common::repo_path("scenes/spheres.toml")
+        .display()
+        .to_string();
+    refused(&resume, &spheres, "different scene");
+    refused(
+        &[&resume[..], &["--seed", "5"]].concat(),
+        &cornell(),
+        "different scene",
+    );
+    let (ok, err) = render_sized(&cornell(), "9", &resume);
+    assert!(
+        !ok && err.contains("holds a 8x8 image, the render is 9x8"),
+        "{err}"
+    );
+    refused(
+        &[&resume[..], &["--spp", "2"]].concat(),
+        &cornell(),
+        "already holds 4",
+    );
+    std::fs::write(&ckpt, &good[..good.len() - 1]).unwrap();
+    refused(&resume, &cornell(), "truncated");
+    std::fs::write(&ckpt, b"not a checkpoint").unwrap();
+    refused(&resume, &cornell(), "no checkpoint header");
+    let mut other = good.clone();
+    let at = other.windows(7).position(|w| w == b"version").unwrap();
+    let end = at + other[at..].iter().position(|&b| b == b'\n').unwrap();
+    other.splice(at..end, b"version = 0.0.0".iter().copied());
+    std::fs::write(&ckpt, &other).unwrap();
+    refused(&resume, &cornell(), "written by wgtrace 0.0.0");
+    // the good one still resumes (to 8 spp)
+    std::fs::write(&ckpt, &good).unwrap();
+    let (ok, err) = render(&cornell(), &[&resume[..], &["--spp", "8"]].concat());
+    assert!(ok, "{err}");
+}

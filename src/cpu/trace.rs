@@ -277,6 +277,11 @@ impl CpuRenderer {
         self.accum.clone()
     }
 
+    /// Replaces the sums (a resumed render); `data` has two entries per pixel.
+    pub fn set_accumulation(&mut self, data: &[[f32; 4]]) {
+        self.accum.copy_from_slice(data);
+    }
+
     /// Image width and height.
     pub fn size(&self) -> (u32, u32) {
         (self.scene.width, self.scene.height)

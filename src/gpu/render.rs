@@ -110,7 +110,9 @@ impl GpuRenderer {
         let accum = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("accumulation"),
             size: accum_size,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
@@ -182,6 +184,15 @@ impl GpuRenderer {
             .poll(wgpu::PollType::wait_indefinitely())
             .map(|_| ())
             .map_err(|e| GpuError::Readback(e.to_string()))
+    }
+
+    /// Replaces the accumulation buffer's sums (a resumed render): two `[f32; 4]` per pixel.
+    pub fn set_accumulation(&mut self, data: &[[f32; 4]]) -> Result<(), GpuError> {
+        self.ctx
+            .queue
+            .write_buffer(&self.accum, 0, bytemuck::cast_slice(data));
+        self.ctx.queue.submit([]);
+        self.wait()
     }
 
     /// Copies the accumulation buffer back: two `[f32; 4]` per pixel.

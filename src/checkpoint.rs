@@ -1,0 +1,198 @@
+//! Checkpoints of a progressive render: the accumulation (linear sums, squares and counts
+//! per pixel), how many passes it holds, the renderer's version and a hash of the scene as
+//! flattened, so a render can stop (Ctrl-C, SIGTERM, a time limit) and continue later to
+//! the same result, bit for bit on the same backend.
+//!
+//! File layout: a text header (`wgtrace checkpoint` on the first line, then `key = value`
+//! lines, then an empty line) followed by the sums as little-endian f32, two `[f32; 4]`
+//! per pixel. Written to a temporary name and renamed, so a checkpoint on disk is always
+//! whole.
+
+use std::hash::{Hash, Hasher};
+use std::path::{Path, PathBuf};
+
+use crate::render::Accumulation;
+use crate::scene::records::{SAMPLER_HAMMERSLEY, SAMPLER_JITTERED};
+use crate::scene::FlatScene;
+
+const MAGIC: &str = "wgtrace checkpoint";
+
+/// The renderer version a checkpoint must come from.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+#[derive(Debug, thiserror::Error)]
+pub enum CheckpointError {
+    #[error("{}: cannot read checkpoint: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: not a usable wgtrace checkpoint: {reason}", path.display())]
+    Corrupt { path: PathBuf, reason: String },
+    #[error("{}: {reason}", path.display())]
+    Mismatch { path: PathBuf, reason: String },
+}
+
+/// A render's state after `passes` passes (sample indices `0..passes`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checkpoint {
+    pub version: String,
+    pub scene_hash: u64,
+    pub passes: u32,
+    pub accumulation: Accumulation,
+}
+
+/// A hash of everything that decides a render's samples: the records both backends read
+/// and the parameters (camera, size, seed, sampler, light sampling, depth). The sample
+/// count is left out, so a resumed render may ask for more samples, except under the
+/// Hammersley and jittered samplers, whose points depend on it.
+pub fn scene_hash(scene: &FlatScene) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    let mut params = scene.params(0, scene.full_tile());
+    if params.sampler != SAMPLER_HAMMERSLEY && params.sampler != SAMPLER_JITTERED {
+        params.spp = 0;
+        params.strata_log2 = 0;
+    }
+    let bytes: [&[u8]; 8] = [
+        bytemuck::bytes_of(&params),
+        bytemuck::cast_slice(&scene.primitives),
+        bytemuck::cast_slice(&scene.materials),
+        bytemuck::cast_slice(&scene.emitters),
+        bytemuck::cast_slice(&scene.bvh),
+        bytemuck::cast_slice(&scene.shape_data),
+        bytemuck::cast_slice(&scene.textures),
+        bytemuck::cast_slice(&scene.texels),
+    ];
+    for b in bytes {
+        b.hash(&mut h);
+    }
+    h.finish()
+}
+
+impl Checkpoint {
+    /// The state of a render of `scene` after `passes` passes.
+    pub fn new(scene: &FlatScene, passes: u32, accumulation: Accumulation) -> Self {
+        Checkpoint {
+            version: VERSION.to_string(),
+            scene_hash: scene_hash(scene),
+            passes,
+            accumulation,
+        }
+    }
+
+    /// Writes the checkpoint to `path` whole: to a temporary file beside it, then renamed.
+    pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let acc = &self.accumulation;
+        let mut bytes = format!(
+            "{MAGIC}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\npasses = {}\n\n",
+            self.version, self.scene_hash, acc.width, acc.height, self.passes
+        )
+        .into_bytes();
+        for v in acc.data.iter().flatten() {
+            bytes.extend_from_slice(&v.to_le_bytes());
+        }
+        let mut tmp = path.as_os_str().to_owned();
+        tmp.push(format!(".tmp{}", std::process::id()));
+        let tmp = PathBuf::from(tmp);
+        std::fs::write(&tmp, &bytes)
+            .and_then(|_| std::fs::rename(&tmp, path))
+            .inspect_err(|_| {
+                let _ = std::fs::remove_file(&tmp);
+            })
+    }
+
+    /// Reads a checkpoint, refusing anything that is not a whole one.
+    pub fn read(path: &Path) -> Result<Self, CheckpointError> {
+        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let corrupt = |reason: String| CheckpointError::Corrupt {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let end = bytes
+            .windows(2)
+            .position(|w| w == b"\n\n")
+            .filter(|_| bytes.starts_with(MAGIC.as_bytes()))
+            .ok_or_else(|| corrupt("no checkpoint header".into()))?;
+        let header = std::str::from_utf8(&bytes[..end])
+            .map_err(|_| corrupt("the header is not text".into()))?;
+        let field = |key: &str| -> Result<&str, CheckpointError> {
+            header
+                .lines()
+                .find_map(|l| l.strip_prefix(key)?.trim_start().strip_prefix('='))
+                .map(str::trim)
+                .ok_or_else(|| corrupt(format!("no {key} in the header")))
+        };
+        let number = |key: &str| -> Result<u32, CheckpointError> {
+            field(key)?
+                .parse()
+                .map_err(|_| corrupt(format!("{key} is not a number")))
+        };
+        let scene_hash = u64::from_str_radix(field("scene_hash")?, 16)
+            .map_err(|_| corrupt("scene_hash is not a hex number".into()))?;
+        let (width, height, passes) = (number("width")?, number("height")?, number("passes")?);
+        let data = &bytes[end + 2..];
+        let expected = width as u64 * height as u64 * 32;
+        if data.len() as u64 != expected {
+            return Err(corrupt(format!(
+                "{} bytes of sums where a {width}x{height} image has {expected} (truncated?)",
+                data.len()
+            )));
+        }
+        let floats: Vec<f32> = data
+            .chunks_exact(4)
+            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+            .collect();
+        Ok(Checkpoint {
+            version: field("version")?.to_string(),
+            scene_hash,
+            passes,
+            accumulation: Accumulation {
+                width,
+                height,
+                data: floats
+                    .chunks_exact(4)
+                    .map(|c| [c[0], c[1], c[2], c[3]])
+                    .collect(),
+            },
+        })
+    }
+
+    /// Whether this checkpoint can continue a render of `scene` (read from `path`): same
+    /// renderer version, same scene and settings, same size, no more passes than it asks.
+    pub fn check(&self, scene: &FlatScene, path: &Path) -> Result<(), CheckpointError> {
+        let mismatch = |reason: String| CheckpointError::Mismatch {
+            path: path.to_path_buf(),
+            reason,
+        };
+        if self.version != VERSION {
+            return Err(mismatch(format!(
+                "written by wgtrace {}, this is {VERSION}; render again",
+                self.version
+            )));
+        }
+        let acc = &self.accumulation;
+        if (acc.width, acc.height) != (scene.width, scene.height) {
+            return Err(mismatch(format!(
+                "holds a {}x{} image, the render is {}x{}",
+                acc.width, acc.height, scene.width, scene.height
+            )));
+        }
+        if self.scene_hash != scene_hash(scene) {
+            return Err(mismatch(
+                "comes from a different scene or different settings (seed, sampler, light \
+                 sampling, max_depth, camera)"
+                    .into(),
+            ));
+        }
+        if self.passes > scene.spp {
+            return Err(mismatch(format!(
+                "already holds {} samples per pixel, more than the {} asked for",
+                self.passes, scene.spp
+            )));
+        }
+        Ok(())
+    }
+}
