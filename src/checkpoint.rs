@@ -9,6 +9,7 @@
 //! whole.
 
 use std::hash::{Hash, Hasher};
+use std::ops::Range;
 use std::path::{Path, PathBuf};
 
 use crate::render::Accumulation;
@@ -33,13 +34,54 @@ pub enum CheckpointError {
     Mismatch { path: PathBuf, reason: String },
 }
 
-/// A render's state after `passes` passes (sample indices `0..passes`).
+/// A render's state: the sums of the samples with the indices in `samples` (sorted,
+/// disjoint, adjacent ranges joined).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Checkpoint {
     pub version: String,
     pub scene_hash: u64,
-    pub passes: u32,
+    pub samples: Vec<Range<u32>>,
     pub accumulation: Accumulation,
+}
+
+/// Sorts ranges and joins those that touch; None when two overlap.
+pub fn join_ranges(mut ranges: Vec<Range<u32>>) -> Option<Vec<Range<u32>>> {
+    ranges.retain(|r| !r.is_empty());
+    ranges.sort_by_key(|r| r.start);
+    let mut out: Vec<Range<u32>> = Vec::new();
+    for r in ranges {
+        match out.last_mut() {
+            Some(last) if r.start < last.end => return None,
+            Some(last) if r.start == last.end => last.end = r.end,
+            _ => out.push(r),
+        }
+    }
+    Some(out)
+}
+
+fn format_ranges(ranges: &[Range<u32>]) -> String {
+    let parts: Vec<String> = ranges
+        .iter()
+        .map(|r| format!("{}..{}", r.start, r.end))
+        .collect();
+    parts.join(",")
+}
+
+/// Parses `START..END` (END > START).
+pub fn parse_range(s: &str) -> Result<Range<u32>, String> {
+    let (a, b) = s
+        .split_once("..")
+        .ok_or_else(|| format!("expected START..END, got {s}"))?;
+    let parse = |x: &str| {
+        x.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("expected START..END with whole numbers, got {s}"))
+    };
+    let (a, b) = (parse(a)?, parse(b)?);
+    if b <= a {
+        return Err(format!("END must exceed START, got {s}"));
+    }
+    Ok(a..b)
 }
 
 /// A hash of everything that decides a render's samples: the records both backends read
@@ -70,22 +112,85 @@ pub fn scene_hash(scene: &FlatScene) -> u64 {
 }
 
 impl Checkpoint {
-    /// The state of a render of `scene` after `passes` passes.
-    pub fn new(scene: &FlatScene, passes: u32, accumulation: Accumulation) -> Self {
+    /// The state of a render of `scene` holding the samples `samples`.
+    pub fn new(scene: &FlatScene, samples: Range<u32>, accumulation: Accumulation) -> Self {
         Checkpoint {
             version: VERSION.to_string(),
             scene_hash: scene_hash(scene),
-            passes,
+            samples: vec![samples],
             accumulation,
         }
+    }
+
+    /// Samples per pixel held.
+    pub fn sample_count(&self) -> u32 {
+        self.samples.iter().map(|r| r.end - r.start).sum()
+    }
+
+    /// The one contiguous range of samples held, if it is one (a render can continue it).
+    pub fn contiguous(&self) -> Option<Range<u32>> {
+        match self.samples.as_slice() {
+            [r] => Some(r.clone()),
+            _ => None,
+        }
+    }
+
+    /// Adds the samples of checkpoints of the same scene, settings, size and version, whose
+    /// sample ranges do not overlap (`paths` name them in errors).
+    pub fn merge(parts: &[(PathBuf, Checkpoint)]) -> Result<Checkpoint, CheckpointError> {
+        let (first_path, first) = parts.first().ok_or_else(|| CheckpointError::Mismatch {
+            path: PathBuf::new(),
+            reason: "no checkpoints to merge".into(),
+        })?;
+        let mut merged = first.clone();
+        for (path, c) in &parts[1..] {
+            let mismatch = |what: &str| CheckpointError::Mismatch {
+                path: path.clone(),
+                reason: format!("{what} differs from {}'s", first_path.display()),
+            };
+            if c.version != first.version {
+                return Err(mismatch("the renderer version"));
+            }
+            if c.scene_hash != first.scene_hash {
+                return Err(mismatch("the scene or its settings"));
+            }
+            let (a, b) = (&c.accumulation, &merged.accumulation);
+            if (a.width, a.height) != (b.width, b.height) {
+                return Err(mismatch("the image size"));
+            }
+            let all = merged.samples.iter().chain(&c.samples).cloned().collect();
+            merged.samples = join_ranges(all).ok_or_else(|| CheckpointError::Mismatch {
+                path: path.clone(),
+                reason: format!(
+                    "its samples {} overlap samples already merged ({})",
+                    format_ranges(&c.samples),
+                    format_ranges(&merged.samples)
+                ),
+            })?;
+            for (m, x) in merged
+                .accumulation
+                .data
+                .iter_mut()
+                .zip(&c.accumulation.data)
+            {
+                for k in 0..4 {
+                    m[k] += x[k];
+                }
+            }
+        }
+        Ok(merged)
     }
 
     /// Writes the checkpoint to `path` whole: to a temporary file beside it, then renamed.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let acc = &self.accumulation;
         let mut bytes = format!(
-            "{MAGIC}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\npasses = {}\n\n",
-            self.version, self.scene_hash, acc.width, acc.height, self.passes
+            "{MAGIC}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\nsamples = {}\n\n",
+            self.version,
+            self.scene_hash,
+            acc.width,
+            acc.height,
+            format_ranges(&self.samples)
         )
         .into_bytes();
         for v in acc.data.iter().flatten() {
@@ -132,7 +237,15 @@ impl Checkpoint {
         };
         let scene_hash = u64::from_str_radix(field("scene_hash")?, 16)
             .map_err(|_| corrupt("scene_hash is not a hex number".into()))?;
-        let (width, height, passes) = (number("width")?, number("height")?, number("passes")?);
+        let (width, height) = (number("width")?, number("height")?);
+        let samples = field("samples")?
+            .split(',')
+            .map(parse_range)
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(|e| corrupt(format!("samples: {e}")))?;
+        let samples = join_ranges(samples)
+            .filter(|r| !r.is_empty())
+            .ok_or_else(|| corrupt("samples: empty or overlapping ranges".into()))?;
         let data = &bytes[end + 2..];
         let expected = width as u64 * height as u64 * 32;
         if data.len() as u64 != expected {
@@ -148,7 +261,7 @@ impl Checkpoint {
         Ok(Checkpoint {
             version: field("version")?.to_string(),
             scene_hash,
-            passes,
+            samples,
             accumulation: Accumulation {
                 width,
                 height,
@@ -187,10 +300,11 @@ impl Checkpoint {
                     .into(),
             ));
         }
-        if self.passes > scene.spp {
+        let end = self.samples.last().map_or(0, |r| r.end);
+        if end > scene.spp {
             return Err(mismatch(format!(
-                "already holds {} samples per pixel, more than the {} asked for",
-                self.passes, scene.spp
+                "already holds samples up to index {end}, more than the {} asked for",
+                scene.spp
             )));
         }
         Ok(())

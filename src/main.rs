@@ -40,6 +40,20 @@ enum Command {
     },
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
+    /// Combine checkpoints of one scene rendered over disjoint sample ranges
+    /// (`render --sample-range`) into one image, and optionally one checkpoint.
+    Merge {
+        /// Checkpoints to add up (same scene, settings, size and version; no sample index
+        /// in two of them).
+        #[arg(required = true)]
+        checkpoints: Vec<PathBuf>,
+        /// Output image (.png, .exr or .ppm).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Also write the merged checkpoint here.
+        #[arg(long, value_name = "PATH")]
+        checkpoint: Option<PathBuf>,
+    },
 }
 
 #[derive(clap::Args)]
@@ -169,6 +183,11 @@ struct RenderArgs {
     /// backend.
     #[arg(long, value_name = "PATH")]
     resume: Option<PathBuf>,
+    /// Render only the samples with these indices (END at most spp), and keep them in a
+    /// checkpoint: ranges rendered apart (other processes or machines) are combined with
+    /// `wgtrace merge`.
+    #[arg(long, value_name = "START..END", value_parser = wgtrace::checkpoint::parse_range)]
+    sample_range: Option<std::ops::Range<u32>>,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -199,6 +218,11 @@ fn main() -> ExitCode {
         Command::Converge(args) => converge(args),
         Command::Features { scene } => features(&scene),
         Command::Info => info(),
+        Command::Merge {
+            checkpoints,
+            output,
+            checkpoint,
+        } => merge(&checkpoints, &output, checkpoint.as_deref()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -209,6 +233,37 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+fn merge(inputs: &[PathBuf], output: &Path, checkpoint: Option<&Path>) -> anyhow::Result<()> {
+    OutputFormat::from_path(output)?;
+    let parts = inputs
+        .iter()
+        .map(|p| Ok((p.clone(), Checkpoint::read(p)?)))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let merged = Checkpoint::merge(&parts)?;
+    let acc = &merged.accumulation;
+    write_image(output, acc.width, acc.height, &acc.to_rgb())?;
+    if let Some(path) = checkpoint {
+        merged
+            .write(path)
+            .with_context(|| format!("writing checkpoint {}", path.display()))?;
+    }
+    let ranges: Vec<String> = merged
+        .samples
+        .iter()
+        .map(|r| format!("{}..{}", r.start, r.end))
+        .collect();
+    println!(
+        "{}: {}x{}, {} spp (samples {}) from {} checkpoints",
+        output.display(),
+        acc.width,
+        acc.height,
+        merged.sample_count(),
+        ranges.join(","),
+        parts.len()
+    );
+    Ok(())
 }
 
 fn info() -> anyhow::Result<()> {
@@ -376,13 +431,32 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         eprintln!("{note}");
     }
     eprintln!("device: {}", engine.name());
-    let mut first = 0;
+    let range = args.sample_range.clone().unwrap_or(0..scene.spp);
+    if range.end > scene.spp {
+        anyhow::bail!(
+            "--sample-range {}..{} ends past the render's {} samples per pixel",
+            range.start,
+            range.end,
+            scene.spp
+        );
+    }
+    let mut first = range.start;
     if let Some(path) = &args.resume {
         let ckpt = Checkpoint::read(path)?;
         ckpt.check(&scene, path)?;
+        let held = ckpt.contiguous().filter(|r| r.start == range.start);
+        let Some(held) = held else {
+            anyhow::bail!(
+                "{}: holds samples {:?}, which do not start this render's samples {}..{}",
+                path.display(),
+                ckpt.samples,
+                range.start,
+                range.end
+            );
+        };
         engine.set_accumulation(&ckpt.accumulation)?;
-        first = ckpt.passes;
-        eprintln!("resuming {} at {first} spp", path.display());
+        first = held.end;
+        eprintln!("resuming {} at sample {first}", path.display());
     }
     let checkpoint_path = args
         .checkpoint
@@ -390,7 +464,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         .or_else(|| args.resume.clone())
         .unwrap_or_else(|| output.with_extension("ckpt"));
     let save = |engine: &mut Engine, passes: u32| -> anyhow::Result<()> {
-        let ckpt = Checkpoint::new(&scene, passes, engine.accumulation()?);
+        let ckpt = Checkpoint::new(&scene, range.start..passes, engine.accumulation()?);
         ckpt.write(&checkpoint_path)
             .with_context(|| format!("writing checkpoint {}", checkpoint_path.display()))
     };
@@ -421,7 +495,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     };
     let mut passes_done = first;
     let mut last_save = std::time::Instant::now();
-    let result = render_from(&mut engine, &scene, rule, first, |p, engine| {
+    let result = render_from(&mut engine, &scene, rule, first..range.end, |p, engine| {
         passes_done = p.passes_done;
         bar.set_position(p.passes_done as u64);
         bar.set_message(format!("{:.2} Msamples/s", p.samples_per_second() / 1e6));
@@ -445,7 +519,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             write(&mut engine)?;
             save(&mut engine, passes_done)?;
             eprintln!(
-                "interrupted after {passes_done} spp: wrote {} and checkpoint {}; continue with\n  \
+                "interrupted at sample {passes_done}: wrote {} and checkpoint {}; continue with\n  \
                  wgtrace render {} --resume {} (and the same options)",
                 output.display(),
                 checkpoint_path.display(),
@@ -457,7 +531,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         r => r?,
     };
     write(&mut engine)?;
-    if args.checkpoint.is_some() || args.resume.is_some() {
+    if args.checkpoint.is_some() || args.resume.is_some() || args.sample_range.is_some() {
         save(&mut engine, done.passes_done)?;
     }
     if let Some(map) = &args.error_map {
@@ -472,7 +546,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         output.display(),
         w,
         h,
-        done.passes_done,
+        done.passes_done - range.start,
         done.elapsed.as_secs_f64(),
         done.samples_per_second() / 1e6
     );

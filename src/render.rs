@@ -253,34 +253,36 @@ pub fn render_until<E>(
 where
     E: From<GpuError>,
 {
-    render_from(engine, scene, rule, 0, on_pass)
+    render_from(engine, scene, rule, 0..scene.spp, on_pass)
 }
 
-/// [`render_until`] for an engine that already holds passes `0..first` (a resumed render):
-/// runs passes `first..scene.spp`. `Progress` counts every pass, the time and samples of
-/// this run only.
+/// [`render_until`] over the sample indices `passes` only: a resumed render starts past 0
+/// (its engine holding the samples before), a range of a distributed render ends before
+/// `scene.spp`. `Progress` counts passes as sample indices (`passes_done` is the next
+/// index), and the time and samples of this run only.
 pub fn render_from<E>(
     engine: &mut Engine,
     scene: &FlatScene,
     rule: StopRule,
-    first: u32,
+    passes: std::ops::Range<u32>,
     mut on_pass: impl FnMut(&Progress, &mut Engine) -> Result<(), E>,
 ) -> Result<(Progress, Stopped, Option<f64>), E>
 where
     E: From<GpuError>,
 {
     let start = Instant::now();
+    let first = passes.start;
     let pixels = scene.width as u64 * scene.height as u64;
     let mut progress = Progress {
         passes_done: first,
-        passes_total: scene.spp,
+        passes_total: passes.end,
         elapsed: Duration::ZERO,
         samples: 0,
     };
     let mut estimate = None;
     let mut look_cost = Duration::ZERO;
     let mut last_look = Duration::ZERO;
-    for pass in first..scene.spp {
+    for pass in passes {
         if let Some(limit) = rule.time_limit {
             let mean_pass = progress.elapsed / (pass - first).max(1);
             if pass > first && start.elapsed() + mean_pass > limit {

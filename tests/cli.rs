@@ -320,7 +320,11 @@ fn an_interrupted_render_resumes_to_the_uninterrupted_image() {
         let stderr = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(130), "{stderr}");
         assert!(stderr.contains("--resume") && resumed.exists(), "{stderr}");
-        let passes = wgtrace::checkpoint::Checkpoint::read(&ckpt).unwrap().passes;
+        let held = wgtrace::checkpoint::Checkpoint::read(&ckpt)
+            .unwrap()
+            .samples;
+        assert_eq!(held.len(), 1, "{held:?}");
+        let passes = held[0].end;
         assert!(passes >= 1);
         let spp = (passes + 8).to_string();
         let run = |extra: &[&str], out: &Path| {
@@ -399,7 +403,7 @@ fn a_corrupt_or_mismatched_checkpoint_is_refused() {
     refused(
         &[&resume[..], &["--spp", "2"]].concat(),
         &cornell(),
-        "already holds 4",
+        "already holds samples up to index 4",
     );
     std::fs::write(&ckpt, &good[..good.len() - 1]).unwrap();
     refused(&resume, &cornell(), "truncated");
@@ -415,4 +419,86 @@ fn a_corrupt_or_mismatched_checkpoint_is_refused() {
     std::fs::write(&ckpt, &good).unwrap();
     let (ok, err) = render(&cornell(), &[&resume[..], &["--spp", "8"]].concat());
     assert!(ok, "{err}");
+}
+
+/// Four sample ranges rendered apart and merged give the image of one render of all the
+/// samples, up to the rounding of adding the sums in another order (each pixel a sum of 16
+/// samples: within 16 x 4 f32 epsilons, relative); overlapping ranges and checkpoints of
+/// another scene are refused.
+#[test]
+fn merged_sample_ranges_equal_one_render() {
+    let dir = tmp_dir("merge");
+    let base = |extra: &[&str], out: &Path| {
+        let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+            .args(["render", &cornell(), "--width", "12", "--height", "8", "-q"])
+            .args(["--spp", "16"])
+            .args(extra)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .expect("run wgtrace");
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let mut parts = Vec::new();
+    for (i, range) in ["0..4", "4..8", "8..12", "12..16"].iter().enumerate() {
+        let ckpt = dir.join(format!("part{i}.ckpt"));
+        let c = ckpt.display().to_string();
+        base(
+            &["--sample-range", range, "--checkpoint", &c],
+            &dir.join(format!("part{i}.exr")),
+        );
+        parts.push(c);
+    }
+    let whole = dir.join("whole.exr");
+    base(&[], &whole);
+    let merged = dir.join("merged.exr");
+    let merge = |inputs: &[&str], out: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+            .arg("merge")
+            .args(inputs)
+            .arg("-o")
+            .arg(out)
+            .output()
+            .expect("run wgtrace")
+    };
+    // in any order
+    let order: Vec<&str> = [3, 0, 2, 1].iter().map(|&i| parts[i].as_str()).collect();
+    let o = merge(&order, &merged);
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        stdout.contains("16 spp (samples 0..16) from 4 checkpoints"),
+        "{stdout}"
+    );
+    let read = |p: &Path| image::open(p).unwrap().to_rgb32f().into_raw();
+    let (a, b) = (read(&merged), read(&whole));
+    assert_eq!(a.len(), b.len());
+    let bound = 16.0 * 4.0 * f32::EPSILON;
+    for (x, y) in a.iter().zip(&b) {
+        assert!((x - y).abs() <= bound * y.abs().max(1e-6), "{x} vs {y}");
+    }
+    // overlap: 0..4 twice
+    let o = merge(&[&parts[0], &parts[0]], &merged);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("overlap"), "{err}");
+    // another scene
+    let other = dir.join("other.ckpt");
+    let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+        .args([
+            "render",
+            &common::repo_path("scenes/spheres.toml")
+                .display()
+                .to_string(),
+        ])
+        .args(["--width", "12", "--height", "8", "-q", "--spp", "16"])
+        .args(["--sample-range", "4..8", "-o"])
+        .arg(dir.join("other.png"))
+        .arg("--checkpoint")
+        .arg(&other)
+        .output()
+        .expect("run wgtrace");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = merge(&[&parts[0], &other.display().to_string()], &merged);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("scene"), "{err}");
 }
