@@ -192,12 +192,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // nothing in the scene emits, so no path can carry light: no ray is traced
     let c = vec3<f32>(0.0);
 #endif
+    // the bound accumulation buffer holds this tile's pixels only
+    let slot = gid.y * params.tile_width + gid.x;
     if (all_finite(c) && all_finite(c * c)) {
-        accum[2u * pixel] += vec4<f32>(c, 1.0);
-        accum[2u * pixel + 1u] += vec4<f32>(c * c, 0.0);
+        accum[2u * slot] += vec4<f32>(c, 1.0);
+        accum[2u * slot + 1u] += vec4<f32>(c * c, 0.0);
     } else {
         // dropped, and counted in the otherwise unused .w of the squares
-        accum[2u * pixel + 1u].w += 1.0;
+        accum[2u * slot + 1u].w += 1.0;
     }
 }
 

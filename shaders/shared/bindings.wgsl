@@ -6,8 +6,9 @@
 @group(0) @binding(1) var<storage, read> primitives: array<Primitive>;
 @group(0) @binding(2) var<storage, read> materials: array<Material>;
 @group(0) @binding(3) var<storage, read> emitters: array<Emitter>;
-// Two vec4 per pixel: [2i] = (sum r, sum g, sum b, samples), [2i + 1] = (sum r^2, g^2, b^2,
-// samples dropped as not finite).
+// Two vec4 per pixel of the tile being rendered (a band of whole rows with its own buffer,
+// pixel i row-major within the band): [2i] = (sum r, sum g, sum b, samples), [2i + 1] =
+// (sum r^2, g^2, b^2, samples dropped as not finite).
 @group(0) @binding(4) var<storage, read_write> accum: array<vec4<f32>>;
 @group(0) @binding(5) var<storage, read> bvh: array<BvhNode>;
 // Transforms and triangle vertex attributes, indexed by Primitive.data.

@@ -22,17 +22,6 @@ pub enum GpuError {
     #[error("GPU buffer readback failed: {0}")]
     Readback(String),
     #[error(
-        "a {width}x{height} image needs {needed_mib} MiB of accumulation buffer, more than \
-         this adapter's {limit_mib} MiB per storage binding; use a smaller size or \
-         --backend cpu"
-    )]
-    ImageTooLarge {
-        width: u32,
-        height: u32,
-        needed_mib: u64,
-        limit_mib: u64,
-    },
-    #[error(
         "the scene's {what} buffer needs {needed_mib} MiB, more than this adapter's \
          {limit_mib} MiB per storage binding; use fewer triangles or --backend cpu"
     )]

@@ -6,7 +6,8 @@ use wgpu::util::DeviceExt;
 
 use super::context::{GpuContext, GpuError};
 use super::render::{
-    all_bindings, check_loop_limit, check_scene_fits, read_mapped, scene_bindings, scene_layout,
+    all_bindings, bind_scene, check_loop_limit, check_scene_fits, read_mapped, scene_buffers,
+    scene_layout,
 };
 use super::shader;
 use crate::scene::records::{KernelHit, KernelRay, TextureLookup};
@@ -90,10 +91,11 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let scene_group = scene_bindings(device, &scene_bgl, &all_bindings(), scene, &accum);
+    let buffers = scene_buffers(device, &all_bindings(), scene);
+    let scene_group = bind_scene(device, &scene_bgl, &all_bindings(), &buffers, &accum);
     let params = scene.params(0, scene.full_tile());
     ctx.queue
-        .write_buffer(&scene_group.params, 0, bytemuck::bytes_of(&params));
+        .write_buffer(&buffers.params, 0, bytemuck::bytes_of(&params));
 
     let input_buf = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("kernel inputs"),
@@ -136,7 +138,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
             timestamp_writes: None,
         });
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &scene_group.group, &[]);
+        pass.set_bind_group(0, &scene_group, &[]);
         pass.set_bind_group(1, &io_group, &[]);
         pass.dispatch_workgroups((inputs.len() as u32).div_ceil(WORKGROUP), 1, 1);
     }

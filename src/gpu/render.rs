@@ -37,11 +37,30 @@ pub struct GpuRenderer {
     ctx: Arc<GpuContext>,
     scene: FlatScene,
     pipeline: Arc<TracePipeline>,
-    bind_group: wgpu::BindGroup,
     params: wgpu::Buffer,
-    accum: wgpu::Buffer,
+    bands: Vec<Band>,
+    /// As large as the largest band's accumulation.
     readback: wgpu::Buffer,
-    tiles: Vec<Tile>,
+}
+
+/// A band of whole rows: one dispatch and one submission per pass, with an accumulation
+/// buffer of its own, so no buffer exceeds a storage binding however large the image.
+struct Band {
+    tile: Tile,
+    accum: wgpu::Buffer,
+    group: wgpu::BindGroup,
+}
+
+/// Most pixels per band: [`MAX_TILE_PIXELS`] (or `WGTRACE_MAX_TILE_PIXELS`, to keep each
+/// submission shorter on a GPU with a watchdog, and for tests), and no more than one
+/// storage binding of `limit` bytes holds.
+pub fn band_pixels(limit: u64) -> u32 {
+    let wanted = std::env::var("WGTRACE_MAX_TILE_PIXELS")
+        .ok()
+        .and_then(|v| v.parse::<u32>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or(MAX_TILE_PIXELS);
+    wanted.min((limit / ACCUM_BYTES_PER_PIXEL).min(u32::MAX as u64) as u32)
 }
 
 /// A storage buffer holding `items`, or one zeroed element when there are none (WebGPU
@@ -62,7 +81,13 @@ fn storage_buffer<T: bytemuck::Pod>(
 
 /// Splits the image into bands of whole rows of at most [`MAX_TILE_PIXELS`] pixels.
 pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
-    let rows = (MAX_TILE_PIXELS / width).max(1);
+    tiles_within(width, height, MAX_TILE_PIXELS)
+}
+
+/// Splits the image into bands of whole rows of at most `max_pixels` pixels (one row at
+/// least).
+pub fn tiles_within(width: u32, height: u32, max_pixels: u32) -> Vec<Tile> {
+    let rows = (max_pixels / width).max(1);
     (0..height)
         .step_by(rows as usize)
         .map(|y| Tile {
@@ -90,49 +115,49 @@ impl GpuRenderer {
         pipeline: Arc<TracePipeline>,
     ) -> Result<Self, GpuError> {
         let device = &ctx.device;
-        // wgpu zero-initialises new buffers, so the sums start at 0.
-        let accum_size = scene.width as u64 * scene.height as u64 * ACCUM_BYTES_PER_PIXEL;
+        check_scene_fits(device, scene)?;
+        check_loop_limit(&ctx, scene, true)?;
         let limits = device.limits();
         let limit = limits
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
-        if accum_size > limit {
-            return Err(GpuError::ImageTooLarge {
-                width: scene.width,
-                height: scene.height,
-                needed_mib: accum_size.div_ceil(1 << 20),
-                limit_mib: limit >> 20,
-            });
-        }
-        check_scene_fits(device, scene)?;
-        check_loop_limit(&ctx, scene, true)?;
-
-        let accum = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("accumulation"),
-            size: accum_size,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
+        let tiles = tiles_within(scene.width, scene.height, band_pixels(limit));
+        let buffers = scene_buffers(device, &pipeline.bindings, scene);
+        // wgpu zero-initialises new buffers, so the sums start at 0.
+        let bands: Vec<Band> = tiles
+            .into_iter()
+            .map(|tile| {
+                let accum = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("accumulation"),
+                    size: tile.width as u64 * tile.height as u64 * ACCUM_BYTES_PER_PIXEL,
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                });
+                let group = bind_scene(
+                    device,
+                    &pipeline.layout,
+                    &pipeline.bindings,
+                    &buffers,
+                    &accum,
+                );
+                Band { tile, accum, group }
+            })
+            .collect();
+        let largest = bands.iter().map(|b| b.accum.size()).max().unwrap_or(0);
         let readback = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("readback"),
-            size: accum_size,
+            size: largest,
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let SceneBindings {
-            params,
-            group: bind_group,
-        } = scene_bindings(device, &pipeline.layout, &pipeline.bindings, scene, &accum);
         Ok(Self {
-            tiles: tiles(scene.width, scene.height),
             scene: scene.clone(),
             ctx,
             pipeline,
-            bind_group,
-            params,
-            accum,
+            params: buffers.params,
+            bands,
             readback,
         })
     }
@@ -149,7 +174,8 @@ impl GpuRenderer {
 
     /// Adds sample `sample_index` of every pixel: one submission per tile, then waits.
     pub fn render_pass(&mut self, sample_index: u32) -> Result<(), GpuError> {
-        for &tile in &self.tiles {
+        for band in &self.bands {
+            let tile = band.tile;
             let params = self.scene.params(sample_index, tile);
             // Staged writes land at the start of the next submission, so each tile's
             // dispatch sees its own parameters.
@@ -166,7 +192,7 @@ impl GpuRenderer {
                     timestamp_writes: None,
                 });
                 pass.set_pipeline(&self.pipeline.pipeline);
-                pass.set_bind_group(0, &self.bind_group, &[]);
+                pass.set_bind_group(0, &band.group, &[]);
                 pass.dispatch_workgroups(
                     tile.width.div_ceil(WORKGROUP),
                     tile.height.div_ceil(WORKGROUP),
@@ -186,24 +212,38 @@ impl GpuRenderer {
             .map_err(|e| GpuError::Readback(e.to_string()))
     }
 
-    /// Replaces the accumulation buffer's sums (a resumed render): two `[f32; 4]` per pixel.
+    /// Replaces the accumulation buffers' sums (a resumed render): two `[f32; 4]` per
+    /// pixel of the image, row-major.
     pub fn set_accumulation(&mut self, data: &[[f32; 4]]) -> Result<(), GpuError> {
-        self.ctx
-            .queue
-            .write_buffer(&self.accum, 0, bytemuck::cast_slice(data));
+        let mut at = 0;
+        for band in &self.bands {
+            let n = 2 * band.tile.width as usize * band.tile.height as usize;
+            self.ctx
+                .queue
+                .write_buffer(&band.accum, 0, bytemuck::cast_slice(&data[at..at + n]));
+            at += n;
+        }
         self.ctx.queue.submit([]);
         self.wait()
     }
 
-    /// Copies the accumulation buffer back: two `[f32; 4]` per pixel.
+    /// Copies the accumulation back, band by band: two `[f32; 4]` per pixel of the image,
+    /// row-major.
     pub fn accumulation(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
-        let mut encoder = self
-            .ctx
-            .device
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-        encoder.copy_buffer_to_buffer(&self.accum, 0, &self.readback, 0, self.accum.size());
-        self.ctx.queue.submit([encoder.finish()]);
-        read_mapped(&self.ctx.device, &self.readback)
+        let mut out =
+            Vec::with_capacity(2 * self.scene.width as usize * self.scene.height as usize);
+        for band in &self.bands {
+            let mut encoder = self
+                .ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            encoder.copy_buffer_to_buffer(&band.accum, 0, &self.readback, 0, band.accum.size());
+            self.ctx.queue.submit([encoder.finish()]);
+            let n = 2 * band.tile.width as usize * band.tile.height as usize;
+            let data: Vec<[f32; 4]> = read_mapped(&self.ctx.device, &self.readback)?;
+            out.extend_from_slice(&data[..n]);
+        }
+        Ok(out)
     }
 }
 
@@ -308,58 +348,80 @@ pub(crate) fn scene_layout(device: &wgpu::Device, bindings: &[u32]) -> wgpu::Bin
     })
 }
 
-/// Group 0 bound to a scene's buffers; `params` is written before each dispatch.
-pub(crate) struct SceneBindings {
+/// The scene's records on the device, for the bindings a shader uses: the parameters
+/// (written before each dispatch) and the storage buffers, all but the accumulation.
+pub(crate) struct SceneBuffers {
     pub params: wgpu::Buffer,
-    pub group: wgpu::BindGroup,
+    records: Vec<(u32, wgpu::Buffer)>,
 }
 
-/// Uploads the scene records that `bindings` name and binds them, with `accum` as the
-/// accumulation buffer; records the shader does not use are neither uploaded nor bound.
-pub(crate) fn scene_bindings(
+/// Uploads the scene records that `bindings` name; records the shader does not use are
+/// neither uploaded nor bound.
+pub(crate) fn scene_buffers(
     device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
     bindings: &[u32],
     scene: &FlatScene,
-    accum: &wgpu::Buffer,
-) -> SceneBindings {
+) -> SceneBuffers {
     let params = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("params"),
         size: std::mem::size_of::<Params>() as u64,
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
-    let buffers: Vec<(u32, wgpu::Buffer)> = bindings
+    let records = bindings
         .iter()
-        .map(|&binding| {
+        .filter_map(|&binding| {
             let buffer = match binding {
-                0 => params.clone(),
+                0 | 4 => return None,
                 1 => storage_buffer(device, "primitives", &scene.primitives),
                 2 => storage_buffer(device, "materials", &scene.materials),
                 3 => storage_buffer(device, "emitters", &scene.emitters),
-                4 => accum.clone(),
                 5 => storage_buffer(device, "bvh", &scene.bvh),
                 6 => storage_buffer(device, "shape_data", &scene.shape_data),
                 7 => storage_buffer(device, "textures", &scene.textures),
                 8 => storage_buffer(device, "texels", &scene.texels),
                 _ => unreachable!("binding {binding} is not in BINDINGS"),
             };
-            (binding, buffer)
+            Some((binding, buffer))
         })
         .collect();
-    let entries: Vec<wgpu::BindGroupEntry> = buffers
+    SceneBuffers { params, records }
+}
+
+/// Group 0: the scene's buffers with `accum` as the accumulation buffer.
+pub(crate) fn bind_scene(
+    device: &wgpu::Device,
+    layout: &wgpu::BindGroupLayout,
+    bindings: &[u32],
+    buffers: &SceneBuffers,
+    accum: &wgpu::Buffer,
+) -> wgpu::BindGroup {
+    let entries: Vec<wgpu::BindGroupEntry> = bindings
         .iter()
-        .map(|(binding, buf)| wgpu::BindGroupEntry {
-            binding: *binding,
-            resource: buf.as_entire_binding(),
+        .map(|&binding| {
+            let buffer = match binding {
+                0 => &buffers.params,
+                4 => accum,
+                _ => {
+                    &buffers
+                        .records
+                        .iter()
+                        .find(|(b, _)| *b == binding)
+                        .expect("uploaded with scene_buffers")
+                        .1
+                }
+            };
+            wgpu::BindGroupEntry {
+                binding,
+                resource: buffer.as_entire_binding(),
+            }
         })
         .collect();
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+    device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("scene bind group"),
         layout,
         entries: &entries,
-    });
-    SceneBindings { params, group }
+    })
 }
 
 /// Maps a MAP_READ buffer whose copy has been submitted, waits, and returns its contents.
