@@ -468,8 +468,14 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         ckpt.write(&checkpoint_path)
             .with_context(|| format!("writing checkpoint {}", checkpoint_path.display()))
     };
-    ctrlc::set_handler(|| INTERRUPTED.store(true, std::sync::atomic::Ordering::SeqCst))
-        .context("installing the Ctrl-C handler")?;
+    // the first signal stops after the current pass and keeps the work; a second one, for
+    // a pass that takes too long, exits at once
+    ctrlc::set_handler(|| {
+        if INTERRUPTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    })
+    .context("installing the Ctrl-C handler")?;
 
     let bar = if args.quiet {
         ProgressBar::hidden()
