@@ -32,19 +32,8 @@ const VALUES: &[&str] = &[
     "[nan, 0, 0]",
 ];
 
-/// Tokens a mutation inserts anywhere.
-const TOKENS: &[&str] = &[
-    "nan",
-    "inf",
-    "-inf",
-    "-1",
-    "0",
-    "-0.0",
-    "1e39",
-    "1e-45",
-    "4294967296",
-    "99999999999999999999",
-    "16384",
+/// Syntax a mutation inserts anywhere (besides the values above).
+const SYNTAX: &[&str] = &[
     "\"",
     "[",
     "]",
@@ -54,11 +43,7 @@ const TOKENS: &[&str] = &[
     "\n",
     "[[objects]]\n",
     "[materials.x]\n",
-    "true",
     "\"lambertian\"",
-    "\"nope\"",
-    "[1, 2]",
-    "[0, 0, 0]",
 ];
 
 /// One edit of a scene's text, positions given as indices into whatever length it has.
@@ -94,7 +79,10 @@ fn boundary(s: &str, mut i: usize) -> usize {
 }
 
 fn apply(text: &mut String, e: &Edit) {
-    let token = |t: &Index| TOKENS[t.index(TOKENS.len())];
+    let token = |t: &Index| {
+        let k = t.index(VALUES.len() + SYNTAX.len());
+        VALUES.get(k).unwrap_or_else(|| &SYNTAX[k - VALUES.len()])
+    };
     let value = |t: &Index| VALUES[t.index(VALUES.len())];
     let at = |i: &Index, s: &str| boundary(s, i.index(s.len() + 1));
     match e {
