@@ -17,6 +17,21 @@ fn cornell() -> String {
         .to_string()
 }
 
+/// Runs `wgtrace ARGS -o OUT` and fails the test unless it succeeds.
+fn run_ok(args: &[&str], out: &Path) {
+    let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+        .args(args)
+        .arg("-o")
+        .arg(out)
+        .output()
+        .expect("run wgtrace");
+    assert!(
+        o.status.success(),
+        "wgtrace {args:?} failed:\n{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
 fn render_to(out: &Path, extra: &[&str]) -> Output {
     let out_s = out.display().to_string();
     let scene = cornell();
@@ -329,15 +344,7 @@ fn an_interrupted_render_resumes_to_the_uninterrupted_image() {
         assert!(passes >= 1);
         let spp = (passes + 8).to_string();
         let run = |extra: &[&str], out: &Path| {
-            let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
-                .args(base)
-                .args(["--spp", &spp])
-                .args(extra)
-                .arg("-o")
-                .arg(out)
-                .output()
-                .expect("run wgtrace");
-            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            run_ok(&[&base[..], &["--spp", &spp], extra].concat(), out)
         };
         run(&["--resume", &ckpt.display().to_string()], &resumed);
         run(&[], &whole);
@@ -429,16 +436,10 @@ fn a_corrupt_or_mismatched_checkpoint_is_refused() {
 #[test]
 fn merged_sample_ranges_equal_one_render() {
     let dir = tmp_dir("merge");
+    let scene = cornell();
     let base = |extra: &[&str], out: &Path| {
-        let o = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
-            .args(["render", &cornell(), "--width", "12", "--height", "8", "-q"])
-            .args(["--spp", "16"])
-            .args(extra)
-            .arg("-o")
-            .arg(out)
-            .output()
-            .expect("run wgtrace");
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let args = ["render", &scene, "--width", "12", "--height", "8", "-q"];
+        run_ok(&[&args[..], &["--spp", "16"], extra].concat(), out)
     };
     let mut parts = Vec::new();
     for (i, range) in ["0..4", "4..8", "8..12", "12..16"].iter().enumerate() {
