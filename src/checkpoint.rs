@@ -23,10 +23,11 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
-    #[error("{}: cannot read checkpoint: {source}", path.display())]
+    #[error("{}: cannot read checkpoint: {cause}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        // not `source`: the message already holds it, and a chain would repeat it
+        cause: std::io::Error,
     },
     #[error("{}: not a usable wgtrace checkpoint: {reason}", path.display())]
     Corrupt { path: PathBuf, reason: String },
@@ -208,9 +209,9 @@ impl Checkpoint {
 
     /// Reads a checkpoint, refusing anything that is not a whole one.
     pub fn read(path: &Path) -> Result<Self, CheckpointError> {
-        let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io {
+        let bytes = std::fs::read(path).map_err(|cause| CheckpointError::Io {
             path: path.to_path_buf(),
-            source,
+            cause,
         })?;
         let corrupt = |reason: String| CheckpointError::Corrupt {
             path: path.to_path_buf(),

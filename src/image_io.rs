@@ -23,10 +23,11 @@ pub enum ImageError {
         path.display()
     )]
     UnknownExtension { path: PathBuf },
-    #[error("{}: cannot write image: {source}", path.display())]
+    #[error("{}: cannot write image: {cause}", path.display())]
     Write {
         path: PathBuf,
-        source: Box<dyn std::error::Error + Send + Sync>,
+        // not `source`: the message already holds it, and a chain would repeat it
+        cause: Box<dyn std::error::Error + Send + Sync>,
     },
 }
 
@@ -106,7 +107,7 @@ fn write_pixels(
     let format = OutputFormat::from_path(path)?;
     let wrap = |e: Box<dyn std::error::Error + Send + Sync>| ImageError::Write {
         path: path.to_path_buf(),
-        source: e,
+        cause: e,
     };
     let tmp = temp_path(path);
     let result = (|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
@@ -135,6 +136,27 @@ fn write_pixels(
         let _ = std::fs::remove_file(&tmp);
     }
     result.map_err(wrap)
+}
+
+/// Fails now, rather than after a long render, when an image cannot be written at `path`:
+/// an unknown extension, a missing or read-only folder, or a folder in the way.
+pub fn check_writable(path: &Path) -> Result<(), ImageError> {
+    OutputFormat::from_path(path)?;
+    probe_writable(path).map_err(|e| ImageError::Write {
+        path: path.to_path_buf(),
+        cause: e.into(),
+    })
+}
+
+/// Creates and removes a temporary file beside `path` (where an atomic write puts its
+/// temporary file), and refuses a folder at `path` itself.
+pub fn probe_writable(path: &Path) -> std::io::Result<()> {
+    if path.is_dir() {
+        return Err(std::io::Error::other("is a folder"));
+    }
+    let tmp = temp_path(path);
+    std::fs::File::create(&tmp)?;
+    std::fs::remove_file(&tmp)
 }
 
 fn temp_path(path: &Path) -> PathBuf {

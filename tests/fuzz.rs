@@ -172,3 +172,64 @@ proptest! {
         load_or_refuse(&text, path)?;
     }
 }
+
+/// Files too large to read are refused by their size or header before anything is
+/// allocated for them: a scene file over 64 MiB, an OBJ over 2 GiB (both sparse files
+/// here: no disk used), and an image whose header claims 20000 x 20000 pixels or more
+/// texels than a scene may hold. Each error names the file and the limit.
+#[test]
+fn oversized_files_are_refused_before_they_are_read() {
+    use wgtrace::scene::{mesh, textures, MAX_SCENE_FILE_BYTES};
+    let dir = common::tmp_dir("fuzz-sizes");
+    let sparse = |name: &str, len: u64| {
+        let path = dir.join(name);
+        std::fs::File::create(&path).unwrap().set_len(len).unwrap();
+        path
+    };
+    let big_scene = sparse("big.toml", MAX_SCENE_FILE_BYTES + 1);
+    let e = wgtrace::load_scene(&big_scene, &Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("big.toml") && e.contains(&MAX_SCENE_FILE_BYTES.to_string()),
+        "{e}"
+    );
+    sparse("big.obj", mesh::MAX_MESH_FILE_BYTES + 1);
+    // a PPM header is the whole of the claim: the pixels are never there
+    std::fs::write(dir.join("wide.ppm"), "P6\n20000 8\n255\n").unwrap();
+    std::fs::write(dir.join("many.ppm"), "P6\n16384 8193\n255\n").unwrap();
+    let head = "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\n\
+                m = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }\n";
+    for (body, key, file, limit) in [
+        (
+            "[[objects]]\ntype = \"mesh\"\npath = \"big.obj\"\nmaterial = \"m\"\n",
+            "objects[0].path",
+            "big.obj",
+            mesh::MAX_MESH_FILE_BYTES.to_string(),
+        ),
+        (
+            "[textures]\nt = { type = \"image\", path = \"wide.ppm\" }\n",
+            "textures.t.path",
+            "wide.ppm",
+            textures::MAX_TEXTURE_SIDE.to_string(),
+        ),
+        (
+            "[textures]\nt = { type = \"image\", path = \"many.ppm\" }\n",
+            "textures.t.path",
+            "many.ppm",
+            textures::MAX_TEXELS.to_string(),
+        ),
+    ] {
+        let e = wgtrace::load_scene_str(
+            &format!("{head}{body}"),
+            &dir.join("s.toml"),
+            &Overrides::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("s.toml:") && e.contains(key) && e.contains(file) && e.contains(&limit),
+            "{e}"
+        );
+    }
+}

@@ -40,10 +40,11 @@ impl Problem {
 /// Why a scene could not be loaded.
 #[derive(Debug, thiserror::Error)]
 pub enum SceneError {
-    #[error("{}: cannot read scene: {source}", path.display())]
+    #[error("{}: cannot read scene: {cause}", path.display())]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        // not `source`: the message already holds it, and a chain would repeat it
+        cause: std::io::Error,
     },
     #[error("{}", display_problems(path, problems))]
     Invalid {

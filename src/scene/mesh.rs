@@ -14,8 +14,21 @@ pub struct MeshData {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Reads every object of an OBJ file into one mesh (polygons are triangulated).
+/// Largest OBJ file read (2 GiB): the whole file is parsed in memory.
+pub const MAX_MESH_FILE_BYTES: u64 = 1 << 31;
+
+/// Most triangles of all a scene's meshes together (2^24, about 1.7 GB of records).
+pub const MAX_TRIANGLES: usize = 1 << 24;
+
+/// Reads every object of an OBJ file into one mesh (polygons are triangulated). Files
+/// over [`MAX_MESH_FILE_BYTES`] and meshes over [`MAX_TRIANGLES`] are refused.
 pub fn load_obj(path: &Path) -> Result<MeshData, String> {
+    let bytes = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
+    if bytes > MAX_MESH_FILE_BYTES {
+        return Err(format!(
+            "is {bytes} bytes, more than the {MAX_MESH_FILE_BYTES} read for a mesh"
+        ));
+    }
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -47,6 +60,12 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
     }
     if mesh.triangles.is_empty() {
         return Err("has no faces".into());
+    }
+    if mesh.triangles.len() > MAX_TRIANGLES {
+        return Err(format!(
+            "has {} triangles, more than the {MAX_TRIANGLES} a scene may hold",
+            mesh.triangles.len()
+        ));
     }
     let n = mesh.positions.len();
     if (with_normals && mesh.normals.len() != n) || (with_uvs && mesh.uvs.len() != n) {

@@ -45,6 +45,8 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const MAX_SPP: u32 = 1 << 24;
 /// Longest path accepted (rays per path).
 pub const MAX_DEPTH_LIMIT: u32 = 1024;
+/// Largest scene file read (64 MiB).
+pub const MAX_SCENE_FILE_BYTES: u64 = 1 << 26;
 
 /// The camera reduced to what the shader needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -200,10 +202,18 @@ pub fn strata_log2(spp: u32) -> u32 {
 
 /// Reads, validates and flattens a scene file.
 pub fn load_scene(path: &Path, overrides: &Overrides) -> Result<FlatScene, SceneError> {
-    let src = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let io = |cause| SceneError::Io {
         path: path.to_path_buf(),
-        source,
-    })?;
+        cause,
+    };
+    let bytes = std::fs::metadata(path).map_err(io)?.len();
+    if bytes > MAX_SCENE_FILE_BYTES {
+        return Err(io(std::io::Error::other(format!(
+            "it is {bytes} bytes, more than the {MAX_SCENE_FILE_BYTES} read for a scene file \
+             (meshes belong in OBJ files)"
+        ))));
+    }
+    let src = std::fs::read_to_string(path).map_err(io)?;
     load_scene_str(&src, path, overrides)
 }
 
@@ -235,6 +245,10 @@ pub fn load_scene_str(
     // Files the scene names (OBJ meshes, images), relative to it.
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut problems = Vec::new();
+    // the caps hold for all meshes and all images of the scene together, counted as they
+    // load, so that naming one file many times cannot exhaust memory either
+    let triangles = std::cell::Cell::new(0usize);
+    let texels = std::cell::Cell::new(0u64);
     let meshes: Vec<Option<mesh::MeshData>> = file
         .objects
         .iter()
@@ -244,7 +258,19 @@ pub fn load_scene_str(
                 (src, dir, path),
                 obj.span().start,
                 format!("objects[{i}].path"),
-                mesh::load_obj,
+                |p| {
+                    let m = mesh::load_obj(p)?;
+                    let total = triangles.get() + m.triangles.len();
+                    if total > mesh::MAX_TRIANGLES {
+                        return Err(format!(
+                            "brings the scene's mesh triangles to {total}, more than the {} \
+                             accepted",
+                            mesh::MAX_TRIANGLES
+                        ));
+                    }
+                    triangles.set(total);
+                    Ok(m)
+                },
                 &mut problems,
             ),
             _ => None,
@@ -258,7 +284,19 @@ pub fn load_scene_str(
                 (src, dir, path),
                 t.span().start,
                 format!("textures.{name}.path"),
-                textures::load_image,
+                |p| {
+                    let img = textures::load_image(p)?;
+                    let total = texels.get() + img.width as u64 * img.height as u64;
+                    if total > textures::MAX_TEXELS {
+                        return Err(format!(
+                            "brings the scene's image texels to {total}, more than the {} \
+                             accepted",
+                            textures::MAX_TEXELS
+                        ));
+                    }
+                    texels.set(total);
+                    Ok(img)
+                },
                 &mut problems,
             ),
             _ => None,

@@ -26,10 +26,30 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// Largest side of an image texture.
+pub const MAX_TEXTURE_SIDE: u32 = 16384;
+
+/// Most texels of all a scene's images together (2^26: 1 GiB as linear RGBA floats).
+pub const MAX_TEXELS: u64 = 1 << 26;
+
 /// Reads an image with the `image` crate: float formats (HDR, EXR) are linear already,
-/// 8- and 16-bit ones are sRGB-decoded.
+/// 8- and 16-bit ones are sRGB-decoded. Its size is read from the header first: a side
+/// over [`MAX_TEXTURE_SIDE`] or more than [`MAX_TEXELS`] texels is refused before
+/// decoding.
 pub fn load_image(path: &Path) -> Result<ImageData, String> {
-    let img = image::open(path).map_err(|e| e.to_string())?;
+    let reader = || {
+        image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| e.to_string())
+    };
+    let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
+    if w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE || w as u64 * h as u64 > MAX_TEXELS {
+        return Err(format!(
+            "is {w}x{h}, more than the {MAX_TEXTURE_SIDE} per side and {MAX_TEXELS} texels \
+             accepted"
+        ));
+    }
+    let img = reader()?.decode().map_err(|e| e.to_string())?;
     let linear = matches!(
         img.color(),
         image::ColorType::Rgb32F | image::ColorType::Rgba32F
