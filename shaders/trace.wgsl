@@ -192,8 +192,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     // nothing in the scene emits, so no path can carry light: no ray is traced
     let c = vec3<f32>(0.0);
 #endif
-    // the bound accumulation buffer holds this tile's pixels only
-    let slot = gid.y * params.tile_width + gid.x;
+    // the bound accumulation buffer holds the pixels of the band of rows from accum_y
+    let slot = (y - params.accum_y) * params.tile_width + gid.x;
     if (all_finite(c) && all_finite(c * c)) {
         accum[2u * slot] += vec4<f32>(c, 1.0);
         accum[2u * slot + 1u] += vec4<f32>(c * c, 0.0);

@@ -8,8 +8,9 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use wgtrace::checkpoint::Checkpoint;
-use wgtrace::image_io::{write_error_map, write_image, OutputFormat};
-use wgtrace::render::{render_from, StopRule, Stopped};
+use wgtrace::gpu::GpuError;
+use wgtrace::image_io::{check_writable, probe_writable, write_error_map, write_image};
+use wgtrace::render::{render_from, Accumulation, StopRule, Stopped};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::{BackendChoice, Engine, Overrides};
 
@@ -188,6 +189,11 @@ struct RenderArgs {
     /// `wgtrace merge`.
     #[arg(long, value_name = "START..END", value_parser = wgtrace::checkpoint::parse_range)]
     sample_range: Option<std::ops::Range<u32>>,
+    /// Seconds one GPU submission should take: the work per submission adapts to the
+    /// measured times to stay near this, far below the 2 s after which Windows resets a GPU
+    /// (several samples per submission when quick, a few rows when slow).
+    #[arg(long, value_name = "SECONDS", default_value_t = 0.5, value_parser = positive_f64)]
+    submission_time: f64,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -236,7 +242,7 @@ fn main() -> ExitCode {
 }
 
 fn merge(inputs: &[PathBuf], output: &Path, checkpoint: Option<&Path>) -> anyhow::Result<()> {
-    OutputFormat::from_path(output)?;
+    check_writable(output)?;
     let parts = inputs
         .iter()
         .map(|p| Ok((p.clone(), Checkpoint::read(p)?)))
@@ -392,11 +398,18 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    // Refuse a bad output name before spending time on the render.
-    OutputFormat::from_path(&output)?;
+    // Refuse a bad output name or place before spending time on the render.
+    check_writable(&output)?;
     if let Some(map) = &args.error_map {
-        OutputFormat::from_path(map)?;
+        check_writable(map)?;
     }
+    let checkpoint_path = args
+        .checkpoint
+        .clone()
+        .or_else(|| args.resume.clone())
+        .unwrap_or_else(|| output.with_extension("ckpt"));
+    probe_writable(&checkpoint_path)
+        .with_context(|| format!("{}: cannot write checkpoint", checkpoint_path.display()))?;
     let overrides = Overrides {
         width: args.width,
         height: args.height,
@@ -458,13 +471,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         first = held.end;
         eprintln!("resuming {} at sample {first}", path.display());
     }
-    let checkpoint_path = args
-        .checkpoint
-        .clone()
-        .or_else(|| args.resume.clone())
-        .unwrap_or_else(|| output.with_extension("ckpt"));
-    let save = |engine: &mut Engine, passes: u32| -> anyhow::Result<()> {
-        let ckpt = Checkpoint::new(&scene, range.start..passes, engine.accumulation()?);
+    let save_acc = |acc: Accumulation, passes: u32| -> anyhow::Result<()> {
+        let ckpt = Checkpoint::new(&scene, range.start..passes, acc);
         ckpt.write(&checkpoint_path)
             .with_context(|| format!("writing checkpoint {}", checkpoint_path.display()))
     };
@@ -490,40 +498,98 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         .progress_chars("=> "),
     );
     let (w, h) = (scene.width, scene.height);
-    let write = |engine: &mut Engine| -> anyhow::Result<()> {
-        let acc = engine.accumulation()?;
+    let write_acc = |acc: &Accumulation| -> anyhow::Result<()> {
         write_image(&output, w, h, &acc.to_rgb())?;
         Ok(())
     };
+    let write = |engine: &mut Engine| -> anyhow::Result<()> { write_acc(&engine.accumulation()?) };
     let rule = StopRule {
         time_limit: args.time_limit.map(std::time::Duration::from_secs_f64),
         target_error: args.target_error,
     };
+    engine.set_submission_target(std::time::Duration::from_secs_f64(args.submission_time));
+    // for tests of a device lost mid-render: the device is destroyed once this many
+    // samples are done
+    let lose_device_at: Option<u32> = std::env::var("WGTRACE_LOSE_DEVICE_AT_SAMPLE")
+        .ok()
+        .and_then(|v| v.parse().ok());
     let mut passes_done = first;
     let mut last_save = std::time::Instant::now();
+    // Without --checkpoint, the accumulation read back every --checkpoint-every seconds
+    // is kept here instead, to be written out if the device is lost.
+    let mut kept: Option<(u32, Accumulation)> = None;
+    // whether the checkpoint file holds this render's state (as --resume left it, or as
+    // written since)
+    let mut on_disk = args.resume.as_ref() == Some(&checkpoint_path);
     let result = render_from(&mut engine, &scene, rule, first..range.end, |p, engine| {
+        let before = passes_done;
         passes_done = p.passes_done;
         bar.set_position(p.passes_done as u64);
         bar.set_message(format!("{:.2} Msamples/s", p.samples_per_second() / 1e6));
         if let Some(n) = args.preview_every {
-            if p.passes_done % n == 0 && p.passes_done < p.passes_total {
+            if p.passes_done / n > before / n && p.passes_done < p.passes_total {
                 write(engine).context("writing preview")?;
             }
         }
         if INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst) {
             return Err(Interrupted.into());
         }
-        if args.checkpoint.is_some() && last_save.elapsed().as_secs_f64() >= args.checkpoint_every {
-            save(engine, p.passes_done)?;
+        if last_save.elapsed().as_secs_f64() >= args.checkpoint_every {
+            let acc = engine.accumulation()?;
+            if args.checkpoint.is_some() {
+                save_acc(acc, p.passes_done)?;
+                on_disk = true;
+            } else {
+                kept = Some((p.passes_done, acc));
+            }
             last_save = std::time::Instant::now();
+        }
+        if lose_device_at.is_some_and(|n| p.passes_done >= n) {
+            engine.lose_device();
         }
         Ok::<(), anyhow::Error>(())
     });
     bar.finish_and_clear();
-    let (done, stopped, estimate) = match result {
+    // the sums are read back once; a device lost at any point up to here ends below
+    let result = result.and_then(|done| Ok((done, engine.accumulation()?)));
+    if let Err(e) = &result {
+        if let Some(lost @ (GpuError::Lost(_) | GpuError::Failed(_))) = e.downcast_ref::<GpuError>()
+        {
+            // the device's sums are gone: write the last ones read back
+            let held = match kept.take() {
+                Some((held, acc)) => {
+                    write_acc(&acc)?;
+                    save_acc(acc, held)?;
+                    held
+                }
+                None if on_disk => {
+                    let ckpt = Checkpoint::read(&checkpoint_path)?;
+                    write_acc(&ckpt.accumulation)?;
+                    ckpt.samples.last().map_or(range.start, |r| r.end)
+                }
+                None => anyhow::bail!(
+                    "{lost} at sample {passes_done}; no samples had been read back yet \
+                     (that happens every --checkpoint-every {} s), so nothing was written",
+                    args.checkpoint_every
+                ),
+            };
+            anyhow::bail!(
+                "{lost} at sample {passes_done}; wrote samples {}..{held} (the last read \
+                 back) to {} and checkpoint {}; continue with\n  wgtrace render {} --resume {} \
+                 (and the same options)",
+                range.start,
+                output.display(),
+                checkpoint_path.display(),
+                args.scene.display(),
+                checkpoint_path.display()
+            );
+        }
+    }
+    let ((done, stopped, estimate), acc) = match result {
         Err(e) if e.is::<Interrupted>() => {
-            write(&mut engine)?;
-            save(&mut engine, passes_done)?;
+            let acc = engine.accumulation()?;
+            write_acc(&acc)?;
+            save_acc(acc, passes_done)?;
             eprintln!(
                 "interrupted at sample {passes_done}: wrote {} and checkpoint {}; continue with\n  \
                  wgtrace render {} --resume {} (and the same options)",
@@ -536,16 +602,17 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         }
         r => r?,
     };
-    write(&mut engine)?;
-    if args.checkpoint.is_some() || args.resume.is_some() || args.sample_range.is_some() {
-        save(&mut engine, done.passes_done)?;
-    }
+    write_acc(&acc)?;
     if let Some(map) = &args.error_map {
-        let acc = engine.accumulation()?;
         let errors: Vec<f32> = (0..acc.pixel_count())
             .map(|i| acc.pixel_rel_mse(i).sqrt() as f32)
             .collect();
         write_error_map(map, w, h, &errors)?;
+    }
+    // every sample that was not finite was dropped and counted; there should be none
+    let dropped = acc.non_finite();
+    if args.checkpoint.is_some() || args.resume.is_some() || args.sample_range.is_some() {
+        save_acc(acc, done.passes_done)?;
     }
     let mut summary = format!(
         "{}: {}x{}, {} spp, {:.3} s, {:.3} Msamples/s",
@@ -556,8 +623,6 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         done.elapsed.as_secs_f64(),
         done.samples_per_second() / 1e6
     );
-    // every sample that was not finite was dropped and counted; there should be none
-    let dropped = engine.accumulation()?.non_finite();
     summary += &format!(", {dropped} non-finite");
     if let Some(e) = estimate {
         summary += &format!(", estimated relative error {e:.4}");

@@ -65,12 +65,43 @@ impl Engine {
 
     /// Adds one sample per pixel.
     pub fn render_pass(&mut self, sample_index: u32) -> Result<(), GpuError> {
+        self.render_samples(sample_index..sample_index + 1)
+    }
+
+    /// Adds the samples with indices `samples` to every pixel.
+    pub fn render_samples(&mut self, samples: std::ops::Range<u32>) -> Result<(), GpuError> {
         match self {
-            Engine::Gpu(g) => g.render_pass(sample_index),
+            Engine::Gpu(g) => g.render_samples(samples),
             Engine::Cpu(c) => {
-                c.render_pass(sample_index);
+                samples.for_each(|i| c.render_pass(i));
                 Ok(())
             }
+        }
+    }
+
+    /// How many samples per pixel one [`Engine::render_samples`] call should ask for: the
+    /// GPU's submissions grow to several samples when one takes much less than its target
+    /// time; the CPU renders one at a time.
+    pub fn samples_per_call(&self) -> u32 {
+        match self {
+            Engine::Gpu(g) => g.samples_per_call(),
+            Engine::Cpu(_) => 1,
+        }
+    }
+
+    /// Ends the GPU device as a driver reset would, for tests of a render's recovery; the
+    /// CPU has nothing to lose.
+    pub fn lose_device(&mut self) {
+        if let Engine::Gpu(g) = self {
+            g.lose_device();
+        }
+    }
+
+    /// The time one GPU submission should take (see
+    /// [`crate::gpu::render::DEFAULT_SUBMISSION_TARGET`]); the CPU ignores it.
+    pub fn set_submission_target(&mut self, target: Duration) {
+        if let Engine::Gpu(g) = self {
+            g.set_submission_target(target);
         }
     }
 
@@ -259,7 +290,8 @@ where
 /// [`render_until`] over the sample indices `passes` only: a resumed render starts past 0
 /// (its engine holding the samples before), a range of a distributed render ends before
 /// `scene.spp`. `Progress` counts passes as sample indices (`passes_done` is the next
-/// index), and the time and samples of this run only.
+/// index), and the time and samples of this run only. Passes go to the engine in batches
+/// of [`Engine::samples_per_call`], and `on_pass` is called after each batch.
 pub fn render_from<E>(
     engine: &mut Engine,
     scene: &FlatScene,
@@ -282,22 +314,34 @@ where
     let mut estimate = None;
     let mut look_cost = Duration::ZERO;
     let mut last_look = Duration::ZERO;
-    for pass in passes {
+    let mut pass = first;
+    while pass < passes.end {
+        let mut batch = engine.samples_per_call().clamp(1, passes.end - pass);
         if let Some(limit) = rule.time_limit {
-            let mean_pass = progress.elapsed / (pass - first).max(1);
-            if pass > first && start.elapsed() + mean_pass > limit {
-                return Ok((progress, Stopped::TimeLimit, estimate));
+            if pass > first {
+                // as many passes as the mean pass time says end within the limit
+                let mean_pass = progress.elapsed.as_secs_f64() / (pass - first) as f64;
+                let left = limit.saturating_sub(start.elapsed()).as_secs_f64();
+                let fit = (left / mean_pass.max(1e-9)).floor().min(u32::MAX as f64) as u32;
+                if fit == 0 {
+                    return Ok((progress, Stopped::TimeLimit, estimate));
+                }
+                batch = batch.min(fit);
             }
         }
-        engine.render_pass(pass)?;
-        progress.passes_done = pass + 1;
-        progress.samples = pixels * (progress.passes_done - first) as u64;
+        engine.render_samples(pass..pass + batch)?;
+        let before = pass;
+        pass += batch;
+        progress.passes_done = pass;
+        progress.samples = pixels * (pass - first) as u64;
         progress.elapsed = start.elapsed();
         on_pass(&progress, engine)?;
         if let Some(target) = rule.target_error {
             let n = progress.passes_done;
             let since = start.elapsed().saturating_sub(last_look);
-            if n >= MIN_PASSES_FOR_ERROR && (n.is_power_of_two() || since >= look_cost) {
+            // a power of two reached in this batch
+            let doubled = before.checked_ilog2() != n.checked_ilog2();
+            if n >= MIN_PASSES_FOR_ERROR && (doubled || since >= look_cost) {
                 let t0 = Instant::now();
                 let e = engine.accumulation()?.estimated_rel_error();
                 look_cost = t0.elapsed();

@@ -153,9 +153,53 @@ fn bad_input_gives_a_clear_error_and_nonzero_exit() {
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(e.contains("[possible values: bsdf, mixture, mis]"), "{e}");
 
-    let o = wgtrace(&["render", &scene, "--spp", "0", "-o", "/dev/null/x.png"]);
+    let ok_out = dir.join("x.png").display().to_string();
+    let o = wgtrace(&["render", &scene, "--spp", "0", "-o", &ok_out]);
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("render.spp"));
+
+    // an output or checkpoint that cannot be written is refused before the render starts
+    // (no device opened), with the cause said once
+    let missing = dir.join("no-such-folder");
+    for (args, what) in [
+        (
+            vec![
+                "-o".to_string(),
+                missing.join("x.png").display().to_string(),
+            ],
+            "cannot write image",
+        ),
+        (
+            vec![
+                "-o".to_string(),
+                ok_out.clone(),
+                "--checkpoint".to_string(),
+                missing.join("x.ckpt").display().to_string(),
+            ],
+            "cannot write checkpoint",
+        ),
+        (
+            vec![
+                "-o".to_string(),
+                ok_out.clone(),
+                "--error-map".to_string(),
+                missing.join("e.exr").display().to_string(),
+            ],
+            "cannot write image",
+        ),
+    ] {
+        let mut all = vec!["render".to_string(), scene.clone()];
+        all.extend(args);
+        let o = wgtrace(&all.iter().map(String::as_str).collect::<Vec<_>>());
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{e}");
+        assert!(e.contains("no-such-folder") && e.contains(what), "{e}");
+        assert!(
+            !e.contains("device:"),
+            "refused only after opening the device: {e}"
+        );
+        assert_eq!(e.matches("No such file or directory").count(), 1, "{e}");
+    }
 }
 
 /// Without any Vulkan driver (the loader pointed at no ICD), `render` says so in one line
@@ -541,4 +585,66 @@ fn tiled_and_untiled_renders_are_identical() {
     let bytes = |p: &Path| std::fs::read(p).unwrap();
     assert!(bytes(&whole) == bytes(&banded), "banded differs");
     assert!(bytes(&whole) == bytes(&resumed), "banded resume differs");
+}
+
+/// A device lost mid-render (the test destroys it after 4 samples, as a driver reset
+/// would) ends the render with a clear error and a non-zero exit, having written the
+/// samples last read back as image and checkpoint; resuming that checkpoint gives the
+/// uninterrupted image. Both with and without `--checkpoint`.
+#[test]
+fn a_device_lost_mid_render_keeps_the_samples_read_back() {
+    let dir = tmp_dir("lost");
+    let base = [
+        "render",
+        &cornell(),
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--spp",
+        "64",
+        "-q",
+    ];
+    let whole = dir.join("w.exr");
+    run_ok(&base, &whole);
+    for given in [false, true] {
+        let (out, ckpt) = (
+            dir.join(format!("l{given}.exr")),
+            dir.join(format!("l{given}.ckpt")),
+        );
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_wgtrace"));
+        cmd.args(base)
+            .args(["--checkpoint-every", "0", "--submission-time", "0.001"])
+            .env("WGTRACE_LOSE_DEVICE_AT_SAMPLE", "4")
+            .arg("-o")
+            .arg(&out);
+        if given {
+            cmd.arg("--checkpoint").arg(&ckpt);
+        }
+        let o = cmd.output().expect("run wgtrace");
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{err}");
+        assert!(
+            err.contains("device was lost")
+                && err.contains("--resume")
+                && !err.contains("panicked"),
+            "{err}"
+        );
+        let held = wgtrace::checkpoint::Checkpoint::read(&ckpt)
+            .unwrap()
+            .samples;
+        assert!(
+            held.len() == 1 && held[0].start == 0 && (4..64).contains(&held[0].end),
+            "{held:?}"
+        );
+        assert!(out.exists());
+        run_ok(
+            &[&base[..], &["--resume", &ckpt.display().to_string()]].concat(),
+            &out,
+        );
+        assert!(
+            std::fs::read(&out).unwrap() == std::fs::read(&whole).unwrap(),
+            "resumed after a loss at {held:?} differs from the uninterrupted render"
+        );
+    }
 }

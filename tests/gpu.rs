@@ -630,3 +630,103 @@ fn a_thin_lens_renders_the_same_on_both_backends() {
         sharp.tiles
     );
 }
+
+/// The work per submission follows the time submissions take: a tiny target splits each
+/// pass into submissions of a few rows, a long one puts several samples into one
+/// submission; either way every pixel adds its samples in index order, so the two images
+/// are identical to the bit.
+#[test]
+fn submissions_adapt_to_their_time_and_leave_the_image_unchanged() {
+    use std::time::Duration;
+    use wgtrace::render::render_progressive;
+    use wgtrace::Engine;
+    let o = Overrides {
+        width: Some(64),
+        height: Some(48),
+        spp: Some(64),
+        ..Default::default()
+    };
+    let scene = wgtrace::load_scene(&common::repo_path("scenes/cornell.toml"), &o).unwrap();
+    let run = |target: Duration| {
+        let mut engine = common::gpu_engine(&scene);
+        engine.set_submission_target(target);
+        render_progressive(&mut engine, &scene, |_, _| {
+            Ok::<(), wgtrace::gpu::GpuError>(())
+        })
+        .expect("render");
+        let Engine::Gpu(g) = &engine else {
+            unreachable!("a GPU engine")
+        };
+        let (count, budget) = (g.submission_count(), g.submission_budget());
+        (engine.accumulation().unwrap(), count, budget)
+    };
+    let (sliced, sliced_count, sliced_budget) = run(Duration::from_micros(1));
+    let (batched, batched_count, _) = run(Duration::from_secs(60));
+    // a microsecond is never met: the budget falls to one row per submission
+    assert_eq!(sliced_budget, 64, "budget {sliced_budget} pixel samples");
+    assert!(
+        sliced_count > 64 * 10,
+        "{sliced_count} submissions for 64 passes of 48 rows"
+    );
+    assert!(
+        batched_count * 4 <= 64,
+        "{batched_count} submissions for 64 passes"
+    );
+    assert!(sliced.data == batched.data, "the split changed the sums");
+    assert_eq!(sliced.samples(0), 64.0);
+}
+
+/// The budget rule: scaled toward the target, at most 2x up and 4x down per step, within
+/// its bounds; the last, smaller submission of a render does not lower it when it was quick.
+#[test]
+fn the_submission_budget_moves_toward_the_target_in_bounded_steps() {
+    use std::time::Duration;
+    use wgtrace::gpu::render::next_budget;
+    let ms = Duration::from_millis;
+    let target = ms(500);
+    // four times too fast: doubles (no more)
+    assert_eq!(next_budget(1000, 1000, ms(125), target, 10, 1 << 30), 2000);
+    // twice too slow: halves
+    assert_eq!(next_budget(1000, 1000, ms(1000), target, 10, 1 << 30), 500);
+    // far too slow: a quarter (no less)
+    assert_eq!(
+        next_budget(1000, 1000, ms(60_000), target, 10, 1 << 30),
+        250
+    );
+    // bounds
+    assert_eq!(
+        next_budget(1000, 1000, ms(60_000), target, 400, 1 << 30),
+        400
+    );
+    assert_eq!(next_budget(1000, 1000, ms(1), target, 10, 1500), 1500);
+    // a quick partial submission keeps the budget
+    assert_eq!(next_budget(1000, 100, ms(10), target, 10, 1 << 30), 1000);
+    // a slow partial one lowers it from the work it did
+    assert_eq!(next_budget(1000, 100, ms(1000), target, 10, 1 << 30), 50);
+}
+
+/// A device lost mid-render (destroyed here, as a driver reset would end it) is an error
+/// from the next call, not a panic. The test opens a device of its own, as the shared one
+/// serves the tests running beside it.
+#[test]
+fn a_lost_device_is_an_error_not_a_panic() {
+    use std::sync::Arc;
+    use wgtrace::gpu::{GpuError, GpuRenderer};
+    use wgtrace::Engine;
+    let o = Overrides {
+        width: Some(16),
+        height: Some(16),
+        spp: Some(4),
+        ..Default::default()
+    };
+    let scene = wgtrace::load_scene(&common::repo_path("scenes/spheres.toml"), &o).unwrap();
+    let ctx = Arc::new(common::gpu_context());
+    let mut engine = Engine::Gpu(Box::new(GpuRenderer::new(ctx.clone(), &scene).unwrap()));
+    engine.render_pass(0).expect("a pass before the loss");
+    assert!(ctx.check().is_ok());
+    engine.lose_device();
+    let err = engine.render_pass(1).expect_err("a pass on a lost device");
+    assert!(matches!(err, GpuError::Lost(_)), "{err}");
+    assert!(matches!(engine.accumulation(), Err(GpuError::Lost(_))));
+    assert!(matches!(ctx.check(), Err(GpuError::Lost(_))));
+}

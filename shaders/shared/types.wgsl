@@ -206,7 +206,8 @@ struct Params {
     env_texture: u32,
     env_cdf: u32,
     env_light: u32,
-    pad0: u32,
+    // image row of the bound accumulation buffer's first pixel (the band it holds)
+    accum_y: u32,
     pad1: u32,
     pad2: u32,
 }

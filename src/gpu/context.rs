@@ -40,6 +40,10 @@ pub enum GpuError {
     LoopLimit { iterations: u64, limit: u64 },
     #[error(transparent)]
     Shader(#[from] super::shader::ShaderError),
+    #[error("the GPU device was lost ({0})")]
+    Lost(String),
+    #[error("the GPU reported an error: {0}")]
+    Failed(String),
 }
 
 /// An open device on one adapter, with the trace pipelines compiled on it so far (one per
@@ -51,6 +55,40 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     pub(crate) pipelines: Mutex<HashMap<BTreeSet<String>, Arc<TracePipeline>>>,
     pub(crate) disk_cache: Option<DiskCache>,
+    /// The first error wgpu reported outside an error scope, or the device's loss: set by
+    /// the device's callbacks, turned into a `GpuError` by [`GpuContext::check`].
+    fault: Arc<Mutex<Option<GpuError>>>,
+}
+
+thread_local! {
+    /// Set while a wgpu call that panics on a lost device runs under `catch_unwind`: the
+    /// panic is turned into a `GpuError`, so its message is not printed.
+    static QUIET_PANICS: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f`, turning a panic into its message. wgpu 30 panics where a wait meets a lost
+/// device (`Device::poll` treats every error but a timeout as fatal); the render turns
+/// that into [`GpuError::Lost`] and keeps its finished work.
+fn catch_panic<T>(f: impl FnOnce() -> T) -> Result<T, String> {
+    static HOOK: std::sync::Once = std::sync::Once::new();
+    HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if !QUIET_PANICS.with(|q| q.get()) {
+                previous(info)
+            }
+        }));
+    });
+    QUIET_PANICS.with(|q| q.set(true));
+    let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    QUIET_PANICS.with(|q| q.set(false));
+    result.map_err(|payload| {
+        payload
+            .downcast_ref::<String>()
+            .cloned()
+            .or_else(|| payload.downcast_ref::<&str>().map(|s| s.to_string()))
+            .unwrap_or_else(|| "wgpu panicked".into())
+    })
 }
 
 /// A driver pipeline cache and the file it is loaded from and saved to.
@@ -127,7 +165,8 @@ impl GpuContext {
     /// The process's context on adapter `index` of [`list_adapters`], opened on first use.
     pub fn shared(index: usize) -> Result<Arc<Self>, GpuError> {
         let mut contexts = shared_contexts().lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(ctx) = contexts.get(&index) {
+        // a context whose device was lost is replaced by a new one
+        if let Some(ctx) = contexts.get(&index).filter(|c| c.check().is_ok()) {
             return Ok(ctx.clone());
         }
         let ctx = Arc::new(Self::new(index)?);
@@ -166,6 +205,37 @@ impl GpuContext {
                 required_limits: adapter.limits(),
                 ..Default::default()
             }))?;
+        let fault: Arc<Mutex<Option<GpuError>>> = Arc::default();
+        let record = |fault: &Arc<Mutex<Option<GpuError>>>, error: GpuError| {
+            let mut slot = fault.lock().unwrap_or_else(|e| e.into_inner());
+            // the first fault is the cause; a lost device outranks what it caused
+            if slot.is_none()
+                || matches!(error, GpuError::Lost(_)) && !matches!(*slot, Some(GpuError::Lost(_)))
+            {
+                *slot = Some(error);
+            }
+        };
+        {
+            let fault = fault.clone();
+            device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+                record(&fault, GpuError::Failed(e.to_string()));
+            }));
+        }
+        {
+            let fault = fault.clone();
+            device.set_device_lost_callback(move |reason, message| {
+                let why = match reason {
+                    wgpu::DeviceLostReason::Destroyed => "destroyed",
+                    wgpu::DeviceLostReason::Unknown => "driver error",
+                };
+                let message = if message.is_empty() {
+                    why.to_string()
+                } else {
+                    format!("{why}: {message}")
+                };
+                record(&fault, GpuError::Lost(message));
+            });
+        }
         let disk_cache = cache_file.map(|path| {
             let data = std::fs::read(&path).ok();
             // SAFETY: the data was written by `get_data` of a cache with the same key (the
@@ -187,7 +257,37 @@ impl GpuContext {
             info,
             pipelines: Mutex::new(HashMap::new()),
             disk_cache,
+            fault,
         })
+    }
+
+    /// The device's first fault so far (lost, or an error wgpu reported), if any.
+    pub fn check(&self) -> Result<(), GpuError> {
+        let slot = self.fault.lock().unwrap_or_else(|e| e.into_inner());
+        match &*slot {
+            None => Ok(()),
+            Some(GpuError::Lost(m)) => Err(GpuError::Lost(m.clone())),
+            Some(GpuError::Failed(m)) => Err(GpuError::Failed(m.clone())),
+            Some(e) => Err(GpuError::Failed(e.to_string())),
+        }
+    }
+
+    /// Waits for everything submitted so far; a lost device or an error reported meanwhile
+    /// is returned rather than panicking.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.check()?;
+        let waited = catch_panic(|| self.device.poll(wgpu::PollType::wait_indefinitely()));
+        self.check()?;
+        match waited {
+            Ok(Ok(_)) => Ok(()),
+            Ok(Err(e)) => Err(GpuError::Failed(e.to_string())),
+            Err(panic) => Err(GpuError::Lost(panic)),
+        }
+    }
+
+    /// Ends the device as a driver reset would (for tests of what a render does then).
+    pub fn lose_device(&self) {
+        self.device.destroy();
     }
 
     /// Writes the pipeline cache back to its file (write then rename, so a reader never sees

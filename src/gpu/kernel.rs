@@ -91,7 +91,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let buffers = scene_buffers(device, &all_bindings(), scene);
+    let buffers = scene_buffers(device, &all_bindings(), scene, 0);
     let scene_group = bind_scene(device, &scene_bgl, &all_bindings(), &buffers, &accum);
     let params = scene.params(0, scene.full_tile());
     ctx.queue
@@ -138,11 +138,11 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
             timestamp_writes: None,
         });
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &scene_group, &[]);
+        pass.set_bind_group(0, &scene_group, &[0]);
         pass.set_bind_group(1, &io_group, &[]);
         pass.dispatch_workgroups((inputs.len() as u32).div_ceil(WORKGROUP), 1, 1);
     }
     encoder.copy_buffer_to_buffer(&out_buf, 0, &readback, 0, out_size);
     ctx.queue.submit([encoder.finish()]);
-    read_mapped(device, &readback)
+    read_mapped(ctx, &readback)
 }

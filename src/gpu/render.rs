@@ -4,6 +4,7 @@
 use wgpu::util::DeviceExt;
 
 use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 use super::context::{GpuContext, GpuError};
 use super::pipeline::TracePipeline;
@@ -11,7 +12,7 @@ use super::shader;
 use crate::scene::records::{self, Params};
 use crate::scene::{FlatScene, Tile};
 
-/// Most pixels one dispatch (one submission) traces: bounds the time of a submission.
+/// Most pixels of one band (one accumulation buffer, 8 MiB).
 pub const MAX_TILE_PIXELS: u32 = 1 << 18;
 
 /// Accumulation bytes per pixel: two vec4<f32> (sum with count, sum of squares).
@@ -37,23 +38,74 @@ pub struct GpuRenderer {
     ctx: Arc<GpuContext>,
     scene: FlatScene,
     pipeline: Arc<TracePipeline>,
+    /// One [`Params`] per dispatch of a submission, `params_stride` bytes apart, bound
+    /// with a dynamic offset.
     params: wgpu::Buffer,
+    params_stride: u64,
     bands: Vec<Band>,
     /// As large as the largest band's accumulation.
     readback: wgpu::Buffer,
+    submissions: Submissions,
 }
 
-/// A band of whole rows: one dispatch and one submission per pass, with an accumulation
-/// buffer of its own, so no buffer exceeds a storage binding however large the image.
+/// A band of whole rows with an accumulation buffer of its own, so no buffer exceeds a
+/// storage binding however large the image. A submission traces part of a band (some of
+/// its rows, one sample) or all of it (one or more samples).
 struct Band {
     tile: Tile,
     accum: wgpu::Buffer,
     group: wgpu::BindGroup,
 }
 
-/// Most pixels per band: [`MAX_TILE_PIXELS`] (or `WGTRACE_MAX_TILE_PIXELS`, to keep each
-/// submission shorter on a GPU with a watchdog, and for tests), and no more than one
-/// storage binding of `limit` bytes holds.
+/// Most dispatches (samples of one band) in one submission.
+pub const MAX_DISPATCHES_PER_SUBMISSION: u32 = 256;
+
+/// Default time one submission should take: far below the 2 s after which Windows
+/// resets a GPU (TDR) and the few seconds of Linux display watchdogs, and short enough
+/// that a stop request is heard within about this time; long enough that lavapipe's
+/// per-submission cost (it looks the shader's machine code up again) stays small.
+pub const DEFAULT_SUBMISSION_TARGET: Duration = Duration::from_millis(500);
+
+/// Pixel samples the first submission may trace, before any has been timed: one 256 x 256
+/// pass.
+const FIRST_SUBMISSION_WORK: u64 = 1 << 16;
+
+/// How much work one submission gets: pixel samples, adapted after each submission to the
+/// time it took, so that submissions stay near `target`.
+#[derive(Debug, Clone, Copy)]
+struct Submissions {
+    target: Duration,
+    /// Pixel samples the next submission may trace.
+    budget: u64,
+    /// Submissions made so far. The first traces one sample at most: its time, which may
+    /// include the driver compiling the pipeline, is not yet known.
+    count: u64,
+}
+
+/// The next submission's budget after one that traced `work` pixel samples in `took`:
+/// scaled by target / took, by at most 2x up and 4x down per step, within `min..=max`.
+/// A submission that traced less than its budget (the render's last samples) and ended
+/// within the target does not lower it.
+pub fn next_budget(
+    budget: u64,
+    work: u64,
+    took: Duration,
+    target: Duration,
+    min: u64,
+    max: u64,
+) -> u64 {
+    let ratio = (target.as_secs_f64() / took.as_secs_f64().max(1e-6)).clamp(0.25, 2.0);
+    let scaled = (work as f64 * ratio) as u64;
+    let next = if took <= target {
+        scaled.max(budget)
+    } else {
+        scaled
+    };
+    next.clamp(min, max.max(min))
+}
+
+/// Most pixels per band: [`MAX_TILE_PIXELS`] (or `WGTRACE_MAX_TILE_PIXELS`, for tests),
+/// and no more than one storage binding of `limit` bytes holds.
 pub fn band_pixels(limit: u64) -> u32 {
     let wanted = std::env::var("WGTRACE_MAX_TILE_PIXELS")
         .ok()
@@ -99,6 +151,13 @@ pub fn tiles_within(width: u32, height: u32, max_pixels: u32) -> Vec<Tile> {
         .collect()
 }
 
+/// Bytes between the [`Params`] of two dispatches in the parameter buffer: its size,
+/// rounded up to the adapter's alignment of dynamic uniform offsets.
+fn params_stride(device: &wgpu::Device) -> u64 {
+    let align = device.limits().min_uniform_buffer_offset_alignment.max(1) as u64;
+    (std::mem::size_of::<Params>() as u64).div_ceil(align) * align
+}
+
 impl GpuRenderer {
     /// Uploads `scene` and gets the trace pipeline for its feature set (compiled now, or
     /// already by an earlier render in this process).
@@ -114,6 +173,7 @@ impl GpuRenderer {
         scene: &FlatScene,
         pipeline: Arc<TracePipeline>,
     ) -> Result<Self, GpuError> {
+        ctx.check()?;
         let device = &ctx.device;
         check_scene_fits(device, scene)?;
         check_loop_limit(&ctx, scene, true)?;
@@ -122,7 +182,13 @@ impl GpuRenderer {
             .max_storage_buffer_binding_size
             .min(limits.max_buffer_size);
         let tiles = tiles_within(scene.width, scene.height, band_pixels(limit));
-        let buffers = scene_buffers(device, &pipeline.bindings, scene);
+        let stride = params_stride(device);
+        let buffers = scene_buffers(
+            device,
+            &pipeline.bindings,
+            scene,
+            stride * MAX_DISPATCHES_PER_SUBMISSION as u64,
+        );
         // wgpu zero-initialises new buffers, so the sums start at 0.
         let bands: Vec<Band> = tiles
             .into_iter()
@@ -152,13 +218,20 @@ impl GpuRenderer {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        ctx.check()?;
         Ok(Self {
             scene: scene.clone(),
             ctx,
             pipeline,
             params: buffers.params,
+            params_stride: stride,
             bands,
             readback,
+            submissions: Submissions {
+                target: DEFAULT_SUBMISSION_TARGET,
+                budget: FIRST_SUBMISSION_WORK,
+                count: 0,
+            },
         })
     }
 
@@ -172,44 +245,151 @@ impl GpuRenderer {
         super::context::describe(&self.ctx.info)
     }
 
-    /// Adds sample `sample_index` of every pixel: one submission per tile, then waits.
+    /// Sets the time one submission should take (default [`DEFAULT_SUBMISSION_TARGET`]).
+    pub fn set_submission_target(&mut self, target: Duration) {
+        self.submissions.target = target;
+    }
+
+    /// Ends the device as a driver reset would (for tests).
+    pub fn lose_device(&mut self) {
+        self.ctx.lose_device();
+    }
+
+    /// Submissions made so far.
+    pub fn submission_count(&self) -> u64 {
+        self.submissions.count
+    }
+
+    /// Pixel samples the next submission may trace.
+    pub fn submission_budget(&self) -> u64 {
+        self.submissions.budget
+    }
+
+    /// Samples per pixel that one call of [`Self::render_samples`] should ask for, so that
+    /// it makes about one submission per band: at least 1.
+    pub fn samples_per_call(&self) -> u32 {
+        if self.submissions.count == 0 {
+            return 1;
+        }
+        let largest = self
+            .bands
+            .iter()
+            .map(|b| b.tile.width as u64 * b.tile.height as u64)
+            .max()
+            .unwrap_or(1);
+        (self.submissions.budget / largest).clamp(1, MAX_DISPATCHES_PER_SUBMISSION as u64) as u32
+    }
+
+    /// Adds sample `sample_index` of every pixel.
     pub fn render_pass(&mut self, sample_index: u32) -> Result<(), GpuError> {
-        for band in &self.bands {
-            let tile = band.tile;
-            let params = self.scene.params(sample_index, tile);
-            // Staged writes land at the start of the next submission, so each tile's
-            // dispatch sees its own parameters.
-            self.ctx
-                .queue
-                .write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
-            let mut encoder = self
-                .ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("trace pass"),
-                    timestamp_writes: None,
-                });
-                pass.set_pipeline(&self.pipeline.pipeline);
-                pass.set_bind_group(0, &band.group, &[]);
+        self.render_samples(sample_index..sample_index + 1)
+    }
+
+    /// Adds the samples with indices `samples` to every pixel, band by band, in
+    /// submissions sized by the time the earlier ones took: several samples of a band in
+    /// one submission when it is quick, a few of its rows per submission when it is slow.
+    /// Each pixel adds its samples in index order, so the sums do not depend on how the
+    /// work was split.
+    pub fn render_samples(&mut self, samples: std::ops::Range<u32>) -> Result<(), GpuError> {
+        for b in 0..self.bands.len() {
+            let band = self.bands[b].tile;
+            let band_pixels = band.width as u64 * band.height as u64;
+            let mut s = samples.start;
+            while s < samples.end {
+                let budget = self.submissions.budget;
+                // the first submission, not yet timed, traces one sample
+                let budget = if self.submissions.count == 0 {
+                    budget.min(band_pixels)
+                } else {
+                    budget
+                };
+                if budget >= band_pixels {
+                    let k = (budget / band_pixels)
+                        .min((samples.end - s) as u64)
+                        .min(MAX_DISPATCHES_PER_SUBMISSION as u64)
+                        as u32;
+                    let dispatches: Vec<(u32, Tile)> = (s..s + k).map(|i| (i, band)).collect();
+                    self.submit(b, &dispatches)?;
+                    s += k;
+                } else {
+                    // one sample, a few rows at a time
+                    let mut y = band.y;
+                    while y < band.y + band.height {
+                        let rows = (self.submissions.budget / band.width as u64).max(1) as u32;
+                        let rows = rows.min(band.y + band.height - y);
+                        let tile = Tile {
+                            x: band.x,
+                            y,
+                            width: band.width,
+                            height: rows,
+                        };
+                        self.submit(b, &[(s, tile)])?;
+                        y += rows;
+                    }
+                    s += 1;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// One submission: a dispatch per (sample index, tile) of band `b`, each with its own
+    /// parameters; waits for it, then adapts the budget to the time it took.
+    fn submit(&mut self, b: usize, dispatches: &[(u32, Tile)]) -> Result<(), GpuError> {
+        let band = &self.bands[b];
+        let stride = self.params_stride as usize;
+        let mut bytes = vec![0u8; stride * dispatches.len()];
+        for (i, &(sample, tile)) in dispatches.iter().enumerate() {
+            let mut params = self.scene.params(sample, tile);
+            params.accum_y = band.tile.y;
+            bytes[i * stride..][..std::mem::size_of::<Params>()]
+                .copy_from_slice(bytemuck::bytes_of(&params));
+        }
+        self.ctx.queue.write_buffer(&self.params, 0, &bytes);
+        let mut encoder = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("trace pass"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline.pipeline);
+            for (i, &(_, tile)) in dispatches.iter().enumerate() {
+                pass.set_bind_group(0, &band.group, &[(i * stride) as u32]);
                 pass.dispatch_workgroups(
                     tile.width.div_ceil(WORKGROUP),
                     tile.height.div_ceil(WORKGROUP),
                     1,
                 );
             }
-            self.ctx.queue.submit([encoder.finish()]);
         }
-        self.wait()
-    }
-
-    fn wait(&self) -> Result<(), GpuError> {
-        self.ctx
-            .device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map(|_| ())
-            .map_err(|e| GpuError::Readback(e.to_string()))
+        let start = Instant::now();
+        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.wait()?;
+        let took = start.elapsed();
+        let work: u64 = dispatches
+            .iter()
+            .map(|(_, t)| t.width as u64 * t.height as u64)
+            .sum();
+        let largest = self
+            .bands
+            .iter()
+            .map(|b| b.tile.width as u64 * b.tile.height as u64)
+            .max()
+            .unwrap_or(1);
+        let sub = &mut self.submissions;
+        sub.budget = next_budget(
+            sub.budget,
+            work,
+            took,
+            sub.target,
+            self.scene.width as u64,
+            largest * MAX_DISPATCHES_PER_SUBMISSION as u64,
+        );
+        sub.count += 1;
+        Ok(())
     }
 
     /// Replaces the accumulation buffers' sums (a resumed render): two `[f32; 4]` per
@@ -224,7 +404,7 @@ impl GpuRenderer {
             at += n;
         }
         self.ctx.queue.submit([]);
-        self.wait()
+        self.ctx.wait()
     }
 
     /// Copies the accumulation back, band by band: two `[f32; 4]` per pixel of the image,
@@ -240,7 +420,7 @@ impl GpuRenderer {
             encoder.copy_buffer_to_buffer(&band.accum, 0, &self.readback, 0, band.accum.size());
             self.ctx.queue.submit([encoder.finish()]);
             let n = 2 * band.tile.width as usize * band.tile.height as usize;
-            let data: Vec<[f32; 4]> = read_mapped(&self.ctx.device, &self.readback)?;
+            let data: Vec<[f32; 4]> = read_mapped(&self.ctx, &self.readback)?;
             out.extend_from_slice(&data[..n]);
         }
         Ok(out)
@@ -336,7 +516,8 @@ pub(crate) fn scene_layout(device: &wgpu::Device, bindings: &[u32]) -> wgpu::Bin
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
                 ty,
-                has_dynamic_offset: false,
+                // the parameters of each dispatch of a submission lie at their own offset
+                has_dynamic_offset: binding == 0,
                 min_binding_size: None,
             },
             count: None,
@@ -349,22 +530,25 @@ pub(crate) fn scene_layout(device: &wgpu::Device, bindings: &[u32]) -> wgpu::Bin
 }
 
 /// The scene's records on the device, for the bindings a shader uses: the parameters
-/// (written before each dispatch) and the storage buffers, all but the accumulation.
+/// (written before each submission, one block per dispatch, bound at a dynamic offset)
+/// and the storage buffers, all but the accumulation.
 pub(crate) struct SceneBuffers {
     pub params: wgpu::Buffer,
     records: Vec<(u32, wgpu::Buffer)>,
 }
 
 /// Uploads the scene records that `bindings` name; records the shader does not use are
-/// neither uploaded nor bound.
+/// neither uploaded nor bound. The parameter buffer has `params_bytes` (at least one
+/// [`Params`]).
 pub(crate) fn scene_buffers(
     device: &wgpu::Device,
     bindings: &[u32],
     scene: &FlatScene,
+    params_bytes: u64,
 ) -> SceneBuffers {
     let params = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("params"),
-        size: std::mem::size_of::<Params>() as u64,
+        size: params_bytes.max(std::mem::size_of::<Params>() as u64),
         usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         mapped_at_creation: false,
     });
@@ -400,7 +584,17 @@ pub(crate) fn bind_scene(
         .iter()
         .map(|&binding| {
             let buffer = match binding {
-                0 => &buffers.params,
+                // one Params at the offset each dispatch gives
+                0 => {
+                    return wgpu::BindGroupEntry {
+                        binding,
+                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                            buffer: &buffers.params,
+                            offset: 0,
+                            size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
+                        }),
+                    }
+                }
                 4 => accum,
                 _ => {
                     &buffers
@@ -426,16 +620,14 @@ pub(crate) fn bind_scene(
 
 /// Maps a MAP_READ buffer whose copy has been submitted, waits, and returns its contents.
 pub(crate) fn read_mapped<T: bytemuck::Pod>(
-    device: &wgpu::Device,
+    ctx: &GpuContext,
     buffer: &wgpu::Buffer,
 ) -> Result<Vec<T>, GpuError> {
     let (tx, rx) = std::sync::mpsc::channel();
     buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
         let _ = tx.send(r);
     });
-    device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
+    ctx.wait()?;
     rx.recv()
         .map_err(|e| GpuError::Readback(e.to_string()))?
         .map_err(|e| GpuError::Readback(e.to_string()))?;

@@ -274,7 +274,9 @@ pub struct Params {
     pub env_cdf: u32,
     /// Image background: its index in the light list, else `NO_LIGHT`.
     pub env_light: u32,
-    pub pad0: u32,
+    /// Image row of the bound accumulation buffer's first pixel: the band a dispatch's
+    /// tile lies in starts there (the GPU keeps one buffer per band of rows).
+    pub accum_y: u32,
     pub pad1: u32,
     pub pad2: u32,
 }
@@ -425,7 +427,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             env_texture,
             env_cdf,
             env_light,
-            pad0,
+            accum_y,
             pad1,
             pad2
         }),
