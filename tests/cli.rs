@@ -143,7 +143,7 @@ fn bad_input_gives_a_clear_error_and_nonzero_exit() {
     assert!(!o.status.success());
     let e = String::from_utf8_lossy(&o.stderr);
     assert!(
-        e.contains("render.width: must be in 1..=16384, got 16385"),
+        e.contains("render.width (from --width): must be in 1..=16384, got 16385"),
         "{e}"
     );
     assert!(!e.contains("panicked"), "{e}");

@@ -278,6 +278,150 @@ material = "nope"
     assert!(e.contains("convex"), "{e}");
 }
 
+/// The issue's table of broken scenes: each is one edit of a valid scene, and its error
+/// names the file, the line and column, and the key.
+#[test]
+fn a_table_of_broken_scenes_names_file_line_and_key() {
+    let base = r#"[camera]
+look_from = [0, 0, 5]
+look_at = [0, 0, 0]
+[render]
+width = 8
+height = 8
+[textures]
+t = { type = "checker", even = [1, 1, 1], odd = [0, 0, 0], scale = 4 }
+[materials]
+m = { type = "lambertian", albedo = "t" }
+g = { type = "dielectric", ior = 1.5 }
+r = { type = "microfacet", albedo = [0.5, 0.5, 0.5], specular = [1, 1, 1], roughness = 0.3 }
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "m"
+"#;
+    let sphere = "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1";
+    let checker = r#"t = { type = "checker", even = [1, 1, 1], odd = [0, 0, 0], scale = 4 }"#;
+    let table: &[(&str, &str, &str, &str)] = &[
+        // (what, from, to, expected)
+        (
+            "syntax",
+            "look_at = [0, 0, 0]",
+            "look_at = [0, 0, 0",
+            "bad.toml:4:1: missing comma",
+        ),
+        (
+            "unknown key",
+            "height = 8",
+            "heigth = 8",
+            "bad.toml:6:1: unknown field `heigth`",
+        ),
+        (
+            "wrong type",
+            "width = 8",
+            "width = \"8\"",
+            "bad.toml:5:9: invalid type: string \"8\"",
+        ),
+        (
+            "unknown material",
+            "material = \"m\"",
+            "material = \"nope\"",
+            "bad.toml:13:1: objects[0].material: unknown material \"nope\"",
+        ),
+        (
+            "unknown texture",
+            "albedo = \"t\"",
+            "albedo = \"tt\"",
+            "bad.toml:10:5: materials.m.albedo: unknown texture \"tt\"",
+        ),
+        (
+            "missing mesh",
+            sphere,
+            "type = \"mesh\"\npath = \"gone.obj\"",
+            "bad.toml:13:1: objects[0].path: gone.obj:",
+        ),
+        (
+            "missing image",
+            checker,
+            r#"t = { type = "image", path = "gone.png" }"#,
+            "bad.toml:8:5: textures.t.path: gone.png:",
+        ),
+        (
+            "negative radius",
+            "radius = 1",
+            "radius = -2",
+            "bad.toml:13:1: objects[0].radius: must be > 0, got -2",
+        ),
+        (
+            "spp 0",
+            "height = 8",
+            "height = 8\nspp = 0",
+            "bad.toml:7:1: render.spp: must be in 1..=16777216, got 0",
+        ),
+        (
+            "width 0",
+            "width = 8",
+            "width = 0",
+            "bad.toml:5:1: render.width: must be in 1..=16384, got 0",
+        ),
+        (
+            "roughness",
+            "roughness = 0.3",
+            "roughness = 1.5",
+            "bad.toml:12:5: materials.r.roughness: must be in [0, 1], got 1.5",
+        ),
+        (
+            "ior",
+            "ior = 1.5",
+            "ior = 0",
+            "bad.toml:11:5: materials.g.ior: must be > 0, got 0",
+        ),
+        (
+            "nan",
+            "center = [0, 0, 0]",
+            "center = [nan, 0, 0]",
+            "bad.toml:13:1: objects[0].center: must be finite",
+        ),
+        (
+            "infinite",
+            "radius = 1",
+            "radius = inf",
+            "bad.toml:13:1: objects[0].radius: must be > 0, got inf",
+        ),
+        (
+            "degenerate",
+            sphere,
+            "type = \"triangle\"\nvertices = [[0, 0, 0], [1, 1, 1], [2, 2, 2]]",
+            "bad.toml:13:1: objects[0].vertices: is degenerate",
+        ),
+        (
+            "camera",
+            "look_at = [0, 0, 0]",
+            "look_at = [0, 0, 5]",
+            "bad.toml:3:1: camera.look_at: must differ from look_from",
+        ),
+    ];
+    assert!(wgtrace::load_scene_str(base, Path::new("bad.toml"), &Overrides::default()).is_ok());
+    for (what, from, to, expected) in table {
+        assert!(base.contains(from), "{what}: the edit does not apply");
+        let e = load_err(&base.replacen(from, to, 1));
+        assert!(e.contains(expected), "{what}: {e}");
+    }
+    // every problem at once, each with its own place
+    let many = base
+        .replacen("width = 8", "width = 0", 1)
+        .replacen("ior = 1.5", "ior = 0", 1)
+        .replacen("radius = 1", "radius = -2", 1);
+    let e = load_err(&many);
+    for expected in [
+        "bad.toml:5:1: render.width",
+        "bad.toml:11:5: materials.g.ior",
+        "bad.toml:13:1: objects[0].radius",
+    ] {
+        assert!(e.contains(expected), "{expected}: {e}");
+    }
+}
+
 #[test]
 fn overrides_replace_render_settings_and_are_validated() {
     let o = Overrides {

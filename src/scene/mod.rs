@@ -237,7 +237,17 @@ pub fn load_scene_str(
         invalid(vec![Problem::at(src, offset, "", message)])
     })?;
     apply_overrides(&mut file, overrides);
-    let problems = validate::validate(&file, src);
+    let o = overrides;
+    let overridden: Vec<&str> = [
+        ("width", o.width.is_some()),
+        ("height", o.height.is_some()),
+        ("spp", o.spp.is_some()),
+        ("max_depth", o.max_depth.is_some()),
+    ]
+    .into_iter()
+    .filter_map(|(k, set)| set.then_some(k))
+    .collect();
+    let problems = validate::validate(&file, src, &overridden);
     if !problems.is_empty() {
         return Err(invalid(problems));
     }

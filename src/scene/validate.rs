@@ -6,10 +6,14 @@ use super::error::Problem;
 use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TextureDesc, TransformDesc};
 use super::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE, MAX_SPP};
 
-/// Collects every problem of a parsed scene (not only the first).
-pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
+/// Collects every problem of a parsed scene (not only the first). `overridden` names the
+/// `[render]` keys whose values came from the command line (`--spp` for `spp`), so their
+/// problems point there rather than at the file.
+pub fn validate(file: &SceneFile, src: &str, overridden: &[&str]) -> Vec<Problem> {
     let mut v = Validator {
         src,
+        doc: toml::de::DeTable::parse(src).ok().map(|d| d.into_inner()),
+        overridden: overridden.iter().map(|k| format!("render.{k}")).collect(),
         problems: Vec::new(),
         textures: file
             .textures
@@ -330,6 +334,11 @@ pub fn validate(file: &SceneFile, src: &str) -> Vec<Problem> {
 
 struct Validator<'a> {
     src: &'a str,
+    /// The text parsed again with spans, to place problems of keys that serde's records
+    /// hold without one (`[render]`, `[camera]`, `[background]`).
+    doc: Option<toml::de::DeTable<'a>>,
+    /// `render.KEY` of values from the command line.
+    overridden: Vec<String>,
     problems: Vec<Problem>,
     /// Texture names, and whether each is a checker.
     textures: Vec<(String, bool)>,
@@ -337,8 +346,42 @@ struct Validator<'a> {
 
 impl Validator<'_> {
     fn push(&mut self, offset: usize, key: &str, message: String) {
+        if self.overridden.iter().any(|k| k == key) {
+            let flag = key.trim_start_matches("render.").replace('_', "-");
+            let key = format!("{key} (from --{flag})");
+            self.problems.push(Problem::at(self.src, 0, key, message));
+            return;
+        }
+        let offset = if offset == 0 {
+            self.locate(key)
+        } else {
+            offset
+        };
         self.problems
             .push(Problem::at(self.src, offset, key, message));
+    }
+
+    /// Where `table.field` is in the text: the field's key, else the table's header, else
+    /// nowhere (0). Records with spans of their own (objects, materials, textures) are
+    /// placed by those instead.
+    fn locate(&self, key: &str) -> usize {
+        let Some((table, field)) = key.split_once('.') else {
+            return 0;
+        };
+        let Some(doc) = &self.doc else {
+            return 0;
+        };
+        let Some((name, value)) = doc.iter().find(|(k, _)| k.get_ref().as_ref() == table) else {
+            return 0;
+        };
+        let field_key = match value.get_ref() {
+            toml::de::DeValue::Table(t) => t
+                .iter()
+                .find(|(k, _)| k.get_ref().as_ref() == field)
+                .map(|(k, _)| k.span().start),
+            _ => None,
+        };
+        field_key.unwrap_or(name.span().start)
     }
 
     fn range_u32(&mut self, key: &str, value: u32, lo: u32, hi: u32, at: usize) {
