@@ -57,7 +57,14 @@ pub struct GpuContext {
     pub(crate) disk_cache: Option<DiskCache>,
     /// The first error wgpu reported outside an error scope, or the device's loss: set by
     /// the device's callbacks, turned into a `GpuError` by [`GpuContext::check`].
-    fault: Arc<Mutex<Option<GpuError>>>,
+    fault: Arc<Mutex<Option<Fault>>>,
+}
+
+/// What went wrong with a device, as its callbacks report it.
+#[derive(Debug, Clone)]
+enum Fault {
+    Lost(String),
+    Failed(String),
 }
 
 thread_local! {
@@ -205,20 +212,20 @@ impl GpuContext {
                 required_limits: adapter.limits(),
                 ..Default::default()
             }))?;
-        let fault: Arc<Mutex<Option<GpuError>>> = Arc::default();
-        let record = |fault: &Arc<Mutex<Option<GpuError>>>, error: GpuError| {
+        let fault: Arc<Mutex<Option<Fault>>> = Arc::default();
+        let record = |fault: &Arc<Mutex<Option<Fault>>>, new: Fault| {
             let mut slot = fault.lock().unwrap_or_else(|e| e.into_inner());
             // the first fault is the cause; a lost device outranks what it caused
-            if slot.is_none()
-                || matches!(error, GpuError::Lost(_)) && !matches!(*slot, Some(GpuError::Lost(_)))
+            if !matches!(*slot, Some(Fault::Lost(_)))
+                && (slot.is_none() || matches!(new, Fault::Lost(_)))
             {
-                *slot = Some(error);
+                *slot = Some(new);
             }
         };
         {
             let fault = fault.clone();
             device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-                record(&fault, GpuError::Failed(e.to_string()));
+                record(&fault, Fault::Failed(e.to_string()));
             }));
         }
         {
@@ -233,7 +240,7 @@ impl GpuContext {
                 } else {
                     format!("{why}: {message}")
                 };
-                record(&fault, GpuError::Lost(message));
+                record(&fault, Fault::Lost(message));
             });
         }
         let disk_cache = cache_file.map(|path| {
@@ -266,9 +273,8 @@ impl GpuContext {
         let slot = self.fault.lock().unwrap_or_else(|e| e.into_inner());
         match &*slot {
             None => Ok(()),
-            Some(GpuError::Lost(m)) => Err(GpuError::Lost(m.clone())),
-            Some(GpuError::Failed(m)) => Err(GpuError::Failed(m.clone())),
-            Some(e) => Err(GpuError::Failed(e.to_string())),
+            Some(Fault::Lost(m)) => Err(GpuError::Lost(m.clone())),
+            Some(Fault::Failed(m)) => Err(GpuError::Failed(m.clone())),
         }
     }
 

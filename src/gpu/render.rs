@@ -271,13 +271,17 @@ impl GpuRenderer {
         if self.submissions.count == 0 {
             return 1;
         }
-        let largest = self
-            .bands
+        (self.submissions.budget / self.largest_band())
+            .clamp(1, MAX_DISPATCHES_PER_SUBMISSION as u64) as u32
+    }
+
+    /// Pixels of the largest band.
+    fn largest_band(&self) -> u64 {
+        self.bands
             .iter()
             .map(|b| b.tile.width as u64 * b.tile.height as u64)
             .max()
-            .unwrap_or(1);
-        (self.submissions.budget / largest).clamp(1, MAX_DISPATCHES_PER_SUBMISSION as u64) as u32
+            .unwrap_or(1)
     }
 
     /// Adds sample `sample_index` of every pixel.
@@ -373,12 +377,7 @@ impl GpuRenderer {
             .iter()
             .map(|(_, t)| t.width as u64 * t.height as u64)
             .sum();
-        let largest = self
-            .bands
-            .iter()
-            .map(|b| b.tile.width as u64 * b.tile.height as u64)
-            .max()
-            .unwrap_or(1);
+        let largest = self.largest_band();
         let sub = &mut self.submissions;
         sub.budget = next_budget(
             sub.budget,
