@@ -270,8 +270,8 @@ where
 }
 
 /// As `render_progressive`, but ends early by `rule`. With a time limit, a pass starts only
-/// if the mean pass time so far says it ends within the limit (the first always runs). With
-/// a target error, the estimate is read back after `MIN_PASSES_FOR_ERROR` passes and then
+/// if the mean pass time so far, and the last batch's, say it ends within the limit (the
+/// first always runs). With a target error, the estimate is read back after `MIN_PASSES_FOR_ERROR` passes and then
 /// whenever the passes since the last look took as long as the look itself or the pass
 /// count is a power of two, so reading back costs at most about half the render. Returns
 /// the progress, why it ended, and the last error estimate (when a target was set).
@@ -315,21 +315,27 @@ where
     let mut look_cost = Duration::ZERO;
     let mut last_look = Duration::ZERO;
     let mut pass = first;
+    // seconds per pass of the last batch
+    let mut last_pass = 0.0;
     while pass < passes.end {
         let mut batch = engine.samples_per_call().clamp(1, passes.end - pass);
         if let Some(limit) = rule.time_limit {
             if pass > first {
-                // as many passes as the mean pass time says end within the limit
+                // as many passes as end within the limit at the mean pass time so far or at
+                // the last batch's, whichever is longer (the machine may have got busier)
                 let mean_pass = progress.elapsed.as_secs_f64() / (pass - first) as f64;
+                let pass_time = mean_pass.max(last_pass);
                 let left = limit.saturating_sub(start.elapsed()).as_secs_f64();
-                let fit = (left / mean_pass.max(1e-9)).floor().min(u32::MAX as f64) as u32;
+                let fit = (left / pass_time.max(1e-9)).floor().min(u32::MAX as f64) as u32;
                 if fit == 0 {
                     return Ok((progress, Stopped::TimeLimit, estimate));
                 }
                 batch = batch.min(fit);
             }
         }
+        let batch_start = Instant::now();
         engine.render_samples(pass..pass + batch)?;
+        last_pass = batch_start.elapsed().as_secs_f64() / batch as f64;
         let before = pass;
         pass += batch;
         progress.passes_done = pass;
