@@ -171,6 +171,14 @@ struct RenderArgs {
     /// comparisons and debugging).
     #[arg(long)]
     no_specialize: bool,
+    /// Walk the BVH even in a scene of at most 16 untransformed primitives, where a plain
+    /// loop over them is the default (for comparisons).
+    #[arg(long, conflicts_with = "no_bvh")]
+    bvh: bool,
+    /// Keep every scene record in a storage buffer, none in a uniform buffer (for
+    /// comparisons).
+    #[arg(long)]
+    no_uniform_records: bool,
     /// Keep the render's state in this checkpoint file (written whole: temporary file,
     /// then rename) every --checkpoint-every seconds and at the end; `--resume` continues
     /// from it. Ctrl-C or SIGTERM always writes one (here, or beside the image as .ckpt).
@@ -297,6 +305,19 @@ fn features(path: &Path) -> anyhow::Result<()> {
             if defines.contains(d) { "yes" } else { "-" }
         );
     }
+    let uniform: Vec<String> = wgtrace::gpu::shader::UNIFORM_DEFINES
+        .iter()
+        .filter(|(d, _)| defines.contains(*d))
+        .map(|(d, _)| d.trim_start_matches("UNIFORM_").to_ascii_lowercase())
+        .collect();
+    println!(
+        "uniform records: {}",
+        if uniform.is_empty() {
+            "none".to_string()
+        } else {
+            uniform.join(", ")
+        }
+    );
     let size = |d| -> anyhow::Result<(usize, usize, usize)> {
         let wgsl = trace_shader(d)?;
         let bindings = used_bindings("trace", &wgsl, "main", 0)?.len();
@@ -420,6 +441,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         sampler: args.sampler,
         light_sampling: args.light_sampling,
         no_specialize: args.no_specialize,
+        force_bvh: args.bvh,
+        no_uniform_records: args.no_uniform_records,
     };
     let loading = std::time::Instant::now();
     let mut scene = wgtrace::load_scene(&args.scene, &overrides)?;

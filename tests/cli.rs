@@ -262,9 +262,14 @@ fn features_lists_the_scene_and_no_specialize_renders() {
     ] {
         assert!(text.contains(line), "{text}");
     }
-    // the Cornell box (MIS, no textures) binds 7 of the 9 scene bindings
+    // the Cornell box (MIS, no textures, few enough primitives for the plain loop) binds 6
+    // of the 9 scene bindings, its records as uniform buffers
     assert!(
-        text.contains("trace shader: specialized") && text.contains("7 bindings; full"),
+        text.contains("bvh              -")
+            && text.contains("primitive_loop   yes")
+            && text.contains("trace shader: specialized")
+            && text.contains("6 bindings; full")
+            && text.contains("uniform records: primitives, materials, emitters"),
         "{text}"
     );
     let out = tmp_dir("full").join("f.png");

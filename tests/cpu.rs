@@ -434,6 +434,8 @@ fn overrides_replace_render_settings_and_are_validated() {
         sampler: None,
         light_sampling: Some(wgtrace::scene::format::LightSampling::Mixture),
         no_specialize: true,
+        force_bvh: false,
+        no_uniform_records: false,
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
     assert_eq!(

@@ -215,3 +215,79 @@ fn records_match_naga_layout_of_the_shader() {
         );
     }
 }
+
+/// Each UNIFORM_* define turns its record array into a uniform buffer of the fixed length
+/// 65536 bytes / record size (the largest whole number of records in `UNIFORM_BYTES`),
+/// alone and all together, in the trace and the kernel shaders; the scenes whose records
+/// fit get them, and the full shader none.
+#[test]
+fn uniform_record_arrays_have_the_fixed_lengths_and_bindings() {
+    use wgtrace::gpu::shader::{uniform_bindings, uniform_defines, UNIFORM_BYTES, UNIFORM_DEFINES};
+    let features = all_defines();
+    let mut all = features.clone();
+    for &(name, binding) in UNIFORM_DEFINES {
+        let mut one = features.clone();
+        one.insert(name.to_string());
+        all.insert(name.to_string());
+        for entry in ENTRY_SHADERS {
+            let wgsl = preprocess(entry, &one).unwrap();
+            assert_eq!(
+                uniform_bindings(entry, &wgsl).unwrap(),
+                vec![binding],
+                "{entry} {name}"
+            );
+            let module = validate(entry, &wgsl).unwrap();
+            let var = module
+                .global_variables
+                .iter()
+                .map(|(_, v)| v)
+                .find(|v| {
+                    v.binding
+                        .as_ref()
+                        .is_some_and(|b| b.group == 0 && b.binding == binding)
+                })
+                .unwrap();
+            let naga::TypeInner::Array {
+                base,
+                size: naga::ArraySize::Constant(len),
+                stride,
+            } = module.types[var.ty].inner
+            else {
+                panic!("{name}: binding {binding} is not a fixed-size array");
+            };
+            let record = module.types[base].inner.size(module.to_ctx()) as u64;
+            assert_eq!(stride as u64, record, "{name}");
+            assert_eq!(
+                len.get() as u64,
+                UNIFORM_BYTES / record,
+                "{name}: {len} records of {record} bytes"
+            );
+        }
+    }
+    let wgsl = preprocess("trace", &all).unwrap();
+    assert_eq!(
+        uniform_bindings("trace", &wgsl).unwrap(),
+        vec![1, 2, 3, 5, 6, 7]
+    );
+    assert!(
+        uniform_bindings("trace", &preprocess("trace", &features).unwrap())
+            .unwrap()
+            .is_empty()
+    );
+    // every scene in scenes/ fits, and its shader gets all its record arrays as uniforms
+    let scene = wgtrace::load_scene(
+        &common::repo_path("scenes/cornell.toml"),
+        &Overrides::default(),
+    )
+    .unwrap();
+    assert_eq!(uniform_defines(&scene).len(), UNIFORM_DEFINES.len());
+    assert!(scene_defines(&scene).contains("UNIFORM_PRIMITIVES"));
+    let full = Overrides {
+        no_specialize: true,
+        ..Default::default()
+    };
+    let scene = wgtrace::load_scene(&common::repo_path("scenes/cornell.toml"), &full).unwrap();
+    assert!(!scene_defines(&scene)
+        .iter()
+        .any(|d| d.starts_with("UNIFORM_")));
+}

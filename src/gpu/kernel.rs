@@ -49,13 +49,14 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
     }
     let device = &ctx.device;
     check_scene_fits(device, scene)?;
+    let defines = shader::fit_to_limits(&shader::scene_defines(scene), &device.limits());
+    let wgsl = shader::kernel_shader(&defines)?;
+    let uniform = shader::uniform_bindings("kernel", &wgsl)?;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("kernel.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(
-            shader::kernel_shader(&shader::scene_defines(scene))?.into(),
-        ),
+        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
     });
-    let scene_bgl = scene_layout(device, &all_bindings());
+    let scene_bgl = scene_layout(device, &all_bindings(), &uniform);
     let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -91,7 +92,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let buffers = scene_buffers(device, &all_bindings(), scene, 0);
+    let buffers = scene_buffers(device, &all_bindings(), &uniform, scene, 0);
     let scene_group = bind_scene(device, &scene_bgl, &all_bindings(), &buffers, &accum);
     let params = scene.params(0, scene.full_tile());
     ctx.queue

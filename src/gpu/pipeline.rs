@@ -17,6 +17,9 @@ pub struct TracePipeline {
     /// Bindings of group 0 (`shaders/shared/bindings.wgsl`) the shader uses; only these are
     /// in the layout and bound.
     pub bindings: Vec<u32>,
+    /// Those of them, other than the parameters, that are uniform buffers (UNIFORM_*
+    /// defines) rather than storage buffers.
+    pub uniform: Vec<u32>,
     /// Size of the assembled WGSL.
     pub shader_bytes: usize,
     /// Wall time to assemble, validate and compile it.
@@ -51,12 +54,13 @@ impl GpuContext {
         let start = Instant::now();
         let wgsl = shader::trace_shader(defines)?;
         let bindings = shader::used_bindings("trace", &wgsl, "main", 0)?;
+        let uniform = shader::uniform_bindings("trace", &wgsl)?;
         let device = &self.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("trace.wgsl"),
             source: wgpu::ShaderSource::Wgsl(wgsl.as_str().into()),
         });
-        let layout = scene_layout(device, &bindings);
+        let layout = scene_layout(device, &bindings, &uniform);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("trace layout"),
             bind_group_layouts: &[Some(&layout)],
@@ -79,6 +83,7 @@ impl GpuContext {
             pipeline,
             layout,
             bindings,
+            uniform,
             shader_bytes: wgsl.len(),
             compile_time: start.elapsed(),
         })

@@ -115,19 +115,27 @@ pub fn band_pixels(limit: u64) -> u32 {
     wanted.min((limit / ACCUM_BYTES_PER_PIXEL).min(u32::MAX as u64) as u32)
 }
 
-/// A storage buffer holding `items`, or one zeroed element when there are none (WebGPU
-/// forbids empty bindings).
-fn storage_buffer<T: bytemuck::Pod>(
-    device: &wgpu::Device,
-    label: &str,
-    items: &[T],
-) -> wgpu::Buffer {
-    let zero = [T::zeroed()];
-    let items = if items.is_empty() { &zero[..] } else { items };
+/// A storage buffer holding `bytes`, or 256 zero bytes when there are none (WebGPU
+/// forbids empty bindings; every record is smaller).
+fn storage_buffer(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    let zero = [0u8; 256];
+    let bytes = if bytes.is_empty() { &zero[..] } else { bytes };
     device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some(label),
-        contents: bytemuck::cast_slice(items),
+        contents: bytes,
         usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+/// A uniform buffer of [`shader::UNIFORM_BYTES`] starting with `bytes`: the shader declares
+/// the record array at that fixed size.
+fn uniform_buffer(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
+    let mut padded = bytes.to_vec();
+    padded.resize(shader::UNIFORM_BYTES as usize, 0);
+    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: &padded,
+        usage: wgpu::BufferUsages::UNIFORM,
     })
 }
 
@@ -162,7 +170,8 @@ impl GpuRenderer {
     /// Uploads `scene` and gets the trace pipeline for its feature set (compiled now, or
     /// already by an earlier render in this process).
     pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene) -> Result<Self, GpuError> {
-        let pipeline = ctx.trace_pipeline(&shader::scene_defines(scene))?;
+        let defines = shader::fit_to_limits(&shader::scene_defines(scene), &ctx.device.limits());
+        let pipeline = ctx.trace_pipeline(&defines)?;
         Self::with_pipeline(ctx, scene, pipeline)
     }
 
@@ -186,6 +195,7 @@ impl GpuRenderer {
         let buffers = scene_buffers(
             device,
             &pipeline.bindings,
+            &pipeline.uniform,
             scene,
             stride * MAX_DISPATCHES_PER_SUBMISSION as u64,
         );
@@ -505,12 +515,26 @@ pub(crate) fn all_bindings() -> Vec<u32> {
 }
 
 /// The layout of group 0 (`shaders/shared/bindings.wgsl`) with `bindings` only: those a
-/// specialized shader uses.
-pub(crate) fn scene_layout(device: &wgpu::Device, bindings: &[u32]) -> wgpu::BindGroupLayout {
+/// specialized shader uses; those in `uniform` are uniform buffers.
+pub(crate) fn scene_layout(
+    device: &wgpu::Device,
+    bindings: &[u32],
+    uniform: &[u32],
+) -> wgpu::BindGroupLayout {
     let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = BINDINGS
         .iter()
         .filter(|(binding, _)| bindings.contains(binding))
-        .map(|&(binding, ty)| wgpu::BindGroupLayoutEntry {
+        .map(|&(binding, ty)| {
+            (
+                binding,
+                if uniform.contains(&binding) {
+                    wgpu::BufferBindingType::Uniform
+                } else {
+                    ty
+                },
+            )
+        })
+        .map(|(binding, ty)| wgpu::BindGroupLayoutEntry {
             binding,
             visibility: wgpu::ShaderStages::COMPUTE,
             ty: wgpu::BindingType::Buffer {
@@ -542,9 +566,17 @@ pub(crate) struct SceneBuffers {
 pub(crate) fn scene_buffers(
     device: &wgpu::Device,
     bindings: &[u32],
+    uniform: &[u32],
     scene: &FlatScene,
     params_bytes: u64,
 ) -> SceneBuffers {
+    let records = |label: &str, bytes: &[u8], binding: u32| {
+        if uniform.contains(&binding) {
+            uniform_buffer(device, label, bytes)
+        } else {
+            storage_buffer(device, label, bytes)
+        }
+    };
     let params = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("params"),
         size: params_bytes.max(std::mem::size_of::<Params>() as u64),
@@ -556,13 +588,13 @@ pub(crate) fn scene_buffers(
         .filter_map(|&binding| {
             let buffer = match binding {
                 0 | 4 => return None,
-                1 => storage_buffer(device, "primitives", &scene.primitives),
-                2 => storage_buffer(device, "materials", &scene.materials),
-                3 => storage_buffer(device, "emitters", &scene.emitters),
-                5 => storage_buffer(device, "bvh", &scene.bvh),
-                6 => storage_buffer(device, "shape_data", &scene.shape_data),
-                7 => storage_buffer(device, "textures", &scene.textures),
-                8 => storage_buffer(device, "texels", &scene.texels),
+                1 => records("primitives", bytemuck::cast_slice(&scene.primitives), 1),
+                2 => records("materials", bytemuck::cast_slice(&scene.materials), 2),
+                3 => records("emitters", bytemuck::cast_slice(&scene.emitters), 3),
+                5 => records("bvh", bytemuck::cast_slice(&scene.bvh), 5),
+                6 => records("shape_data", bytemuck::cast_slice(&scene.shape_data), 6),
+                7 => records("textures", bytemuck::cast_slice(&scene.textures), 7),
+                8 => records("texels", bytemuck::cast_slice(&scene.texels), 8),
                 _ => unreachable!("binding {binding} is not in BINDINGS"),
             };
             Some((binding, buffer))

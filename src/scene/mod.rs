@@ -32,11 +32,24 @@ pub struct Overrides {
     pub seed: Option<u32>,
     /// Test every primitive on every ray instead of traversing the BVH (benchmarks, tests).
     pub no_bvh: bool,
+    /// Traverse the BVH even in a scene small enough for the plain loop
+    /// ([`SMALL_SCENE_PRIMITIVES`]), for comparisons.
+    pub force_bvh: bool,
+    /// Keep every record array in a storage buffer, none in a uniform buffer (for
+    /// comparisons; `gpu::shader::UNIFORM_DEFINES`).
+    pub no_uniform_records: bool,
     pub sampler: Option<format::SamplerKind>,
     pub light_sampling: Option<format::LightSampling>,
     /// Assemble the full shader instead of one specialized to the scene's features.
     pub no_specialize: bool,
 }
+
+/// Scenes with at most this many bounded primitives, none of them transformed, test them
+/// all in a plain loop rather than walking the BVH. On lavapipe the loop was 1.3x to 2.1x
+/// faster on every such scene in `scenes/` (all SIMD lanes walk it together, where the
+/// BVH walk diverges); transformed primitives cost enough per test that the BVH won
+/// there (transforms.toml, 10 primitives: 0.78 against 0.67 Msamples/s).
+pub const SMALL_SCENE_PRIMITIVES: usize = 16;
 
 /// Largest image side accepted.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
@@ -82,6 +95,8 @@ pub struct FlatScene {
     pub light_sampling: u32,
     /// Assemble the GPU shader for the scene's features only (false: the full shader).
     pub specialize: bool,
+    /// Bind record arrays that fit as uniform buffers (a specialized shader only).
+    pub uniform_records: bool,
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
     /// The light list: emissive primitives that can be sampled, then the image background.
@@ -127,6 +142,16 @@ pub struct Tile {
 }
 
 impl FlatScene {
+    /// Whether the plain loop over primitives beats the BVH walk: at most
+    /// [`SMALL_SCENE_PRIMITIVES`] bounded primitives, none transformed.
+    pub fn small(&self) -> bool {
+        let bounded = &self.primitives[self.num_unbounded as usize..];
+        bounded.len() <= SMALL_SCENE_PRIMITIVES
+            && !bounded
+                .iter()
+                .any(|p| p.flags & records::PRIM_FLAG_TRANSFORM != 0)
+    }
+
     /// The uniform block for one dispatch: pass `sample_index` over `tile`.
     pub fn params(&self, sample_index: u32, tile: Tile) -> Params {
         let c = &self.camera;
@@ -319,6 +344,8 @@ pub fn load_scene_str(
     flatten::flatten(&file, &meshes, &images, !overrides.no_bvh)
         .map(|scene| FlatScene {
             specialize: !overrides.no_specialize,
+            uniform_records: !overrides.no_uniform_records,
+            use_bvh: scene.use_bvh && (overrides.force_bvh || !scene.small()),
             ..scene
         })
         .map_err(|objects| {
