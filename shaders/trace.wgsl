@@ -95,6 +95,16 @@ fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
     var prev_pdf = 0.0;
     var prev_delta = true;
     for (var depth = 0u; depth < params.max_depth; depth++) {
+        // Russian roulette from ray rr_depth on: a path goes on with probability
+        // min(1, max(throughput)), its throughput divided by that; unbiased, and a dim path
+        // stops before its next ray
+        if (params.rr_depth != 0u && depth >= params.rr_depth) {
+            let survive = min(1.0, max(throughput.x, max(throughput.y, throughput.z)));
+            if (rand_2d(pixel, sample, depth, DIM_RR, params.seed).x >= survive) {
+                break;
+            }
+            throughput /= survive;
+        }
         let cand = intersect_scene(ray, FAR);
 #ifdef HAS_MIS
         let mis = params.light_sampling == LIGHT_SAMPLING_MIS && !prev_delta;

@@ -179,6 +179,10 @@ struct RenderArgs {
     /// comparisons).
     #[arg(long)]
     no_uniform_records: bool,
+    /// Trace every path to max_depth without Russian roulette (for comparisons; Russian
+    /// roulette from the fourth ray on is unbiased).
+    #[arg(long)]
+    no_russian_roulette: bool,
     /// Keep the render's state in this checkpoint file (written whole: temporary file,
     /// then rename) every --checkpoint-every seconds and at the end; `--resume` continues
     /// from it. Ctrl-C or SIGTERM always writes one (here, or beside the image as .ckpt).
@@ -443,6 +447,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         no_specialize: args.no_specialize,
         force_bvh: args.bvh,
         no_uniform_records: args.no_uniform_records,
+        no_russian_roulette: args.no_russian_roulette,
     };
     let loading = std::time::Instant::now();
     let mut scene = wgtrace::load_scene(&args.scene, &overrides)?;

@@ -123,7 +123,8 @@ fn moeller_trumbore(v0: Vec3, v1: Vec3, v2: Vec3, r: &Ray) -> bool {
 /// exactly at vertices and a third at edge midpoints: every one hits, on the CPU and on the
 /// GPU (the kernel runs the shader's search). Moeller-Trumbore on the same rays lets some
 /// through (printed). A furnace inside it (walls emitting 1, albedo 0.5) shows exactly
-/// 2 (1 - 0.5^24) in every pixel under BSDF sampling, on both backends: no light leaks.
+/// 2 (1 - 0.5^24) in every pixel under BSDF sampling without Russian roulette, on both
+/// backends: no light leaks.
 #[test]
 fn a_closed_mesh_is_watertight_and_its_furnace_does_not_leak() {
     let dir = tmp_dir("watertight");
@@ -146,7 +147,13 @@ type = "mesh"
 path = "jittered.obj"
 material = "wall"
 "#;
-    let scene = load(src, &dir, Overrides::default());
+    // every path runs all 24 rays, so each pixel is exactly the sum (Russian roulette
+    // would make it a random estimate of it)
+    let no_rr = Overrides {
+        no_russian_roulette: true,
+        ..Default::default()
+    };
+    let scene = load(src, &dir, no_rr);
     let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
     let mut state = 4242u32;
     let mut rays = Vec::new();
@@ -186,6 +193,25 @@ material = "wall"
             .filter(|&i| (0..3).any(|c| (img.mean(i)[c] - expected).abs() > 1e-4))
             .count();
         assert_eq!(bad, 0, "{name}: {bad} pixels leak");
+    }
+    // with Russian roulette (the default) each pixel is a random estimate of the same
+    // value, and unbiased: the image mean lies within 4 standard errors of it (the error
+    // from the pixels' own sample variances), and paths did end early (the variance is
+    // not zero)
+    let scene = load(src, &dir, Overrides::default());
+    for (name, img) in [("gpu", render_gpu(&scene)), ("cpu", render_cpu(&scene))] {
+        let n = img.pixel_count();
+        let mean = (0..n).map(|i| img.mean(i)[0] as f64).sum::<f64>() / n as f64;
+        let var_of_mean = (0..n)
+            .map(|i| img.variance(i)[0] as f64 / img.samples(i) as f64)
+            .sum::<f64>()
+            / (n * n) as f64;
+        let se = var_of_mean.sqrt();
+        assert!(se > 0.0, "{name}: no path was stopped early");
+        assert!(
+            (mean - expected as f64).abs() <= 4.0 * se,
+            "{name}: mean {mean} against {expected}, standard error {se}"
+        );
     }
 }
 

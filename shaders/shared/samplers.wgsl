@@ -15,6 +15,8 @@ const DIM_BSDF: u32 = 2u;
 const DIM_LIGHT: u32 = 3u;
 // .x chooses the light, .y the mixture's strategy
 const DIM_LIGHT_CHOICE: u32 = 4u;
+// .x decides Russian roulette
+const DIM_RR: u32 = 5u;
 
 // Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction numbers
 // v_k = v_{k-1} ^ (v_{k-1} >> 1), v_1 = 2^31, of the set bits of i.

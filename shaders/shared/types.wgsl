@@ -208,7 +208,8 @@ struct Params {
     env_light: u32,
     // image row of the bound accumulation buffer's first pixel (the band it holds)
     accum_y: u32,
-    pad1: u32,
+    // Russian roulette decides whether rays from this one on are traced (0: never)
+    rr_depth: u32,
     pad2: u32,
 }
 

@@ -11,6 +11,8 @@ pub const DIM_BSDF: u32 = 2;
 pub const DIM_LIGHT: u32 = 3;
 /// `.x` chooses the light, `.y` the mixture's strategy.
 pub const DIM_LIGHT_CHOICE: u32 = 4;
+/// .x decides Russian roulette.
+pub const DIM_RR: u32 = 5;
 
 /// Second dimension of Sobol' (primitive polynomial x + 1).
 pub fn sobol_dim1(i: u32) -> u32 {

@@ -9,7 +9,8 @@ use super::lights::{
     background_radiance, light_pdf, light_pdf_total, power_heuristic, sample_light,
 };
 use super::materials::{bsdf_eval, bsdf_pdf, emitted, mixture_applies, nee_applies, scatter};
-use super::samplers::{bounce_2d, sample_2d};
+use super::rng::rand_2d;
+use super::samplers::{bounce_2d, sample_2d, DIM_RR};
 use super::sampling::{offset_ray, sample_disk};
 use super::textures::material_at;
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
@@ -131,6 +132,14 @@ pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
     let mut prev_pdf = 0.0;
     let mut prev_delta = true;
     for depth in 0..p.max_depth {
+        // Russian roulette from ray rr_depth on, as the shader does
+        if p.rr_depth != 0 && depth >= p.rr_depth {
+            let survive = throughput.max_element().min(1.0);
+            if rand_2d(pixel, sample, depth, DIM_RR, p.seed)[0] >= survive {
+                break;
+            }
+            throughput /= survive;
+        }
         let cand = intersect_scene(b, &ray, FAR);
         let mis = p.light_sampling == LIGHT_SAMPLING_MIS && !prev_delta;
         if cand.prim == NO_HIT {

@@ -38,6 +38,9 @@ pub struct Overrides {
     /// Keep every record array in a storage buffer, none in a uniform buffer (for
     /// comparisons; `gpu::shader::UNIFORM_DEFINES`).
     pub no_uniform_records: bool,
+    /// Trace every path to max_depth (or until it escapes or goes black), without Russian
+    /// roulette (for comparisons).
+    pub no_russian_roulette: bool,
     pub sampler: Option<format::SamplerKind>,
     pub light_sampling: Option<format::LightSampling>,
     /// Assemble the full shader instead of one specialized to the scene's features.
@@ -50,6 +53,11 @@ pub struct Overrides {
 /// BVH walk diverges); transformed primitives cost enough per test that the BVH won
 /// there (transforms.toml, 10 primitives: 0.78 against 0.67 Msamples/s).
 pub const SMALL_SCENE_PRIMITIVES: usize = 16;
+
+/// The first ray Russian roulette may stop: the fourth (after the camera ray and two
+/// bounces), as pbrt-v4 starts it after depth 1. A path then goes on with probability
+/// min(1, max(throughput)) and its throughput is divided by that: unbiased.
+pub const RR_DEPTH: u32 = 3;
 
 /// Largest image side accepted.
 pub const MAX_IMAGE_SIDE: u32 = 16384;
@@ -97,6 +105,8 @@ pub struct FlatScene {
     pub specialize: bool,
     /// Bind record arrays that fit as uniform buffers (a specialized shader only).
     pub uniform_records: bool,
+    /// The first ray Russian roulette may stop ([`RR_DEPTH`]; 0: none).
+    pub rr_depth: u32,
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
     /// The light list: emissive primitives that can be sampled, then the image background.
@@ -201,6 +211,7 @@ impl FlatScene {
             env_texture: self.env.map_or(0, |e| e.texture),
             env_cdf: self.env.map_or(0, |e| e.cdf),
             env_light: self.env.map_or(records::NO_LIGHT, |e| e.light),
+            rr_depth: self.rr_depth,
             ..Default::default()
         }
     }
@@ -345,6 +356,11 @@ pub fn load_scene_str(
         .map(|scene| FlatScene {
             specialize: !overrides.no_specialize,
             uniform_records: !overrides.no_uniform_records,
+            rr_depth: if overrides.no_russian_roulette {
+                0
+            } else {
+                RR_DEPTH
+            },
             use_bvh: scene.use_bvh && (overrides.force_bvh || !scene.small()),
             ..scene
         })

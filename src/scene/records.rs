@@ -277,7 +277,9 @@ pub struct Params {
     /// Image row of the bound accumulation buffer's first pixel: the band a dispatch's
     /// tile lies in starts there (the GPU keeps one buffer per band of rows).
     pub accum_y: u32,
-    pub pad1: u32,
+    /// Russian roulette decides whether rays from this one on (0 = the camera ray) are
+    /// traced; 0: no Russian roulette.
+    pub rr_depth: u32,
     pub pad2: u32,
 }
 
@@ -428,7 +430,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             env_cdf,
             env_light,
             accum_y,
-            pad1,
+            rr_depth,
             pad2
         }),
         layout!(KernelRay { origin, dir }),
