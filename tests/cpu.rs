@@ -496,3 +496,31 @@ fn background_mistakes_are_named() {
     let e = load_err(&format!("{base}color = [1, 1, 1]\nstrength = 2\n"));
     assert!(e.contains("apply to a texture background only"), "{e}");
 }
+
+/// The Mitsuba comparison's scene (`bench/cornell.toml`) loads, and is `scenes/cornell.toml`
+/// with independent random samples: the same records, camera and settings otherwise.
+#[test]
+fn the_benchmark_cornell_box_is_the_scenes_one_with_random_samples() {
+    let bench = wgtrace::load_scene(
+        &common::repo_path("bench/cornell.toml"),
+        &Overrides::default(),
+    )
+    .unwrap();
+    let scene = wgtrace::load_scene(
+        &common::repo_path("scenes/cornell.toml"),
+        &Overrides::default(),
+    )
+    .unwrap();
+    assert_eq!(bench.sampler, wgtrace::scene::records::SAMPLER_RANDOM);
+    assert_eq!(
+        bench.light_sampling,
+        wgtrace::scene::records::LIGHT_SAMPLING_MIS
+    );
+    assert_eq!(bench.primitives, scene.primitives);
+    assert_eq!(bench.materials, scene.materials);
+    assert_eq!(bench.camera, scene.camera);
+    assert_eq!(
+        (bench.width, bench.height, bench.spp, bench.max_depth),
+        (scene.width, scene.height, scene.spp, scene.max_depth)
+    );
+}
