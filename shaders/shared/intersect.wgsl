@@ -240,8 +240,8 @@ fn transform_error(data: u32, p: vec3<f32>, err: f32) -> f32 {
 }
 
 // One primitive in its own space: (t, u, v) as in Candidate.
-fn intersect_local(prim: Primitive, ray: Ray, t_max: f32) -> vec3<f32> {
-    switch prim.tag {
+fn intersect_local(prim: Primitive, tag: u32, ray: Ray, t_max: f32) -> vec3<f32> {
+    switch tag {
 #ifdef HAS_SPHERE
         case PRIM_SPHERE: {
             return vec3<f32>(intersect_sphere(prim.a.xyz, prim.a.w, ray, t_max), 0.0, 0.0);
@@ -283,17 +283,23 @@ fn intersect_local(prim: Primitive, ray: Ray, t_max: f32) -> vec3<f32> {
 // the direction normalized (the sphere test needs unit length); t is mapped back by the
 // direction's length.
 fn intersect_primitive(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
+    return intersect_primitive_as(i, primitives[i].tag, ray, t_max);
+}
+
+// intersect_primitive for a primitive whose type the caller knows: a literal `tag` lets
+// the compiler drop the other types' cases (the per-type loops of intersect_scene).
+fn intersect_primitive_as(i: u32, tag: u32, ray: Ray, t_max: f32) -> vec3<f32> {
     let prim = primitives[i];
 #ifndef HAS_TRANSFORMS
-    return intersect_local(prim, ray, t_max);
+    return intersect_local(prim, tag, ray, t_max);
 #else
     if ((prim.flags & PRIM_FLAG_TRANSFORM) == 0u) {
-        return intersect_local(prim, ray, t_max);
+        return intersect_local(prim, tag, ray, t_max);
     }
     let r = ray_to_object(prim.data, ray);
     let scale = length(r.dir);
     let t_lim = min(t_max, FAR / max(scale, 1.0)) * scale;
-    let h = intersect_local(prim, Ray(r.origin, r.dir / scale), t_lim);
+    let h = intersect_local(prim, tag, Ray(r.origin, r.dir / scale), t_lim);
     if (h.x < FAR) {
         return vec3<f32>(h.x / scale, h.y, h.z);
     }
@@ -304,6 +310,15 @@ fn intersect_primitive(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
 // Primitive i tested against the closest hit so far; the closer of the two.
 fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
     let h = intersect_primitive(i, ray, best.t);
+    if (h.x < best.t) {
+        return Candidate(h.x, i, h.y, h.z);
+    }
+    return best;
+}
+
+// closer for a primitive of a known type (see intersect_primitive_as).
+fn closer_as(best: Candidate, i: u32, tag: u32, ray: Ray) -> Candidate {
+    let h = intersect_primitive_as(i, tag, ray, best.t);
     if (h.x < best.t) {
         return Candidate(h.x, i, h.y, h.z);
     }
@@ -341,9 +356,36 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     }
 #ifdef HAS_PRIMITIVE_LOOP
     if (params.use_bvh == 0u) {
-        for (var i = params.num_unbounded; i < params.num_primitives; i++) {
-            best = closer(best, i, ray);
+        // Without the BVH the bounded primitives are sorted by type (scene::flatten), and
+        // each type present gets a loop whose body holds only its own test: llvmpipe runs
+        // every case of a switch under a mask. The loops visit the indices in order, as
+        // the CPU's single loop does.
+        var i = params.num_unbounded;
+#ifdef HAS_SPHERE
+        for (; i < params.num_primitives && primitives[i].tag == PRIM_SPHERE; i++) {
+            best = closer_as(best, i, PRIM_SPHERE, ray);
         }
+#endif
+#ifdef HAS_TRIANGLE
+        for (; i < params.num_primitives && primitives[i].tag == PRIM_TRIANGLE; i++) {
+            best = closer_as(best, i, PRIM_TRIANGLE, ray);
+        }
+#endif
+#ifdef HAS_BOX
+        for (; i < params.num_primitives && primitives[i].tag == PRIM_BOX; i++) {
+            best = closer_as(best, i, PRIM_BOX, ray);
+        }
+#endif
+#ifdef HAS_CYLINDER
+        for (; i < params.num_primitives && primitives[i].tag == PRIM_CYLINDER; i++) {
+            best = closer_as(best, i, PRIM_CYLINDER, ray);
+        }
+#endif
+#ifdef HAS_DISK
+        for (; i < params.num_primitives && primitives[i].tag == PRIM_DISK; i++) {
+            best = closer_as(best, i, PRIM_DISK, ray);
+        }
+#endif
         return best;
     }
 #endif

@@ -519,14 +519,25 @@ fn record_ok(p: &Primitive, shape_data: &[[f32; 4]]) -> bool {
     finite && shape && transform && bounded
 }
 
+/// Whether the shader walks the BVH or tests every bounded primitive in a loop.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BvhChoice {
+    /// The loop for a small scene ([`super::SMALL_SCENE_PRIMITIVES`]), else the BVH.
+    Auto,
+    Always,
+    Never,
+}
+
 /// Flattens a validated scene into records; `meshes[i]` holds object i's mesh when it is
-/// one, `images[i]` texture i's image.
+/// one, `images[i]` texture i's image. With the BVH, the bounded primitives are in its
+/// leaves' order; without it they are sorted by type (stable), for the shader's one loop
+/// per type, and there are no BVH nodes.
 /// Errors with the indices of objects whose records degenerate in f32 (see `record_ok`).
 pub fn flatten(
     file: &SceneFile,
     meshes: &[Option<MeshData>],
     images: &[Option<ImageData>],
-    use_bvh: bool,
+    bvh_choice: BvhChoice,
 ) -> Result<FlatScene, Vec<usize>> {
     let texture_names: Vec<String> = file.textures.keys().cloned().collect();
     let (textures, texels) = texture_records(&file.textures, images);
@@ -562,22 +573,40 @@ pub fn flatten(
         .iter()
         .map(|p| world_bounds(p, &shape_data))
         .collect();
-    let tree = bvh::build(&boxes);
+    let small = bounded.len() <= super::SMALL_SCENE_PRIMITIVES
+        && !bounded
+            .iter()
+            .any(|p| p.flags & records::PRIM_FLAG_TRANSFORM != 0);
+    let use_bvh = match bvh_choice {
+        BvhChoice::Auto => !small,
+        BvhChoice::Always => true,
+        BvhChoice::Never => false,
+    };
+    let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.union(b));
     let num_unbounded = unbounded.len() as u32;
     let mut primitives = unbounded;
-    primitives.extend(tree.order.iter().map(|&i| bounded[i as usize]));
-    let bvh: Vec<BvhNode> = tree
-        .nodes
-        .iter()
-        .map(|n| BvhNode {
-            offset: if n.count > 0 {
-                n.offset + num_unbounded
-            } else {
-                n.offset
-            },
-            ..*n
-        })
-        .collect();
+    let (bvh, bvh_depth) = if use_bvh {
+        let tree = bvh::build(&boxes);
+        primitives.extend(tree.order.iter().map(|&i| bounded[i as usize]));
+        let nodes: Vec<BvhNode> = tree
+            .nodes
+            .iter()
+            .map(|n| BvhNode {
+                offset: if n.count > 0 {
+                    n.offset + num_unbounded
+                } else {
+                    n.offset
+                },
+                ..*n
+            })
+            .collect();
+        (nodes, tree.depth)
+    } else {
+        let mut sorted = bounded;
+        sorted.sort_by_key(|p| p.tag);
+        primitives.extend(sorted);
+        (Vec::new(), 0)
+    };
 
     let bg = &file.background;
     let env_texture = bg.texture.as_ref().map(|name| {
@@ -596,9 +625,11 @@ pub fn flatten(
         });
         env_cdf = texels.len() as u32;
         texels.extend(dist);
-        let radius = bvh.first().map_or(1.0, |root| {
-            0.5 * (Vec3::from(root.hi) - Vec3::from(root.lo)).length()
-        });
+        let radius = if boxes.is_empty() {
+            1.0
+        } else {
+            0.5 * (bounds.hi - bounds.lo).length()
+        };
         (integral, radius)
     });
     let (emitters, env_light) = light_list(
@@ -646,7 +677,7 @@ pub fn flatten(
         emitters,
         material_names,
         bvh,
-        bvh_depth: tree.depth,
+        bvh_depth,
         shape_data,
         num_unbounded,
         use_bvh,

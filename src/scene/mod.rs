@@ -152,16 +152,6 @@ pub struct Tile {
 }
 
 impl FlatScene {
-    /// Whether the plain loop over primitives beats the BVH walk: at most
-    /// [`SMALL_SCENE_PRIMITIVES`] bounded primitives, none transformed.
-    pub fn small(&self) -> bool {
-        let bounded = &self.primitives[self.num_unbounded as usize..];
-        bounded.len() <= SMALL_SCENE_PRIMITIVES
-            && !bounded
-                .iter()
-                .any(|p| p.flags & records::PRIM_FLAG_TRANSFORM != 0)
-    }
-
     /// The uniform block for one dispatch: pass `sample_index` over `tile`.
     pub fn params(&self, sample_index: u32, tile: Tile) -> Params {
         let c = &self.camera;
@@ -352,7 +342,14 @@ pub fn load_scene_str(
         return Err(invalid(problems));
     }
 
-    flatten::flatten(&file, &meshes, &images, !overrides.no_bvh)
+    let bvh_choice = if overrides.no_bvh {
+        flatten::BvhChoice::Never
+    } else if overrides.force_bvh {
+        flatten::BvhChoice::Always
+    } else {
+        flatten::BvhChoice::Auto
+    };
+    flatten::flatten(&file, &meshes, &images, bvh_choice)
         .map(|scene| FlatScene {
             specialize: !overrides.no_specialize,
             uniform_records: !overrides.no_uniform_records,
@@ -361,7 +358,6 @@ pub fn load_scene_str(
             } else {
                 RR_DEPTH
             },
-            use_bvh: scene.use_bvh && (overrides.force_bvh || !scene.small()),
             ..scene
         })
         .map_err(|objects| {
