@@ -184,97 +184,29 @@ fn rgb(path: &Path) -> Vec<f32> {
     img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect()
 }
 
-/// An icosphere of `level` subdivisions (20 * 4^level triangles) as OBJ text.
-fn icosphere(level: u32, center: [f32; 3], radius: f32) -> String {
-    let t = (1.0 + 5f32.sqrt()) / 2.0;
-    let mut v: Vec<[f32; 3]> = vec![
-        [-1.0, t, 0.0],
-        [1.0, t, 0.0],
-        [-1.0, -t, 0.0],
-        [1.0, -t, 0.0],
-        [0.0, -1.0, t],
-        [0.0, 1.0, t],
-        [0.0, -1.0, -t],
-        [0.0, 1.0, -t],
-        [t, 0.0, -1.0],
-        [t, 0.0, 1.0],
-        [-t, 0.0, -1.0],
-        [-t, 0.0, 1.0],
-    ];
-    let norm = |p: [f32; 3]| {
-        let l = (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
-        [p[0] / l, p[1] / l, p[2] / l]
-    };
-    v.iter_mut().for_each(|p| *p = norm(*p));
-    let mut f: Vec<[usize; 3]> = vec![
-        [0, 11, 5],
-        [0, 5, 1],
-        [0, 1, 7],
-        [0, 7, 10],
-        [0, 10, 11],
-        [1, 5, 9],
-        [5, 11, 4],
-        [11, 10, 2],
-        [10, 7, 6],
-        [7, 1, 8],
-        [3, 9, 4],
-        [3, 4, 2],
-        [3, 2, 6],
-        [3, 6, 8],
-        [3, 8, 9],
-        [4, 9, 5],
-        [2, 4, 11],
-        [6, 2, 10],
-        [8, 6, 7],
-        [9, 8, 1],
-    ];
-    for _ in 0..level {
-        let mut mids = std::collections::HashMap::new();
-        let mut mid = |a: usize, b: usize, v: &mut Vec<[f32; 3]>| {
-            *mids.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                let (p, q) = (v[a], v[b]);
-                v.push(norm([
-                    (p[0] + q[0]) / 2.0,
-                    (p[1] + q[1]) / 2.0,
-                    (p[2] + q[2]) / 2.0,
-                ]));
-                v.len() - 1
-            })
-        };
-        f = f
-            .iter()
-            .flat_map(|&[a, b, c]| {
-                let (ab, bc, ca) = (mid(a, b, &mut v), mid(b, c, &mut v), mid(c, a, &mut v));
-                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
-            })
-            .collect();
-    }
-    let mut s = String::new();
-    for p in &v {
-        let _ = writeln!(
-            s,
-            "v {} {} {}",
-            center[0] + radius * p[0],
-            center[1] + radius * p[1],
-            center[2] + radius * p[2]
-        );
-    }
-    for t in &f {
-        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
-    }
-    s
-}
-
-/// The bench Cornell box with its first sphere replaced by a mesh of `level` subdivisions.
+/// The bench Cornell box with its first sphere replaced by an icosphere of `level`
+/// subdivisions (20 * 4^level triangles), written by the `gen_mesh` example.
 fn mesh_scene(dir: &Path, level: u32) -> PathBuf {
     let obj = dir.join(format!("ico{level}.obj"));
-    std::fs::write(&obj, icosphere(level, [-0.4, -0.62, -0.35], 0.38)).unwrap();
+    let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+        .current_dir(root())
+        .args(["run", "--release", "--quiet", "--example", "gen_mesh", "--"])
+        .args(["icosphere", "--subdivisions", &level.to_string(), "-o"])
+        .arg(&obj)
+        .stdout(std::process::Stdio::null())
+        .status()
+        .expect("run gen_mesh");
+    assert!(status.success(), "gen_mesh failed");
     let src = std::fs::read_to_string(root().join("bench/cornell.toml")).unwrap();
     let sphere = "type = \"sphere\"\ncenter = [-0.4, -0.62, -0.35]\nradius = 0.38";
     assert!(src.contains(sphere));
+    // a unit icosphere moved where the sphere was (meshes are baked into world space)
     let src = src.replace(
         sphere,
-        &format!("type = \"mesh\"\npath = \"{}\"", obj.display()),
+        &format!(
+            "type = \"mesh\"\npath = \"{}\"\ntransform = {{ scale = 0.38, translate = [-0.4, -0.62, -0.35] }}",
+            obj.display()
+        ),
     );
     let path = dir.join(format!("ico{level}.toml"));
     std::fs::write(&path, src).unwrap();

@@ -283,7 +283,7 @@ pub fn load_scene_str(
     let mut problems = Vec::new();
     // the caps hold for all meshes and all images of the scene together, counted as they
     // load, so that naming one file many times cannot exhaust memory either
-    let triangles = std::cell::Cell::new(0usize);
+    let triangles = std::cell::Cell::new(0u64);
     let texels = std::cell::Cell::new(0u64);
     let meshes: Vec<Option<mesh::MeshData>> = file
         .objects
@@ -296,15 +296,12 @@ pub fn load_scene_str(
                 format!("objects[{i}].path"),
                 |p| {
                     let m = mesh::load_obj(p)?;
-                    let total = triangles.get() + m.triangles.len();
-                    if total > mesh::MAX_TRIANGLES {
-                        return Err(format!(
-                            "brings the scene's mesh triangles to {total}, more than the {} \
-                             accepted",
-                            mesh::MAX_TRIANGLES
-                        ));
-                    }
-                    triangles.set(total);
+                    count_toward(
+                        &triangles,
+                        m.triangles.len() as u64,
+                        mesh::MAX_TRIANGLES as u64,
+                        "mesh triangles",
+                    )?;
                     Ok(m)
                 },
                 &mut problems,
@@ -322,15 +319,8 @@ pub fn load_scene_str(
                 format!("textures.{name}.path"),
                 |p| {
                     let img = textures::load_image(p)?;
-                    let total = texels.get() + img.width as u64 * img.height as u64;
-                    if total > textures::MAX_TEXELS {
-                        return Err(format!(
-                            "brings the scene's image texels to {total}, more than the {} \
-                             accepted",
-                            textures::MAX_TEXELS
-                        ));
-                    }
-                    texels.set(total);
+                    let n = img.width as u64 * img.height as u64;
+                    count_toward(&texels, n, textures::MAX_TEXELS, "image texels")?;
                     Ok(img)
                 },
                 &mut problems,
@@ -376,6 +366,18 @@ pub fn load_scene_str(
                     .collect(),
             )
         })
+}
+
+/// Adds `n` to the scene's running `total` of `what`, or fails once it would pass `cap`.
+fn count_toward(total: &std::cell::Cell<u64>, n: u64, cap: u64, what: &str) -> Result<(), String> {
+    let sum = total.get() + n;
+    if sum > cap {
+        return Err(format!(
+            "brings the scene's {what} to {sum}, more than the {cap} accepted"
+        ));
+    }
+    total.set(sum);
+    Ok(())
 }
 
 /// Loads `rel` (relative to the scene's folder `dir`) with `load`; a failure becomes a
