@@ -330,7 +330,9 @@ where
                 if fit == 0 {
                     return Ok((progress, Stopped::TimeLimit, estimate));
                 }
-                batch = batch.min(fit);
+                // at most half of what fits, so that batches shrink to single passes as
+                // the limit nears and the last one's misprediction stays one pass's
+                batch = batch.min((fit / 2).max(1));
             }
         }
         let batch_start = Instant::now();

@@ -219,10 +219,11 @@ fn time_limit_and_target_error_stop_as_promised() {
         .unwrap()
         .parse()
         .unwrap();
-    // A pass starts only when its predicted time fits, so the render ends within the
-    // limit unless its last pass took longer than predicted (other tests share the cores):
-    // never by more than that one pass. Uncapped by spp, it ran many short passes.
-    assert!(spp >= 8.0 && seconds <= 2.0 + seconds / spp, "{text}");
+    // A pass starts only when its predicted time fits, and batches shrink to single passes
+    // as the limit nears, so the render ends within the limit unless its last pass took
+    // longer than predicted, as it may when other tests share the cores: allow that pass
+    // three times the mean. Uncapped by spp, it ran many short passes.
+    assert!(spp >= 8.0 && seconds <= 2.0 + 3.0 * seconds / spp, "{text}");
 
     let map = dir.join("err.png").display().to_string();
     let o = wgtrace(&[
