@@ -16,6 +16,8 @@ use std::process::Command;
 use std::time::Instant;
 
 use wgtrace::converge::rel_mse;
+use wgtrace::gpu::render::{ACCUM_BYTES_PER_PIXEL, MAX_DISPATCHES_PER_SUBMISSION, MAX_TILE_PIXELS};
+use wgtrace::gpu::shader::{UNIFORM_BYTES, UNIFORM_DEFINES};
 use wgtrace::scene::textures::load_image;
 
 const ROUNDS: usize = 3;
@@ -46,12 +48,16 @@ fn median(v: &[f64]) -> f64 {
 
 /// "median (min to max)".
 fn spread(v: &[f64], digits: usize) -> String {
-    let (lo, hi) = v
-        .iter()
+    let (lo, hi) = range(v);
+    format!("{:.d$} ({:.d$} to {:.d$})", median(v), lo, hi, d = digits)
+}
+
+/// The smallest and the largest value.
+fn range(v: &[f64]) -> (f64, f64) {
+    v.iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
             (a.min(x), b.max(x))
-        });
-    format!("{:.d$} ({:.d$} to {:.d$})", median(v), lo, hi, d = digits)
+        })
 }
 
 /// One wgtrace process: the summary line's render seconds and rate, the wall time of the
@@ -413,11 +419,7 @@ fn comparison(md: &mut String, dir: &Path, scene: &Path) {
 }
 
 fn spread_e(v: &[f64]) -> String {
-    let (lo, hi) = v
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-            (a.min(x), b.max(x))
-        });
+    let (lo, hi) = range(v);
     format!("{:.3e} ({lo:.2e} to {hi:.2e})", median(v))
 }
 
@@ -640,9 +642,13 @@ fn memory(md: &mut String, dir: &Path, scene: &Path) {
             .collect();
         let peak: Vec<f64> = runs.iter().filter_map(|r| r.peak_mib).collect();
         let pixels = w as f64 * h as f64;
-        let band = pixels.min((1u64 << 18) as f64);
-        let gpu =
-            (32.0 * pixels + 32.0 * band + 256.0 * 256.0 + 6.0 * 65536.0) / (1u64 << 20) as f64;
+        // the same sizes as gpu::render allocates (a parameter block of 256 bytes, the
+        // stride on this adapter)
+        let per_pixel = ACCUM_BYTES_PER_PIXEL as f64;
+        let band = pixels.min(MAX_TILE_PIXELS as f64);
+        let params = MAX_DISPATCHES_PER_SUBMISSION as f64 * 256.0;
+        let records = UNIFORM_DEFINES.len() as f64 * UNIFORM_BYTES as f64;
+        let gpu = (per_pixel * (pixels + band) + params + records) / (1u64 << 20) as f64;
         let _ = writeln!(
             md,
             "| {name} ({w} x {h}) | {} | {gpu:.1} | {} |",

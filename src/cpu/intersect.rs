@@ -255,10 +255,10 @@ pub fn transform_error(b: &Bindings, data: u32, p: Vec3, err: f32) -> f32 {
     e
 }
 
-/// One primitive in its own space: (t, u, v) as in Candidate.
-pub fn intersect_local(prim: &Primitive, ray: &Ray, t_max: f32) -> Vec3 {
+/// One primitive of type `tag` in its own space: (t, u, v) as in Candidate.
+pub fn intersect_local(prim: &Primitive, tag: u32, ray: &Ray, t_max: f32) -> Vec3 {
     let (a, b) = (xyz(prim.a), xyz(prim.b));
-    match prim.tag {
+    match tag {
         PRIM_SPHERE => Vec3::new(intersect_sphere(a, prim.a[3], ray, t_max), 0.0, 0.0),
         PRIM_TRIANGLE => intersect_triangle(a, b, xyz(prim.c), ray, t_max),
         PRIM_PLANE => Vec3::new(intersect_plane(a, b, ray, t_max), 0.0, 0.0),
@@ -274,9 +274,16 @@ pub fn intersect_local(prim: &Primitive, ray: &Ray, t_max: f32) -> Vec3 {
 
 /// Primitive i in world space; transformed primitives in object space with a unit direction.
 pub fn intersect_primitive(b: &Bindings, i: u32, ray: &Ray, t_max: f32) -> Vec3 {
+    intersect_primitive_as(b, i, b.primitives[i as usize].tag, ray, t_max)
+}
+
+/// intersect_primitive for a primitive whose type the caller knows (the shader's per-type
+/// loops pass a literal; the CPU's single loop visits the same indices in the same order
+/// through intersect_primitive).
+pub fn intersect_primitive_as(b: &Bindings, i: u32, tag: u32, ray: &Ray, t_max: f32) -> Vec3 {
     let prim = &b.primitives[i as usize];
     if prim.flags & PRIM_FLAG_TRANSFORM == 0 {
-        return intersect_local(prim, ray, t_max);
+        return intersect_local(prim, tag, ray, t_max);
     }
     let r = ray_to_object(b, prim.data, ray);
     let scale = r.dir.length();
@@ -285,7 +292,7 @@ pub fn intersect_primitive(b: &Bindings, i: u32, ray: &Ray, t_max: f32) -> Vec3 
         origin: r.origin,
         dir: r.dir / scale,
     };
-    let h = intersect_local(prim, &local, t_lim);
+    let h = intersect_local(prim, tag, &local, t_lim);
     if h.x < FAR {
         return Vec3::new(h.x / scale, h.y, h.z);
     }
