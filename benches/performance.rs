@@ -283,9 +283,10 @@ fn variants() -> Vec<(&'static str, Vec<&'static str>)> {
         ),
         (
             "+ plain loop for small scenes",
-            vec!["--no-russian-roulette"],
+            vec!["--no-russian-roulette", "--no-baked-primitives"],
         ),
-        ("+ Russian roulette (all kept)", vec![]),
+        ("+ Russian roulette", vec!["--no-baked-primitives"]),
+        ("+ primitives as shader constants (all kept)", vec![]),
     ]
 }
 

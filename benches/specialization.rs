@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use wgtrace::gpu::shader::{scene_defines, FEATURE_DEFINES};
+use wgtrace::gpu::shader::{scene_defines, scene_shader, FEATURE_DEFINES};
 use wgtrace::gpu::{GpuContext, GpuRenderer};
 use wgtrace::{FlatScene, Overrides};
 
@@ -67,7 +67,7 @@ fn child(scene_path: &Path, full: bool) {
     let scene = load(scene_path, full);
     let start = Instant::now();
     let pipeline = ctx
-        .trace_pipeline(&scene_defines(&scene))
+        .trace_pipeline(&scene_shader(&scene))
         .expect("compile the trace pipeline");
     let compile = pipeline.compile_time.as_secs_f64();
     let mut r = GpuRenderer::new(ctx.clone(), &scene).expect("renderer");

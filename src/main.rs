@@ -179,6 +179,10 @@ struct RenderArgs {
     /// comparisons).
     #[arg(long)]
     no_uniform_records: bool,
+    /// Read a small scene's primitives from their buffer instead of writing them into its
+    /// shader as constants (for comparisons).
+    #[arg(long)]
+    no_baked_primitives: bool,
     /// Trace every path to max_depth without Russian roulette (for comparisons; Russian
     /// roulette from the fourth ray on is unbiased).
     #[arg(long)]
@@ -296,9 +300,10 @@ fn info() -> anyhow::Result<()> {
 }
 
 fn features(path: &Path) -> anyhow::Result<()> {
-    use wgtrace::gpu::shader::{all_defines, scene_defines, trace_shader, used_bindings};
+    use wgtrace::gpu::shader::{all_defines, scene_shader, trace_shader, used_bindings};
     let scene = wgtrace::load_scene(path, &Overrides::default())?;
-    let defines = scene_defines(&scene);
+    let spec = scene_shader(&scene);
+    let defines = &spec.defines;
     let all = all_defines();
     println!("{}: features", path.display());
     for d in &all {
@@ -327,8 +332,16 @@ fn features(path: &Path) -> anyhow::Result<()> {
         let bindings = used_bindings("trace", &wgsl, "main", 0)?.len();
         Ok((wgsl.len(), wgsl.lines().count(), bindings))
     };
-    let (sb, sl, sn) = size(&defines)?;
-    let (fb, fl, fn_) = size(&all)?;
+    println!(
+        "primitives as constants: {}",
+        if spec.scene_code.is_empty() {
+            "no"
+        } else {
+            "yes"
+        }
+    );
+    let (sb, sl, sn) = size(&spec)?;
+    let (fb, fl, fn_) = size(&all.into())?;
     println!(
         "trace shader: specialized {sb} bytes, {sl} lines, {sn} bindings; \
          full {fb} bytes, {fl} lines, {fn_} bindings"
@@ -447,6 +460,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         no_specialize: args.no_specialize,
         force_bvh: args.bvh,
         no_uniform_records: args.no_uniform_records,
+        no_baked_primitives: args.no_baked_primitives,
         no_russian_roulette: args.no_russian_roulette,
     };
     let loading = std::time::Instant::now();

@@ -579,7 +579,7 @@ material = "grey"
 #[test]
 fn pipelines_are_compiled_once_per_feature_set_and_process() {
     use std::sync::Arc;
-    use wgtrace::gpu::shader::{all_defines, scene_defines};
+    use wgtrace::gpu::shader::{all_defines, scene_shader};
     let ctx = wgtrace::gpu::GpuContext::shared(0)
         .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter: {e}"));
     assert!(Arc::ptr_eq(
@@ -588,9 +588,9 @@ fn pipelines_are_compiled_once_per_feature_set_and_process() {
     ));
     let scene =
         wgtrace::load_scene(&common::repo_path("scenes/box.toml"), &Overrides::default()).unwrap();
-    let a = ctx.trace_pipeline(&scene_defines(&scene)).unwrap();
-    let b = ctx.trace_pipeline(&scene_defines(&scene)).unwrap();
-    let full = ctx.trace_pipeline(&all_defines()).unwrap();
+    let a = ctx.trace_pipeline(&scene_shader(&scene)).unwrap();
+    let b = ctx.trace_pipeline(&scene_shader(&scene)).unwrap();
+    let full = ctx.trace_pipeline(&all_defines().into()).unwrap();
     assert!(Arc::ptr_eq(&a, &b));
     assert!(!Arc::ptr_eq(&a, &full));
     assert!(a.shader_bytes < full.shader_bytes && a.bindings.len() < full.bindings.len());

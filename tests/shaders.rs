@@ -6,8 +6,8 @@ mod common;
 use std::collections::BTreeSet;
 
 use wgtrace::gpu::shader::{
-    all_defines, preprocess, scene_defines, used_bindings, validate, ENTRY_SHADERS,
-    FEATURE_DEFINES, SHADER_FILES,
+    all_defines, kernel_shader, preprocess, scene_defines, scene_shader, trace_shader,
+    used_bindings, validate, BAKED_PRIMITIVES_MAX, ENTRY_SHADERS, FEATURE_DEFINES, SHADER_FILES,
 };
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::scene::records::record_layouts;
@@ -105,6 +105,70 @@ fn every_feature_set_the_scenes_reach_validates_and_binds_only_what_it_uses() {
     // nothing emits: no path is traced, and only the parameters and the sums are bound
     assert_eq!(used(&BTreeSet::new()), vec![0, 4]);
     assert!(bound.len() > 4, "{bound:?}");
+}
+
+/// Every scene of `scenes/` small enough (no BVH, nothing transformed, at most
+/// BAKED_PRIMITIVES_MAX primitives) gets its primitives written into its shader as
+/// constants; those shaders validate, and every record value reads back bit for bit.
+#[test]
+fn small_scenes_get_their_primitives_as_constants_exactly() {
+    let mut baked = Vec::new();
+    for path in common::scene_files() {
+        for (no_bvh, no_baked) in [(false, false), (true, false), (false, true)] {
+            let o = Overrides {
+                no_bvh,
+                no_baked_primitives: no_baked,
+                ..Default::default()
+            };
+            let scene = wgtrace::load_scene(&path, &o).unwrap();
+            let spec = scene_shader(&scene);
+            let expect = !no_baked
+                && !scene.use_bvh
+                && scene.primitives.len() <= BAKED_PRIMITIVES_MAX
+                && scene
+                    .primitives
+                    .iter()
+                    .all(|p| p.flags & wgtrace::scene::records::PRIM_FLAG_TRANSFORM == 0);
+            assert_eq!(!spec.scene_code.is_empty(), expect, "{}", path.display());
+            assert_eq!(spec.defines.contains("BAKED_PRIMITIVES"), expect);
+            if !expect {
+                continue;
+            }
+            let wgsl = trace_shader(&spec).unwrap();
+            let module = validate("trace", &wgsl).unwrap();
+            validate("kernel", &kernel_shader(&spec).unwrap()).unwrap();
+            // every nonzero component of every record is one of intersect_baked's literals
+            let f = module
+                .functions
+                .iter()
+                .find(|(_, f)| f.name.as_deref() == Some("intersect_baked"))
+                .expect("intersect_baked")
+                .1;
+            let literals: BTreeSet<u32> = f
+                .expressions
+                .iter()
+                .chain(module.global_expressions.iter())
+                .filter_map(|(_, e)| match e {
+                    naga::Expression::Literal(naga::Literal::F32(x)) => Some(x.to_bits()),
+                    _ => None,
+                })
+                .collect();
+            for p in &scene.primitives {
+                for x in p.a.iter().chain(&p.b).chain(&p.c).filter(|&&x| x != 0.0) {
+                    assert!(
+                        literals.contains(&x.abs().to_bits()) || literals.contains(&x.to_bits()),
+                        "{}: {x:?} not written exactly",
+                        path.display()
+                    );
+                }
+            }
+            baked.push(path.file_name().unwrap().to_string_lossy().to_string());
+        }
+    }
+    assert!(
+        baked.iter().any(|n| n == "cornell.toml"),
+        "baked: {baked:?}"
+    );
 }
 
 #[test]

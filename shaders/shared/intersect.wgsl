@@ -4,6 +4,9 @@
 #import shared/bindings
 #import shared/sampling
 #import shared/types
+#ifdef BAKED_PRIMITIVES
+#import generated/scene
+#endif
 
 // Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `dir` is unit length.
 // Returns the nearest root in (0, t_max), else FAR.
@@ -307,22 +310,22 @@ fn intersect_primitive_as(i: u32, tag: u32, ray: Ray, t_max: f32) -> vec3<f32> {
 #endif
 }
 
-// Primitive i tested against the closest hit so far; the closer of the two.
-fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
-    let h = intersect_primitive(i, ray, best.t);
+// The closer of the closest hit so far and hit h = (t, u, v) of primitive i.
+fn closer_hit(best: Candidate, i: u32, h: vec3<f32>) -> Candidate {
     if (h.x < best.t) {
         return Candidate(h.x, i, h.y, h.z);
     }
     return best;
 }
 
+// Primitive i tested against the closest hit so far; the closer of the two.
+fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
+    return closer_hit(best, i, intersect_primitive(i, ray, best.t));
+}
+
 // closer for a primitive of a known type (see intersect_primitive_as).
 fn closer_as(best: Candidate, i: u32, tag: u32, ray: Ray) -> Candidate {
-    let h = intersect_primitive_as(i, tag, ray, best.t);
-    if (h.x < best.t) {
-        return Candidate(h.x, i, h.y, h.z);
-    }
-    return best;
+    return closer_hit(best, i, intersect_primitive_as(i, tag, ray, best.t));
 }
 
 // Entry distance of the ray into a BVH node's box (clamped to 0), or FAR when the box is
@@ -348,8 +351,13 @@ const BOX_WIDEN: f32 = 1.0000003576278687;
 // anything lies in between): every unbounded primitive (planes), then the BVH in order
 // (nearer child first, a far child pushed with its entry distance and skipped when the
 // closest hit is already nearer), or every bounded primitive when use_bvh = 0. A shader
-// holds the BVH walk (HAS_BVH), the plain loop (HAS_PRIMITIVE_LOOP), or both.
+// holds the BVH walk (HAS_BVH), the plain loop (HAS_PRIMITIVE_LOOP), or both; or, for a
+// small scene, the search over its primitives written in as constants (BAKED_PRIMITIVES).
 fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
+#ifdef BAKED_PRIMITIVES
+    // a small scene's records are constants of its shader (gpu::shader::baked_primitives)
+    return intersect_baked(ray, t_max);
+#else
     var best = Candidate(t_max, NO_HIT, 0.0, 0.0);
     for (var i = 0u; i < params.num_unbounded; i++) {
         best = closer(best, i, ray);
@@ -435,6 +443,7 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     }
 #endif
     return best;
+#endif
 }
 
 // A hit in a primitive's own space.

@@ -2,7 +2,7 @@
 //! One device per adapter is shared by every render of a process, so pipelines compiled
 //! for one render serve the next.
 
-use std::collections::{BTreeSet, HashMap};
+use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -47,13 +47,13 @@ pub enum GpuError {
 }
 
 /// An open device on one adapter, with the trace pipelines compiled on it so far (one per
-/// feature set) and, where the driver supports one, a pipeline cache kept on disk.
+/// shader spec: feature set and scene code) and, where the driver supports one, a pipeline cache kept on disk.
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
-    pub(crate) pipelines: Mutex<HashMap<BTreeSet<String>, Arc<TracePipeline>>>,
+    pub(crate) pipelines: Mutex<HashMap<super::shader::ShaderSpec, Arc<TracePipeline>>>,
     pub(crate) disk_cache: Option<DiskCache>,
     /// The first error wgpu reported outside an error scope, or the device's loss: set by
     /// the device's callbacks, turned into a `GpuError` by [`GpuContext::check`].

@@ -49,8 +49,8 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
     }
     let device = &ctx.device;
     check_scene_fits(device, scene)?;
-    let defines = shader::fit_to_limits(&shader::scene_defines(scene), &device.limits());
-    let wgsl = shader::kernel_shader(&defines)?;
+    let spec = shader::fit_to_limits(&shader::scene_shader(scene), &device.limits());
+    let wgsl = shader::kernel_shader(&spec)?;
     let uniform = shader::uniform_bindings("kernel", &wgsl)?;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("kernel.wgsl"),

@@ -2,13 +2,12 @@
 //! the bindings that shader uses, compiled once per process and feature set (and, where the
 //! driver keeps one, through the pipeline cache on disk).
 
-use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use super::context::{GpuContext, GpuError};
 use super::render::scene_layout;
-use super::shader;
+use super::shader::{self, ShaderSpec};
 
 /// A compiled trace pipeline.
 pub struct TracePipeline {
@@ -27,32 +26,29 @@ pub struct TracePipeline {
 }
 
 impl GpuContext {
-    /// The trace pipeline for `defines`: compiled on first request, then shared by every
+    /// The trace pipeline for `spec`: compiled on first request, then shared by every
     /// render of this process.
-    pub fn trace_pipeline(
-        &self,
-        defines: &BTreeSet<String>,
-    ) -> Result<Arc<TracePipeline>, GpuError> {
+    pub fn trace_pipeline(&self, spec: &ShaderSpec) -> Result<Arc<TracePipeline>, GpuError> {
         let lock = || self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some(p) = lock().get(defines) {
+        if let Some(p) = lock().get(spec) {
             return Ok(p.clone());
         }
         // compiled outside the lock: two renders that race compile twice, and keep one
-        let p = Arc::new(self.compile_trace_pipeline(defines, true)?);
-        let p = lock().entry(defines.clone()).or_insert(p).clone();
+        let p = Arc::new(self.compile_trace_pipeline(spec, true)?);
+        let p = lock().entry(spec.clone()).or_insert(p).clone();
         self.save_disk_cache();
         Ok(p)
     }
 
-    /// Compiles the trace pipeline for `defines` afresh, without this process's pipelines,
+    /// Compiles the trace pipeline for `spec` afresh, without this process's pipelines,
     /// and without the pipeline cache on disk unless `disk_cache` (benchmarks time this).
     pub fn compile_trace_pipeline(
         &self,
-        defines: &BTreeSet<String>,
+        spec: &ShaderSpec,
         disk_cache: bool,
     ) -> Result<TracePipeline, GpuError> {
         let start = Instant::now();
-        let wgsl = shader::trace_shader(defines)?;
+        let wgsl = shader::trace_shader(spec)?;
         let bindings = shader::used_bindings("trace", &wgsl, "main", 0)?;
         let uniform = shader::uniform_bindings("trace", &wgsl)?;
         let device = &self.device;

@@ -170,8 +170,8 @@ impl GpuRenderer {
     /// Uploads `scene` and gets the trace pipeline for its feature set (compiled now, or
     /// already by an earlier render in this process).
     pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene) -> Result<Self, GpuError> {
-        let defines = shader::fit_to_limits(&shader::scene_defines(scene), &ctx.device.limits());
-        let pipeline = ctx.trace_pipeline(&defines)?;
+        let spec = shader::fit_to_limits(&shader::scene_shader(scene), &ctx.device.limits());
+        let pipeline = ctx.trace_pipeline(&spec)?;
         Self::with_pipeline(ctx, scene, pipeline)
     }
 

@@ -657,6 +657,7 @@ pub fn flatten(
         camera: camera_frame(file, r.width as f32 / r.height as f32),
         specialize: true,
         uniform_records: true,
+        baked_primitives: true,
         rr_depth: super::RR_DEPTH,
         light_sampling: match r.light_sampling {
             LightSampling::Bsdf => records::LIGHT_SAMPLING_BSDF,
