@@ -275,18 +275,40 @@ fn variants() -> Vec<(&'static str, Vec<&'static str>)> {
     vec![
         (
             "before: storage buffers, BVH, no Russian roulette",
-            vec!["--no-uniform-records", "--bvh", "--no-russian-roulette"],
+            vec![
+                "--no-uniform-records",
+                "--bvh",
+                "--no-russian-roulette",
+                "--no-baked-records",
+                "--no-sample-groups",
+            ],
         ),
         (
             "+ uniform-buffer records",
-            vec!["--bvh", "--no-russian-roulette"],
+            vec![
+                "--bvh",
+                "--no-russian-roulette",
+                "--no-baked-records",
+                "--no-sample-groups",
+            ],
         ),
         (
             "+ plain loop for small scenes",
-            vec!["--no-russian-roulette", "--no-baked-primitives"],
+            vec![
+                "--no-russian-roulette",
+                "--no-baked-records",
+                "--no-sample-groups",
+            ],
         ),
-        ("+ Russian roulette", vec!["--no-baked-primitives"]),
-        ("+ primitives as shader constants (all kept)", vec![]),
+        (
+            "+ Russian roulette",
+            vec!["--no-baked-records", "--no-sample-groups"],
+        ),
+        (
+            "+ records written into the shader",
+            vec!["--no-sample-groups"],
+        ),
+        ("+ sample groups (all kept)", vec![]),
     ]
 }
 

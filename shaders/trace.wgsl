@@ -1,6 +1,6 @@
-// One sample per pixel per dispatch over one tile of the image: camera ray, then an
-// iterative bounce loop; the result is added to the accumulation buffer, or dropped and
-// counted when it is not finite.
+// A group of consecutive samples per pixel per dispatch over one tile of the image: for
+// each, a camera ray, then one extend_path per ray until the path ends; each is added to
+// the pixel's sums in index order, or dropped and counted when it is not finite.
 #import shared/bindings
 #import shared/intersect
 #import shared/lights
@@ -54,12 +54,12 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
     // bounce ray toward the same point has it, so the two weights of a path add up to one
     // (from hit.p they differ by about offset / (distance x cos), 1e-3 on grazing chords)
     var pdf_dir = ls.dir;
-    let e = emitters[ls.light];
+    let e = emitter_record(ls.light);
     if (e.kind == LIGHT_ENVIRONMENT) {
         le = background_radiance(ls.dir);
     } else {
         let lh = surface_at(Ray(hit.p, ls.dir), Candidate(ls.dist, e.primitive, ls.uv.x, ls.uv.y));
-        le = emitted(material_at(materials[lh.material], lh), lh);
+        le = emitted(material_at(material_record(lh.material), lh), lh);
         if (all(le == vec3<f32>(0.0))) {
             return vec3<f32>(0.0);
         }
@@ -79,110 +79,120 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
     return f * le * (w / ls.pdf);
 }
 
-// Radiance along one camera path. max_depth counts rays: 1 shows emitters and the
-// background, 2 adds direct lighting, and so on. light_sampling picks how lights are
-// found: by hitting them (bsdf); by a direction drawn half the time toward a light and
-// weighted by the mixture pdf (mixture); or by next-event estimation at every vertex plus
-// the material's direction, each weighted by the power heuristic so that emission is
-// counted once (mis).
-fn trace_path(pixel: u32, sample: u32, camera: Ray) -> vec3<f32> {
-    var ray = camera;
-    var radiance = vec3<f32>(0.0);
-    var throughput = vec3<f32>(1.0);
-    // the previous vertex, for the MIS weight of an emitter the ray hits: its point, the
-    // pdf of the ray's direction, and whether that came from a delta lobe (weight 1)
-    var prev_p = camera.origin;
-    var prev_pdf = 0.0;
-    var prev_delta = true;
-    for (var depth = 0u; depth < params.max_depth; depth++) {
-        // Russian roulette from ray rr_depth on: a path goes on with probability
-        // min(1, max(throughput)), its throughput divided by that; unbiased, and a dim path
-        // stops before its next ray
-        if (params.rr_depth != 0u && depth >= params.rr_depth) {
-            let survive = min(1.0, max(throughput.x, max(throughput.y, throughput.z)));
-            if (rand_2d(pixel, sample, depth, DIM_RR, params.seed).x >= survive) {
-                break;
-            }
-            throughput /= survive;
+// A camera path being traced: the ray to follow next, the radiance gathered so far, the
+// throughput, and the previous vertex for the MIS weight of an emitter the ray hits (its
+// point, the pdf of the ray's direction, and whether that came from a delta lobe, weight
+// 1). depth counts the rays traced so far.
+struct Path {
+    ray: Ray,
+    radiance: vec3<f32>,
+    throughput: vec3<f32>,
+    prev_p: vec3<f32>,
+    prev_pdf: f32,
+    prev_delta: bool,
+    depth: u32,
+}
+
+fn start_path(camera: Ray) -> Path {
+    return Path(camera, vec3<f32>(0.0), vec3<f32>(1.0), camera.origin, 0.0, true, 0u);
+}
+
+// Traces the path's next ray and adds what it finds; false when the path has ended.
+// max_depth counts rays: 1 shows emitters and the background, 2 adds direct lighting, and
+// so on. light_sampling picks how lights are found: by hitting them (bsdf); by a direction
+// drawn half the time toward a light and weighted by the mixture pdf (mixture); or by
+// next-event estimation at every vertex plus the material's direction, each weighted by
+// the power heuristic so that emission is counted once (mis).
+fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
+    // Russian roulette from ray rr_depth on: a path goes on with probability
+    // min(1, max(throughput)), its throughput divided by that; unbiased, and a dim path
+    // stops before its next ray
+    if (params.rr_depth != 0u && (*path).depth >= params.rr_depth) {
+        let survive = min(1.0, max((*path).throughput.x, max((*path).throughput.y, (*path).throughput.z)));
+        if (rand_2d(pixel, sample, (*path).depth, DIM_RR, params.seed).x >= survive) {
+            return false;
         }
-        let cand = intersect_scene(ray, FAR);
+        (*path).throughput /= survive;
+    }
+    let cand = intersect_scene((*path).ray, FAR);
 #ifdef HAS_MIS
-        let mis = params.light_sampling == LIGHT_SAMPLING_MIS && !prev_delta;
+    let mis = params.light_sampling == LIGHT_SAMPLING_MIS && !(*path).prev_delta;
 #endif
-        if (cand.prim == NO_HIT) {
-            var le = background_radiance(ray.dir);
+    if (cand.prim == NO_HIT) {
+        var le = background_radiance((*path).ray.dir);
 #ifdef HAS_MIS
-            if (mis && params.env_light != NO_LIGHT) {
-                le *= power_heuristic(prev_pdf, light_pdf(params.env_light, prev_p, prev_p, ray.dir));
-            }
-#endif
-            radiance += throughput * le;
-            break;
-        }
-        let hit = surface_at(ray, cand);
-        let mat = material_at(materials[hit.material], hit);
-        var le = emitted(mat, hit);
-#ifdef HAS_MIS
-        let light = primitives[cand.prim].flags >> PRIM_LIGHT_SHIFT;
-        if (mis && light != 0u && any(le > vec3<f32>(0.0))) {
-            le *= power_heuristic(prev_pdf, light_pdf(light - 1u, prev_p, hit.p, ray.dir));
+        if (mis && params.env_light != NO_LIGHT) {
+            le *= power_heuristic((*path).prev_pdf, light_pdf(params.env_light, (*path).prev_p, (*path).prev_p, (*path).ray.dir));
         }
 #endif
-        radiance += throughput * le;
-        if (depth + 1u >= params.max_depth) {
-            break;
-        }
-        let u = bounce_2d(pixel, sample, depth, DIM_BSDF);
+        (*path).radiance += (*path).throughput * le;
+        return false;
+    }
+    let hit = surface_at((*path).ray, cand);
+    let mat = material_at(material_record(hit.material), hit);
+    var le = emitted(mat, hit);
 #ifdef HAS_MIS
-        if (params.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat)) {
-            let ul = bounce_2d(pixel, sample, depth, DIM_LIGHT);
-            let uc = bounce_2d(pixel, sample, depth, DIM_LIGHT_CHOICE);
-            radiance += throughput * direct_light(mat, ray, hit, uc.x, ul);
-        }
+    let light = primitive_record(cand.prim).flags >> PRIM_LIGHT_SHIFT;
+    if (mis && light != 0u && any(le > vec3<f32>(0.0))) {
+        le *= power_heuristic((*path).prev_pdf, light_pdf(light - 1u, (*path).prev_p, hit.p, (*path).ray.dir));
+    }
+#endif
+    (*path).radiance += (*path).throughput * le;
+    if ((*path).depth + 1u >= params.max_depth) {
+        return false;
+    }
+    let u = bounce_2d(pixel, sample, (*path).depth, DIM_BSDF);
+#ifdef HAS_MIS
+    if (params.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat)) {
+        let ul = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT);
+        let uc = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT_CHOICE);
+        (*path).radiance += (*path).throughput * direct_light(mat, (*path).ray, hit, uc.x, ul);
+    }
 #endif
 #ifdef HAS_MIXTURE
-        if (params.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat)) {
-            // one direction from the 50/50 mixture; the path goes on along it
-            let uc = bounce_2d(pixel, sample, depth, DIM_LIGHT_CHOICE);
-            var dir: vec3<f32>;
-            if (uc.y < 0.5) {
-                let ls = sample_light(hit.p, uc.x, bounce_2d(pixel, sample, depth, DIM_LIGHT));
-                if (ls.light == NO_LIGHT) {
-                    break;
-                }
-                dir = ls.dir;
-            } else {
-                let s = scatter(mat, ray, hit, u);
-                if (!s.ok) {
-                    break;
-                }
-                dir = s.dir;
+    if (params.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat)) {
+        // one direction from the 50/50 mixture; the path goes on along it
+        let uc = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT_CHOICE);
+        var dir: vec3<f32>;
+        if (uc.y < 0.5) {
+            let ls = sample_light(hit.p, uc.x, bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT));
+            if (ls.light == NO_LIGHT) {
+                return false;
             }
-            let f = bsdf_eval(mat, ray, hit, dir);
-            let pdf = 0.5 * light_pdf_total(hit.p, dir) + 0.5 * bsdf_pdf(mat, ray, hit, dir);
-            if (!(pdf > 0.0) || all(f == vec3<f32>(0.0))) {
-                break;
+            dir = ls.dir;
+        } else {
+            let s = scatter(mat, (*path).ray, hit, u);
+            if (!s.ok) {
+                return false;
             }
-            throughput *= f / pdf;
-            ray = spawn_ray(hit, dir);
-            continue;
+            dir = s.dir;
         }
-#endif
-        let s = scatter(mat, ray, hit, u);
-        if (!s.ok) {
-            break;
+        let f = bsdf_eval(mat, (*path).ray, hit, dir);
+        let pdf = 0.5 * light_pdf_total(hit.p, dir) + 0.5 * bsdf_pdf(mat, (*path).ray, hit, dir);
+        if (!(pdf > 0.0) || all(f == vec3<f32>(0.0))) {
+            return false;
         }
-        throughput *= s.weight;
-        if (all(throughput == vec3<f32>(0.0))) {
-            // nothing further along this path can add to the pixel
-            break;
-        }
-        prev_p = hit.p;
-        prev_pdf = s.pdf;
-        prev_delta = s.delta;
-        ray = spawn_ray(hit, s.dir);
+        (*path).throughput *= f / pdf;
+        (*path).ray = spawn_ray(hit, dir);
+        (*path).depth += 1u;
+            return (*path).depth < params.max_depth;
     }
-    return radiance;
+#endif
+    let s = scatter(mat, (*path).ray, hit, u);
+    if (!s.ok) {
+        return false;
+    }
+    (*path).throughput *= s.weight;
+    if (all((*path).throughput == vec3<f32>(0.0))) {
+        // nothing further along this path can add to the pixel
+        return false;
+    }
+    (*path).prev_p = hit.p;
+    (*path).prev_pdf = s.pdf;
+    (*path).prev_delta = s.delta;
+    (*path).ray = spawn_ray(hit, s.dir);
+    (*path).depth += 1u;
+    return (*path).depth < params.max_depth;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -193,24 +203,42 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let x = params.tile_x + gid.x;
     let y = params.tile_y + gid.y;
     let pixel = y * params.width + x;
-    let sample = params.sample_index;
-    let jitter = sample_2d(pixel, sample, DIM_PIXEL);
-    let lens = sample_2d(pixel, sample, DIM_LENS);
+    // samples sample_index .. sample_index + sample_count, one after the other: a lane
+    // whose path ends starts its next sample at once, so the 8 lanes of a SIMD batch stay
+    // busy (llvmpipe runs a loop until its last lane is done). Each sample is added to the
+    // pixel's sums in index order, as one sample per dispatch would add it, but the sums
+    // are read and written once. A sample that is not finite (or whose square is not) is
+    // dropped and counted in the otherwise unused .w of the squares.
+    // The bound accumulation buffer holds the pixels of the band of rows from accum_y.
+    let slot = (y - params.accum_y) * params.tile_width + gid.x;
+    var sum = accum[2u * slot];
+    var sum2 = accum[2u * slot + 1u];
 #ifdef HAS_EMISSION
-    let c = trace_path(pixel, sample, camera_ray(x, y, jitter, lens));
+    var sample = params.sample_index;
+    let end = sample + params.sample_count;
+    var path = start_path(camera_ray(x, y, sample_2d(pixel, sample, DIM_PIXEL), sample_2d(pixel, sample, DIM_LENS)));
+    loop {
+        if (params.max_depth == 0u || !extend_path(&path, pixel, sample)) {
+            let c = path.radiance;
+            if (all_finite(c) && all_finite(c * c)) {
+                sum += vec4<f32>(c, 1.0);
+                sum2 += vec4<f32>(c * c, 0.0);
+            } else {
+                sum2.w += 1.0;
+            }
+            sample++;
+            if (sample >= end) {
+                break;
+            }
+            path = start_path(camera_ray(x, y, sample_2d(pixel, sample, DIM_PIXEL), sample_2d(pixel, sample, DIM_LENS)));
+        }
+    }
 #else
     // nothing in the scene emits, so no path can carry light: no ray is traced
-    let c = vec3<f32>(0.0);
+    sum.w += f32(params.sample_count);
 #endif
-    // the bound accumulation buffer holds the pixels of the band of rows from accum_y
-    let slot = (y - params.accum_y) * params.tile_width + gid.x;
-    if (all_finite(c) && all_finite(c * c)) {
-        accum[2u * slot] += vec4<f32>(c, 1.0);
-        accum[2u * slot + 1u] += vec4<f32>(c * c, 0.0);
-    } else {
-        // dropped, and counted in the otherwise unused .w of the squares
-        accum[2u * slot + 1u].w += 1.0;
-    }
+    accum[2u * slot] = sum;
+    accum[2u * slot + 1u] = sum2;
 }
 
 // Whether every component is a finite number, judged by its bits (an exponent of all ones

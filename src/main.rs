@@ -179,10 +179,13 @@ struct RenderArgs {
     /// comparisons).
     #[arg(long)]
     no_uniform_records: bool,
-    /// Read a small scene's primitives from their buffer instead of writing them into its
-    /// shader as constants (for comparisons).
+    /// Read a small scene's primitives, materials and lights from their buffers instead
+    /// of writing them into its shader as constants (for comparisons).
     #[arg(long)]
-    no_baked_primitives: bool,
+    no_baked_records: bool,
+    /// Trace one sample per GPU invocation instead of a group of 8 (for comparisons).
+    #[arg(long)]
+    no_sample_groups: bool,
     /// Trace every path to max_depth without Russian roulette (for comparisons; Russian
     /// roulette from the fourth ray on is unbiased).
     #[arg(long)]
@@ -332,12 +335,21 @@ fn features(path: &Path) -> anyhow::Result<()> {
         let bindings = used_bindings("trace", &wgsl, "main", 0)?.len();
         Ok((wgsl.len(), wgsl.lines().count(), bindings))
     };
+    let baked: Vec<&str> = [
+        ("BAKED_PRIMITIVES", "primitives"),
+        ("BAKED_MATERIALS", "materials"),
+        ("BAKED_EMITTERS", "emitters"),
+    ]
+    .iter()
+    .filter(|(d, _)| defines.contains(*d))
+    .map(|&(_, name)| name)
+    .collect();
     println!(
-        "primitives as constants: {}",
-        if spec.scene_code.is_empty() {
-            "no"
+        "records written into the shader: {}",
+        if baked.is_empty() {
+            "none".to_string()
         } else {
-            "yes"
+            baked.join(", ")
         }
     );
     let (sb, sl, sn) = size(&spec)?;
@@ -460,7 +472,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         no_specialize: args.no_specialize,
         force_bvh: args.bvh,
         no_uniform_records: args.no_uniform_records,
-        no_baked_primitives: args.no_baked_primitives,
+        no_baked_records: args.no_baked_records,
+        no_sample_groups: args.no_sample_groups,
         no_russian_roulette: args.no_russian_roulette,
     };
     let loading = std::time::Instant::now();

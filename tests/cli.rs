@@ -262,14 +262,14 @@ fn features_lists_the_scene_and_no_specialize_renders() {
     ] {
         assert!(text.contains(line), "{text}");
     }
-    // the Cornell box (MIS, no textures, few enough primitives for the plain loop) binds 6
-    // of the 9 scene bindings, its records as uniform buffers
+    // the Cornell box (MIS, no textures, few enough primitives for the plain loop) has its
+    // records written into its shader: it binds 3 of the 9 scene bindings
     assert!(
         text.contains("bvh              -")
             && text.contains("primitive_loop   yes")
             && text.contains("trace shader: specialized")
-            && text.contains("6 bindings; full")
-            && text.contains("uniform records: primitives, materials, emitters"),
+            && text.contains("3 bindings; full")
+            && text.contains("records written into the shader: primitives, materials, emitters"),
         "{text}"
     );
     let out = tmp_dir("full").join("f.png");

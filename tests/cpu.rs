@@ -436,7 +436,8 @@ fn overrides_replace_render_settings_and_are_validated() {
         no_specialize: true,
         force_bvh: false,
         no_uniform_records: false,
-        no_baked_primitives: false,
+        no_baked_records: false,
+        no_sample_groups: false,
         no_russian_roulette: false,
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();

@@ -662,11 +662,18 @@ fn submissions_adapt_to_their_time_and_leave_the_image_unchanged() {
     };
     let (sliced, sliced_count, sliced_budget) = run(Duration::from_micros(1));
     let (batched, batched_count, _) = run(Duration::from_secs(60));
-    // a microsecond is never met: the budget falls to one row per submission
-    assert_eq!(sliced_budget, 64, "budget {sliced_budget} pixel samples");
+    // a microsecond is never met: the budget falls to one row of one sample group per
+    // submission
+    let group = wgtrace::gpu::render::SAMPLE_GROUP;
+    assert_eq!(
+        sliced_budget,
+        64 * group as u64,
+        "budget {sliced_budget} pixel samples"
+    );
+    // most of the 64 / group groups of samples go one row of 48 at a time
     assert!(
-        sliced_count > 64 * 10,
-        "{sliced_count} submissions for 64 passes of 48 rows"
+        sliced_count > 48 * 64 / group as u64 / 2,
+        "{sliced_count} submissions for 64 samples of 48 rows in groups of {group}"
     );
     assert!(
         batched_count * 4 <= 64,
@@ -674,6 +681,21 @@ fn submissions_adapt_to_their_time_and_leave_the_image_unchanged() {
     );
     assert!(sliced.data == batched.data, "the split changed the sums");
     assert_eq!(sliced.samples(0), 64.0);
+}
+
+/// A dispatch traces a group of at most SAMPLE_GROUP consecutive samples.
+#[test]
+fn samples_go_to_dispatches_in_consecutive_groups() {
+    use wgtrace::gpu::render::{group_parts, SAMPLE_GROUP as G};
+    assert_eq!(
+        group_parts(3..2 * G + 5, G),
+        vec![3..G + 3, G + 3..2 * G + 3, 2 * G + 3..2 * G + 5]
+    );
+    assert_eq!(group_parts(G..2 * G, G), vec![G..2 * G]);
+    assert_eq!(group_parts(7..8, G), vec![7..8]);
+    assert!(group_parts(4..4, G).is_empty());
+    assert_eq!(group_parts(u32::MAX - 3..u32::MAX, G).len(), 1);
+    assert_eq!(group_parts(0..3, 1), vec![0..1, 1..2, 2..3]);
 }
 
 /// The budget rule: scaled toward the target, at most 2x up and 4x down per step, within

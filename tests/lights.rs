@@ -675,7 +675,7 @@ material = "glow"
     assert_eq!(scene.emitters.len(), 1280);
     assert_eq!(
         wgtrace::gpu::render::loop_iterations(&scene, true),
-        64 * 1280
+        64 * (1 + 1280)
     );
     let llvmpipe = common::gpu_context().info.name.contains("llvmpipe");
     match wgtrace::Engine::gpu(&scene, 0) {

@@ -7,7 +7,8 @@ use std::collections::BTreeSet;
 
 use wgtrace::gpu::shader::{
     all_defines, kernel_shader, preprocess, scene_defines, scene_shader, trace_shader,
-    used_bindings, validate, BAKED_PRIMITIVES_MAX, ENTRY_SHADERS, FEATURE_DEFINES, SHADER_FILES,
+    used_bindings, validate, BAKED_PRIMITIVES_MAX, BAKED_RECORDS_MAX, ENTRY_SHADERS,
+    FEATURE_DEFINES, SHADER_FILES,
 };
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::scene::records::record_layouts;
@@ -109,7 +110,8 @@ fn every_feature_set_the_scenes_reach_validates_and_binds_only_what_it_uses() {
 
 /// Every scene of `scenes/` small enough (no BVH, nothing transformed, at most
 /// BAKED_PRIMITIVES_MAX primitives) gets its primitives written into its shader as
-/// constants; those shaders validate, and every record value reads back bit for bit.
+/// constants, and one of few materials or lights gets those; the shaders validate, and
+/// every primitive's values read back bit for bit.
 #[test]
 fn small_scenes_get_their_primitives_as_constants_exactly() {
     let mut baked = Vec::new();
@@ -117,7 +119,7 @@ fn small_scenes_get_their_primitives_as_constants_exactly() {
         for (no_bvh, no_baked) in [(false, false), (true, false), (false, true)] {
             let o = Overrides {
                 no_bvh,
-                no_baked_primitives: no_baked,
+                no_baked_records: no_baked,
                 ..Default::default()
             };
             let scene = wgtrace::load_scene(&path, &o).unwrap();
@@ -129,14 +131,34 @@ fn small_scenes_get_their_primitives_as_constants_exactly() {
                     .primitives
                     .iter()
                     .all(|p| p.flags & wgtrace::scene::records::PRIM_FLAG_TRANSFORM == 0);
-            assert_eq!(!spec.scene_code.is_empty(), expect, "{}", path.display());
-            assert_eq!(spec.defines.contains("BAKED_PRIMITIVES"), expect);
-            if !expect {
+            assert_eq!(
+                spec.defines.contains("BAKED_PRIMITIVES"),
+                expect,
+                "{}",
+                path.display()
+            );
+            let few = |n: usize| !no_baked && (1..=BAKED_RECORDS_MAX).contains(&n);
+            assert_eq!(
+                spec.defines.contains("BAKED_MATERIALS"),
+                few(scene.materials.len())
+            );
+            assert_eq!(
+                spec.defines.contains("BAKED_EMITTERS"),
+                few(scene.emitters.len())
+            );
+            assert_eq!(
+                spec.defines.contains("SCENE_CODE"),
+                !spec.scene_code.is_empty()
+            );
+            if spec.scene_code.is_empty() {
                 continue;
             }
             let wgsl = trace_shader(&spec).unwrap();
             let module = validate("trace", &wgsl).unwrap();
             validate("kernel", &kernel_shader(&spec).unwrap()).unwrap();
+            if !expect {
+                continue;
+            }
             // every nonzero component of every record is one of intersect_baked's literals
             let f = module
                 .functions

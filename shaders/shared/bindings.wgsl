@@ -4,6 +4,10 @@
 // loads a storage buffer one lane and one component at a time, a uniform buffer with one
 // gather. The fixed lengths are 65536 bytes / the record's size (a test checks them).
 #import shared/types
+#ifdef SCENE_CODE
+// records written into this scene's shader as constants (gpu::shader::scene_shader)
+#import generated/scene
+#endif
 
 @group(0) @binding(0) var<uniform> params: Params;
 #ifdef UNIFORM_PRIMITIVES
@@ -43,3 +47,22 @@
 #endif
 // Image texels (linear RGB) and the Perlin noise tables.
 @group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;
+
+// Material i and light i: from their buffers, or, for a scene of few of them, from
+// constants written into its shader (BAKED_MATERIALS, BAKED_EMITTERS): llvmpipe gathers a
+// record from a buffer one lane and one component at a time.
+#ifndef BAKED_PRIMITIVES
+fn primitive_record(i: u32) -> Primitive {
+    return primitives[i];
+}
+#endif
+#ifndef BAKED_MATERIALS
+fn material_record(i: u32) -> Material {
+    return materials[i];
+}
+#endif
+#ifndef BAKED_EMITTERS
+fn emitter_record(i: u32) -> Emitter {
+    return emitters[i];
+}
+#endif

@@ -4,9 +4,6 @@
 #import shared/bindings
 #import shared/sampling
 #import shared/types
-#ifdef BAKED_PRIMITIVES
-#import generated/scene
-#endif
 
 // Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `dir` is unit length.
 // Returns the nearest root in (0, t_max), else FAR.
@@ -593,7 +590,7 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
 
 // Shading record of a candidate hit, in world space.
 fn surface_at(ray: Ray, cand: Candidate) -> Hit {
-    let prim = primitives[cand.prim];
+    let prim = primitive_record(cand.prim);
     var s: Surface;
 #ifdef HAS_TRANSFORMS
     if ((prim.flags & PRIM_FLAG_TRANSFORM) != 0u) {

@@ -112,7 +112,7 @@ fn choose_light(u: f32) -> u32 {
     var hi = params.num_emitters - 1u;
     while (lo < hi) {
         let mid = (lo + hi) / 2u;
-        if (u < emitters[mid].cdf) {
+        if (u < emitter_record(mid).cdf) {
             hi = mid;
         } else {
             lo = mid + 1u;
@@ -197,7 +197,7 @@ fn sample_sphere_light(center: vec3<f32>, r: f32, p: vec3<f32>, u: vec2<f32>) ->
 // Solid-angle pdf that light `i` is sampled toward x (a point on it, in direction d from
 // p), the choice of the light included.
 fn light_pdf(i: u32, p: vec3<f32>, x: vec3<f32>, d: vec3<f32>) -> f32 {
-    let e = emitters[i];
+    let e = emitter_record(i);
     var pdf = 0.0;
     switch e.kind {
 #ifdef HAS_TRIANGLE
@@ -240,7 +240,7 @@ fn sample_light(p: vec3<f32>, u_light: f32, u: vec2<f32>) -> LightSample {
         return ls;
     }
     let i = choose_light(u_light);
-    let e = emitters[i];
+    let e = emitter_record(i);
     var x = vec3<f32>(0.0);
     var pdf = 0.0;
     switch e.kind {
@@ -304,7 +304,7 @@ fn light_pdf_total(p: vec3<f32>, d: vec3<f32>) -> f32 {
     let ray = Ray(p, d);
     var total = 0.0;
     for (var i = 0u; i < params.num_emitters; i++) {
-        let e = emitters[i];
+        let e = emitter_record(i);
         var t = FAR;
         switch e.kind {
 #ifdef HAS_TRIANGLE

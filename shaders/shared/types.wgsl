@@ -210,7 +210,8 @@ struct Params {
     accum_y: u32,
     // Russian roulette decides whether rays from this one on are traced (0: never)
     rr_depth: u32,
-    pad2: u32,
+    // samples sample_index .. sample_index + sample_count are traced by this dispatch
+    sample_count: u32,
 }
 
 struct Ray {

@@ -121,93 +121,127 @@ pub fn direct_light(
     f * le * (w / ls.pdf)
 }
 
-/// Radiance along one camera path; max_depth counts rays; light_sampling picks bsdf,
-/// mixture or mis (see trace.wgsl).
-pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
-    let p = &b.params;
-    let mut ray = camera;
-    let mut radiance = Vec3::ZERO;
-    let mut throughput = Vec3::ONE;
-    let mut prev_p = camera.origin;
-    let mut prev_pdf = 0.0;
-    let mut prev_delta = true;
-    for depth in 0..p.max_depth {
-        // Russian roulette from ray rr_depth on, as the shader does
-        if p.rr_depth != 0 && depth >= p.rr_depth {
-            let survive = throughput.max_element().min(1.0);
-            if rand_2d(pixel, sample, depth, DIM_RR, p.seed)[0] >= survive {
-                break;
-            }
-            throughput /= survive;
-        }
-        let cand = intersect_scene(b, &ray, FAR);
-        let mis = p.light_sampling == LIGHT_SAMPLING_MIS && !prev_delta;
-        if cand.prim == NO_HIT {
-            let mut le = background_radiance(b, ray.dir);
-            if mis && p.env_light != NO_LIGHT {
-                le *= power_heuristic(prev_pdf, light_pdf(b, p.env_light, prev_p, prev_p, ray.dir));
-            }
-            radiance += throughput * le;
-            break;
-        }
-        let hit = surface_at(b, &ray, &cand);
-        let mat = &material_at(b, &b.materials[hit.material as usize], &hit);
-        let mut le = emitted(mat, &hit);
-        let light = b.primitives[cand.prim as usize].flags >> PRIM_LIGHT_SHIFT;
-        if mis && light != 0 && le.cmpgt(Vec3::ZERO).any() {
-            le *= power_heuristic(prev_pdf, light_pdf(b, light - 1, prev_p, hit.p, ray.dir));
-        }
-        radiance += throughput * le;
-        if depth + 1 >= p.max_depth {
-            break;
-        }
-        let u = bounce_2d(b, pixel, sample, depth, DIM_BSDF);
-        if p.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat) {
-            let ul = bounce_2d(b, pixel, sample, depth, DIM_LIGHT);
-            let uc = bounce_2d(b, pixel, sample, depth, DIM_LIGHT_CHOICE);
-            radiance += throughput * direct_light(b, mat, &ray, &hit, uc[0], ul);
-        }
-        if p.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat) {
-            let uc = bounce_2d(b, pixel, sample, depth, DIM_LIGHT_CHOICE);
-            let dir = if uc[1] < 0.5 {
-                let ul = bounce_2d(b, pixel, sample, depth, DIM_LIGHT);
-                let ls = sample_light(b, hit.p, uc[0], ul);
-                if ls.light == NO_LIGHT {
-                    break;
-                }
-                ls.dir
-            } else {
-                let s = scatter(mat, &ray, &hit, u);
-                if !s.ok {
-                    break;
-                }
-                s.dir
-            };
-            let f = bsdf_eval(mat, &ray, &hit, dir);
-            let pdf = 0.5 * light_pdf_total(b, hit.p, dir) + 0.5 * bsdf_pdf(mat, &ray, &hit, dir);
-            #[allow(clippy::neg_cmp_op_on_partial_ord)]
-            if !(pdf > 0.0) || f == Vec3::ZERO {
-                break;
-            }
-            throughput *= f / pdf;
-            ray = spawn_ray(&hit, dir);
-            continue;
-        }
-        let s = scatter(mat, &ray, &hit, u);
-        if !s.ok {
-            break;
-        }
-        throughput *= s.weight;
-        if throughput == Vec3::ZERO {
-            // nothing further along this path can add to the pixel
-            break;
-        }
-        prev_p = hit.p;
-        prev_pdf = s.pdf;
-        prev_delta = s.delta;
-        ray = spawn_ray(&hit, s.dir);
+/// A camera path being traced (trace.wgsl's `Path`): the next ray, the radiance so far,
+/// the throughput, the previous vertex for MIS, and the rays traced so far.
+pub struct Path {
+    pub ray: Ray,
+    pub radiance: Vec3,
+    pub throughput: Vec3,
+    pub prev_p: Vec3,
+    pub prev_pdf: f32,
+    pub prev_delta: bool,
+    pub depth: u32,
+}
+
+pub fn start_path(camera: Ray) -> Path {
+    Path {
+        ray: camera,
+        radiance: Vec3::ZERO,
+        throughput: Vec3::ONE,
+        prev_p: camera.origin,
+        prev_pdf: 0.0,
+        prev_delta: true,
+        depth: 0,
     }
-    radiance
+}
+
+/// Traces the path's next ray and adds what it finds; false when the path has ended.
+/// max_depth counts rays; light_sampling picks bsdf, mixture or mis (see trace.wgsl).
+pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bool {
+    let p = &b.params;
+    // Russian roulette from ray rr_depth on, as the shader does
+    if p.rr_depth != 0 && path.depth >= p.rr_depth {
+        let survive = path.throughput.max_element().min(1.0);
+        if rand_2d(pixel, sample, path.depth, DIM_RR, p.seed)[0] >= survive {
+            return false;
+        }
+        path.throughput /= survive;
+    }
+    let cand = intersect_scene(b, &path.ray, FAR);
+    let mis = p.light_sampling == LIGHT_SAMPLING_MIS && !path.prev_delta;
+    if cand.prim == NO_HIT {
+        let mut le = background_radiance(b, path.ray.dir);
+        if mis && p.env_light != NO_LIGHT {
+            le *= power_heuristic(
+                path.prev_pdf,
+                light_pdf(b, p.env_light, path.prev_p, path.prev_p, path.ray.dir),
+            );
+        }
+        path.radiance += path.throughput * le;
+        return false;
+    }
+    let hit = surface_at(b, &path.ray, &cand);
+    let mat = &material_at(b, &b.materials[hit.material as usize], &hit);
+    let mut le = emitted(mat, &hit);
+    let light = b.primitives[cand.prim as usize].flags >> PRIM_LIGHT_SHIFT;
+    if mis && light != 0 && le.cmpgt(Vec3::ZERO).any() {
+        le *= power_heuristic(
+            path.prev_pdf,
+            light_pdf(b, light - 1, path.prev_p, hit.p, path.ray.dir),
+        );
+    }
+    path.radiance += path.throughput * le;
+    if path.depth + 1 >= p.max_depth {
+        return false;
+    }
+    let u = bounce_2d(b, pixel, sample, path.depth, DIM_BSDF);
+    if p.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat) {
+        let ul = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT);
+        let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);
+        path.radiance += path.throughput * direct_light(b, mat, &path.ray, &hit, uc[0], ul);
+    }
+    if p.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat) {
+        let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);
+        let dir = if uc[1] < 0.5 {
+            let ul = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT);
+            let ls = sample_light(b, hit.p, uc[0], ul);
+            if ls.light == NO_LIGHT {
+                return false;
+            }
+            ls.dir
+        } else {
+            let s = scatter(mat, &path.ray, &hit, u);
+            if !s.ok {
+                return false;
+            }
+            s.dir
+        };
+        let f = bsdf_eval(mat, &path.ray, &hit, dir);
+        let pdf = 0.5 * light_pdf_total(b, hit.p, dir) + 0.5 * bsdf_pdf(mat, &path.ray, &hit, dir);
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
+        if !(pdf > 0.0) || f == Vec3::ZERO {
+            return false;
+        }
+        path.throughput *= f / pdf;
+        path.ray = spawn_ray(&hit, dir);
+        path.depth += 1;
+        return path.depth < p.max_depth;
+    }
+    let s = scatter(mat, &path.ray, &hit, u);
+    if !s.ok {
+        return false;
+    }
+    path.throughput *= s.weight;
+    if path.throughput == Vec3::ZERO {
+        // nothing further along this path can add to the pixel
+        return false;
+    }
+    path.prev_p = hit.p;
+    path.prev_pdf = s.pdf;
+    path.prev_delta = s.delta;
+    path.ray = spawn_ray(&hit, s.dir);
+    path.depth += 1;
+    path.depth < p.max_depth
+}
+
+/// Radiance along one camera path: extend_path until it ends, as the shader's `main`
+/// does for each sample of its group.
+pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
+    let mut path = start_path(camera);
+    if b.params.max_depth > 0 {
+        while extend_path(b, &mut path, pixel, sample) {}
+    }
+    path.radiance
 }
 
 /// The shader's `main` for one pixel: the sample's radiance.
@@ -227,8 +261,9 @@ pub fn all_finite(v: Vec3) -> bool {
         .all(|x| x.to_bits() & 0x7f80_0000 != 0x7f80_0000)
 }
 
-/// Adds one sample to a pixel's two accumulation entries as the shader's `main` does: a
-/// sample that is not finite (or whose square is not) is dropped and counted in `sq[3]`.
+/// Adds one sample to a pixel's two accumulation entries: a sample that is not finite (or
+/// whose square is not) is dropped and counted in `sq[3]`, as the shader's `main` does
+/// (which first sums a group of samples, then adds the group).
 pub fn accumulate(sum: &mut [f32; 4], sq: &mut [f32; 4], c: Vec3) {
     if all_finite(c) && all_finite(c * c) {
         sum[0] += c.x;
@@ -243,8 +278,9 @@ pub fn accumulate(sum: &mut [f32; 4], sq: &mut [f32; 4], c: Vec3) {
     }
 }
 
-/// Progressive CPU renderer: one sample per pixel per pass, accumulated exactly as the GPU
-/// accumulates (two vec4 per pixel: sum and sum of squares, in f32, in pass order).
+/// Progressive CPU renderer: one sample per pixel per pass, accumulated as the GPU
+/// accumulates (two vec4 per pixel: sum and sum of squares, in f32, in pass order; the
+/// GPU adds a group of samples' sum at once, so the last bits may differ).
 pub struct CpuRenderer {
     scene: FlatScene,
     accum: Vec<[f32; 4]>,

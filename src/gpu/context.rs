@@ -31,8 +31,8 @@ pub enum GpuError {
         limit_mib: u64,
     },
     #[error(
-        "this render would run {iterations} loop iterations per path (every primitive on \
-         every ray with --no-bvh, every light at every bounce with light_sampling = \
+        "this render would run {iterations} loop iterations per shader invocation (its \
+         group of paths; every primitive on every ray with --no-bvh, every light at every bounce with light_sampling = \
          \"mixture\"), more than the {limit} that llvmpipe (lavapipe) runs before it \
          silently stops a shader's loops; use the BVH, light_sampling = \"mis\", or \
          --backend cpu"

@@ -57,8 +57,38 @@ struct Band {
     group: wgpu::BindGroup,
 }
 
-/// Most dispatches (samples of one band) in one submission.
+/// Most dispatches (sample groups of one band) in one submission.
 pub const MAX_DISPATCHES_PER_SUBMISSION: u32 = 256;
+
+/// Most samples one invocation traces in a row (`shaders/trace.wgsl`, `main`): a lane
+/// whose path ends starts its next sample at once, so the 8 lanes of a SIMD batch stay
+/// busy (llvmpipe runs a loop until its last lane is done), and the pixel's sums are read
+/// and written once per group. Each sample is still added in index order, so the sums do
+/// not depend on how the samples were grouped.
+pub const SAMPLE_GROUP: u32 = 8;
+
+/// The samples one invocation traces for `scene`: [`SAMPLE_GROUP`], fewer when that many
+/// paths would pass llvmpipe's loop limit ([`loop_iterations`]), 1 when it was loaded with
+/// `--no-sample-groups`.
+pub fn sample_group(scene: &FlatScene) -> u32 {
+    if !scene.sample_groups {
+        return 1;
+    }
+    let per_path = path_loop_iterations(scene).max(1);
+    (LLVMPIPE_LOOP_LIMIT / per_path).clamp(1, SAMPLE_GROUP as u64) as u32
+}
+
+/// `samples` in consecutive parts of at most `group`: one dispatch each.
+pub fn group_parts(samples: std::ops::Range<u32>, group: u32) -> Vec<std::ops::Range<u32>> {
+    let mut parts = Vec::new();
+    let mut s = samples.start;
+    while s < samples.end {
+        let end = s.saturating_add(group).min(samples.end);
+        parts.push(s..end);
+        s = end;
+    }
+    parts
+}
 
 /// Default time one submission should take: far below the 2 s after which Windows
 /// resets a GPU (TDR) and the few seconds of Linux display watchdogs, and short enough
@@ -276,13 +306,16 @@ impl GpuRenderer {
     }
 
     /// Samples per pixel that one call of [`Self::render_samples`] should ask for, so that
-    /// it makes about one submission per band: at least 1.
+    /// it makes about one submission per band: whole groups ([`SAMPLE_GROUP`]), at least
+    /// one group.
     pub fn samples_per_call(&self) -> u32 {
+        let group = sample_group(&self.scene);
         if self.submissions.count == 0 {
-            return 1;
+            return group;
         }
-        (self.submissions.budget / self.largest_band())
-            .clamp(1, MAX_DISPATCHES_PER_SUBMISSION as u64) as u32
+        let groups = (self.submissions.budget / (self.largest_band() * group as u64))
+            .clamp(1, MAX_DISPATCHES_PER_SUBMISSION as u64) as u32;
+        groups * group
     }
 
     /// Pixels of the largest band.
@@ -299,37 +332,48 @@ impl GpuRenderer {
         self.render_samples(sample_index..sample_index + 1)
     }
 
-    /// Adds the samples with indices `samples` to every pixel, band by band, in
-    /// submissions sized by the time the earlier ones took: several samples of a band in
-    /// one submission when it is quick, a few of its rows per submission when it is slow.
-    /// Each pixel adds its samples in index order, so the sums do not depend on how the
-    /// work was split.
+    /// Adds the samples with indices `samples` to every pixel, band by band, a dispatch
+    /// per group of samples ([`group_parts`]), in submissions sized by the time the
+    /// earlier ones took: several groups of a band in one submission when it is quick, a
+    /// few of its rows per submission when it is slow. Each pixel adds its samples in
+    /// index order, so the sums do not depend on how the work was split.
     pub fn render_samples(&mut self, samples: std::ops::Range<u32>) -> Result<(), GpuError> {
+        let parts = group_parts(samples, sample_group(&self.scene));
         for b in 0..self.bands.len() {
             let band = self.bands[b].tile;
             let band_pixels = band.width as u64 * band.height as u64;
-            let mut s = samples.start;
-            while s < samples.end {
+            let work = |p: &std::ops::Range<u32>| band_pixels * p.len() as u64;
+            let mut i = 0;
+            while i < parts.len() {
                 let budget = self.submissions.budget;
-                // the first submission, not yet timed, traces one sample
+                // the first submission, not yet timed, traces about one sample of the band
                 let budget = if self.submissions.count == 0 {
                     budget.min(band_pixels)
                 } else {
                     budget
                 };
-                if budget >= band_pixels {
-                    let k = (budget / band_pixels)
-                        .min((samples.end - s) as u64)
-                        .min(MAX_DISPATCHES_PER_SUBMISSION as u64)
-                        as u32;
-                    let dispatches: Vec<(u32, Tile)> = (s..s + k).map(|i| (i, band)).collect();
+                if budget >= work(&parts[i]) {
+                    // as many whole parts as the budget holds
+                    let mut j = i + 1;
+                    let mut total = work(&parts[i]);
+                    while j < parts.len()
+                        && j - i < MAX_DISPATCHES_PER_SUBMISSION as usize
+                        && total + work(&parts[j]) <= budget
+                    {
+                        total += work(&parts[j]);
+                        j += 1;
+                    }
+                    let dispatches: Vec<(std::ops::Range<u32>, Tile)> =
+                        parts[i..j].iter().map(|p| (p.clone(), band)).collect();
                     self.submit(b, &dispatches)?;
-                    s += k;
+                    i = j;
                 } else {
-                    // one sample, a few rows at a time
+                    // one part, a few rows at a time
+                    let part = parts[i].clone();
                     let mut y = band.y;
                     while y < band.y + band.height {
-                        let rows = (self.submissions.budget / band.width as u64).max(1) as u32;
+                        let per_row = band.width as u64 * part.len() as u64;
+                        let rows = (self.submissions.budget / per_row).max(1) as u32;
                         let rows = rows.min(band.y + band.height - y);
                         let tile = Tile {
                             x: band.x,
@@ -337,24 +381,29 @@ impl GpuRenderer {
                             width: band.width,
                             height: rows,
                         };
-                        self.submit(b, &[(s, tile)])?;
+                        self.submit(b, &[(part.clone(), tile)])?;
                         y += rows;
                     }
-                    s += 1;
+                    i += 1;
                 }
             }
         }
         Ok(())
     }
 
-    /// One submission: a dispatch per (sample index, tile) of band `b`, each with its own
+    /// One submission: a dispatch per (samples, tile) of band `b`, each with its own
     /// parameters; waits for it, then adapts the budget to the time it took.
-    fn submit(&mut self, b: usize, dispatches: &[(u32, Tile)]) -> Result<(), GpuError> {
+    fn submit(
+        &mut self,
+        b: usize,
+        dispatches: &[(std::ops::Range<u32>, Tile)],
+    ) -> Result<(), GpuError> {
         let band = &self.bands[b];
         let stride = self.params_stride as usize;
         let mut bytes = vec![0u8; stride * dispatches.len()];
-        for (i, &(sample, tile)) in dispatches.iter().enumerate() {
-            let mut params = self.scene.params(sample, tile);
+        for (i, (samples, tile)) in dispatches.iter().enumerate() {
+            let mut params = self.scene.params(samples.start, *tile);
+            params.sample_count = samples.len() as u32;
             params.accum_y = band.tile.y;
             bytes[i * stride..][..std::mem::size_of::<Params>()]
                 .copy_from_slice(bytemuck::bytes_of(&params));
@@ -385,7 +434,7 @@ impl GpuRenderer {
         let took = start.elapsed();
         let work: u64 = dispatches
             .iter()
-            .map(|(_, t)| t.width as u64 * t.height as u64)
+            .map(|(s, t)| t.width as u64 * t.height as u64 * s.len() as u64)
             .sum();
         let largest = self.largest_band();
         let sub = &mut self.submissions;
@@ -394,8 +443,9 @@ impl GpuRenderer {
             work,
             took,
             sub.target,
-            self.scene.width as u64,
-            largest * MAX_DISPATCHES_PER_SUBMISSION as u64,
+            // the least a submission does: one row of one group
+            self.scene.width as u64 * sample_group(&self.scene) as u64,
+            largest * (MAX_DISPATCHES_PER_SUBMISSION * sample_group(&self.scene)) as u64,
         );
         sub.count += 1;
         Ok(())
@@ -461,18 +511,29 @@ pub(crate) fn check_loop_limit(
     Ok(())
 }
 
-/// Loop iterations of one path (or of one kernel ray when `paths` is false) that grow
-/// with the scene: primitive loops without the BVH, and the mixture's loop over lights.
+/// Loop iterations of one invocation's paths (its sample group; or of one kernel ray when
+/// `paths` is false) that grow with the scene: primitive loops without the BVH (none when
+/// the primitives are written into the shader), and the mixture's loop over lights.
 pub fn loop_iterations(scene: &FlatScene, paths: bool) -> u64 {
-    let lights = scene.light_sampling != records::LIGHT_SAMPLING_BSDF && !scene.emitters.is_empty();
-    let per_ray = if scene.use_bvh {
+    if !paths {
+        return ray_loop_iterations(scene);
+    }
+    sample_group(scene) as u64 * path_loop_iterations(scene)
+}
+
+/// Loop iterations of one ray's closest-hit search that grow with the scene.
+fn ray_loop_iterations(scene: &FlatScene) -> u64 {
+    if scene.use_bvh || super::shader::baked_primitives(scene).is_some() {
         0
     } else {
         scene.primitives.len() as u64 + 1
-    };
-    if !paths {
-        return per_ray;
     }
+}
+
+/// Loop iterations of one path: a turn of the bounce loop per ray, plus the loops of its
+/// rays and, for the mixture, the loop over lights.
+fn path_loop_iterations(scene: &FlatScene) -> u64 {
+    let lights = scene.light_sampling != records::LIGHT_SAMPLING_BSDF && !scene.emitters.is_empty();
     let depth = scene.max_depth as u64;
     let shadow = (lights && scene.light_sampling == records::LIGHT_SAMPLING_MIS) as u64;
     let mixture = if lights && scene.light_sampling == records::LIGHT_SAMPLING_MIXTURE {
@@ -480,7 +541,7 @@ pub fn loop_iterations(scene: &FlatScene, paths: bool) -> u64 {
     } else {
         0
     };
-    depth * ((1 + shadow) * per_ray + mixture)
+    depth * (1 + (1 + shadow) * ray_loop_iterations(scene) + mixture)
 }
 
 /// Refuses a scene whose buffers exceed the adapter's storage binding limit (wgpu's default

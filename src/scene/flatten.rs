@@ -657,7 +657,8 @@ pub fn flatten(
         camera: camera_frame(file, r.width as f32 / r.height as f32),
         specialize: true,
         uniform_records: true,
-        baked_primitives: true,
+        baked_records: true,
+        sample_groups: true,
         rr_depth: super::RR_DEPTH,
         light_sampling: match r.light_sampling {
             LightSampling::Bsdf => records::LIGHT_SAMPLING_BSDF,

@@ -38,9 +38,12 @@ pub struct Overrides {
     /// Keep every record array in a storage buffer, none in a uniform buffer (for
     /// comparisons; `gpu::shader::UNIFORM_DEFINES`).
     pub no_uniform_records: bool,
-    /// Read a small scene's primitives from their buffer, not as constants written into
-    /// its shader (for comparisons; `gpu::shader::baked_primitives`).
-    pub no_baked_primitives: bool,
+    /// Read a small scene's primitives, materials and lights from their buffers, not as
+    /// constants written into its shader (for comparisons; `gpu::shader::scene_shader`).
+    pub no_baked_records: bool,
+    /// One sample per GPU invocation instead of a group of them (for comparisons;
+    /// `gpu::render::SAMPLE_GROUP`).
+    pub no_sample_groups: bool,
     /// Trace every path to max_depth (or until it escapes or goes black), without Russian
     /// roulette (for comparisons).
     pub no_russian_roulette: bool,
@@ -108,9 +111,11 @@ pub struct FlatScene {
     pub specialize: bool,
     /// Bind record arrays that fit as uniform buffers (a specialized shader only).
     pub uniform_records: bool,
-    /// Write a small scene's primitives into its shader as constants (a specialized
-    /// shader only; `gpu::shader::baked_primitives`).
-    pub baked_primitives: bool,
+    /// Write a small scene's primitives, materials and lights into its shader as
+    /// constants (a specialized shader only; `gpu::shader::scene_shader`).
+    pub baked_records: bool,
+    /// Let one GPU invocation trace a group of samples (`gpu::render::SAMPLE_GROUP`).
+    pub sample_groups: bool,
     /// The first ray Russian roulette may stop ([`RR_DEPTH`]; 0: none).
     pub rr_depth: u32,
     pub primitives: Vec<Primitive>,
@@ -349,7 +354,8 @@ pub fn load_scene_str(
         .map(|scene| FlatScene {
             specialize: !overrides.no_specialize,
             uniform_records: !overrides.no_uniform_records,
-            baked_primitives: !overrides.no_baked_primitives,
+            baked_records: !overrides.no_baked_records,
+            sample_groups: !overrides.no_sample_groups,
             rr_depth: if overrides.no_russian_roulette {
                 0
             } else {

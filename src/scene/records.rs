@@ -280,7 +280,10 @@ pub struct Params {
     /// Russian roulette decides whether rays from this one on (0 = the camera ray) are
     /// traced; 0: no Russian roulette.
     pub rr_depth: u32,
-    pub pad2: u32,
+    /// The dispatch traces samples `sample_index .. sample_index + sample_count` of each
+    /// pixel (set per dispatch by the GPU backend; 0 in [`crate::scene::FlatScene::params`],
+    /// so it is not part of a checkpoint's scene hash).
+    pub sample_count: u32,
 }
 
 /// One node of the flattened BVH, in depth-first order. Interior (`count` = 0): the first
@@ -431,7 +434,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             env_light,
             accum_y,
             rr_depth,
-            pad2
+            sample_count
         }),
         layout!(KernelRay { origin, dir }),
         layout!(TextureLookup { uv, p }),
