@@ -318,7 +318,8 @@ fn comparison(md: &mut String, dir: &Path, scene: &Path) {
         md,
         "The Cornell box of `bench/cornell.toml` and its Mitsuba twin `bench/cornell.xml`: \
          path tracing with emitter sampling and MIS, max depth 8, Russian roulette from the \
-         fourth ray, independent random samples, box pixel filter, the same spp for both. \
+         fourth ray (survival min(1, max throughput) in wgtrace, min(0.95, max throughput) \
+         in Mitsuba), independent random samples, box pixel filter, the same spp for both. \
          Mitsuba 3 runs its `llvm_ad_rgb` variant (Dr.Jit's LLVM backend, all cores). \
          *Samples/s* is the steady rate: wgtrace's render time as it reports it, \
          Mitsuba's second render in its process (the first compiles or loads its kernels). \

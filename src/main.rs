@@ -183,7 +183,7 @@ struct RenderArgs {
     /// of writing them into its shader as constants (for comparisons).
     #[arg(long)]
     no_baked_records: bool,
-    /// Trace one sample per GPU invocation instead of a group of 8 (for comparisons).
+    /// Trace one sample per GPU invocation instead of a group of 16 (for comparisons).
     #[arg(long)]
     no_sample_groups: bool,
     /// Trace every path to max_depth without Russian roulette (for comparisons; Russian

@@ -100,6 +100,33 @@ fn is_02_net(points: &[[u32; 2]], m: u32) -> bool {
     })
 }
 
+/// The closed form of Sobol's second dimension equals its definition: the XOR of the
+/// direction numbers v_1 = 2^31, v_k = v_(k-1) ^ (v_(k-1) >> 1) of the set bits.
+#[test]
+fn sobol_second_dimension_matches_its_direction_numbers() {
+    let by_definition = |i: u32| {
+        let (mut v, mut r) = (0x8000_0000u32, 0u32);
+        for k in 0..32 {
+            if i >> k & 1 != 0 {
+                r ^= v;
+            }
+            v ^= v >> 1;
+        }
+        r
+    };
+    let mut x = 0x9e37_79b9u32;
+    let mut inputs: Vec<u32> = (0..4096).chain([u32::MAX, 1 << 31]).collect();
+    for _ in 0..100_000 {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        inputs.push(x);
+    }
+    for i in inputs {
+        assert_eq!(sobol_dim1(i), by_definition(i), "index {i:#x}");
+    }
+}
+
 #[test]
 fn sobol_points_are_02_sequences_scrambled_or_not() {
     let plain: Vec<[u32; 2]> = (0u32..1024)

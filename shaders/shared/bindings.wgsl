@@ -48,9 +48,10 @@
 // Image texels (linear RGB) and the Perlin noise tables.
 @group(0) @binding(8) var<storage, read> texels: array<vec4<f32>>;
 
-// Material i and light i: from their buffers, or, for a scene of few of them, from
-// constants written into its shader (BAKED_MATERIALS, BAKED_EMITTERS): llvmpipe gathers a
-// record from a buffer one lane and one component at a time.
+// Primitive, material and light i: from their buffers, or, for a scene of few of them,
+// from constants written into its shader (BAKED_PRIMITIVES, BAKED_MATERIALS,
+// BAKED_EMITTERS): llvmpipe gathers a record from a buffer one lane and one component at
+// a time.
 #ifndef BAKED_PRIMITIVES
 fn primitive_record(i: u32) -> Primitive {
     return primitives[i];

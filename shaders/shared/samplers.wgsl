@@ -19,19 +19,19 @@ const DIM_LIGHT_CHOICE: u32 = 4u;
 const DIM_RR: u32 = 5u;
 
 // Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction numbers
-// v_k = v_{k-1} ^ (v_{k-1} >> 1), v_1 = 2^31, of the set bits of i.
+// v_k = v_{k-1} ^ (v_{k-1} >> 1), v_1 = 2^31, of the set bits of i. Bit a of i reaches
+// bit 31 - m of the result when C(a, m) is odd, that is (Lucas) when m's bits are a
+// subset of a's: so bit m before the reversal is the XOR of the bits of i at the
+// supersets of m, five shift-and-mask steps. No loop: llvmpipe ran one per bit of the
+// scrambled, full-width index, five times per bounce.
 fn sobol_dim1(i: u32) -> u32 {
-    var v = 0x80000000u;
-    var r = 0u;
-    var k = i;
-    while (k != 0u) {
-        if ((k & 1u) != 0u) {
-            r ^= v;
-        }
-        k >>= 1u;
-        v ^= v >> 1u;
-    }
-    return r;
+    var z = i;
+    z ^= (z >> 1u) & 0x55555555u;
+    z ^= (z >> 2u) & 0x33333333u;
+    z ^= (z >> 4u) & 0x0f0f0f0fu;
+    z ^= (z >> 8u) & 0x00ff00ffu;
+    z ^= (z >> 16u) & 0x0000ffffu;
+    return reverseBits(z);
 }
 
 // Laine and Karras's hash-based permutation: bit k of the result depends only on bits

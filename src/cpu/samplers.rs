@@ -14,19 +14,16 @@ pub const DIM_LIGHT_CHOICE: u32 = 4;
 /// .x decides Russian roulette.
 pub const DIM_RR: u32 = 5;
 
-/// Second dimension of Sobol' (primitive polynomial x + 1).
+/// Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction
+/// numbers of the set bits of i, as five shift-and-mask steps (see samplers.wgsl).
 pub fn sobol_dim1(i: u32) -> u32 {
-    let mut v = 0x8000_0000u32;
-    let mut r = 0u32;
-    let mut k = i;
-    while k != 0 {
-        if k & 1 != 0 {
-            r ^= v;
-        }
-        k >>= 1;
-        v ^= v >> 1;
-    }
-    r
+    let mut z = i;
+    z ^= (z >> 1) & 0x5555_5555;
+    z ^= (z >> 2) & 0x3333_3333;
+    z ^= (z >> 4) & 0x0f0f_0f0f;
+    z ^= (z >> 8) & 0x00ff_00ff;
+    z ^= (z >> 16) & 0x0000_ffff;
+    z.reverse_bits()
 }
 
 /// Laine and Karras's hash-based permutation (Burley 2020's constants).

@@ -65,7 +65,7 @@ pub const MAX_DISPATCHES_PER_SUBMISSION: u32 = 256;
 /// busy (llvmpipe runs a loop until its last lane is done), and the pixel's sums are read
 /// and written once per group. Each sample is still added in index order, so the sums do
 /// not depend on how the samples were grouped.
-pub const SAMPLE_GROUP: u32 = 8;
+pub const SAMPLE_GROUP: u32 = 16;
 
 /// The samples one invocation traces for `scene`: [`SAMPLE_GROUP`], fewer when that many
 /// paths would pass llvmpipe's loop limit ([`loop_iterations`]), 1 when it was loaded with

@@ -259,7 +259,8 @@ fn wgsl_vec4(v: [f32; 4]) -> String {
 /// closest-hit search with every primitive's record written into the shader as a
 /// constant, tested in index order as the CPU's loop does. llvmpipe loads a record from a
 /// uniform buffer with a gather per component even at a constant index; a constant costs
-/// nothing, and the Cornell box renders 1.9x faster (docs/performance.md). None when the
+/// nothing (1.9x on the Cornell box in alternating runs; docs/performance.md has all the
+/// records written in as one row). Also `primitive_record`, for `surface_at`. None when the
 /// scene has a BVH, a transformed primitive, more than [`BAKED_PRIMITIVES_MAX`]
 /// primitives, is not specialized, or was loaded with `--no-baked-records`.
 pub fn baked_primitives(scene: &crate::scene::FlatScene) -> Option<String> {
@@ -280,20 +281,6 @@ pub fn baked_primitives(scene: &crate::scene::FlatScene) -> Option<String> {
          var best = Candidate(t_max, NO_HIT, 0.0, 0.0);\n",
         prims.len()
     );
-    for (i, p) in prims.iter().enumerate() {
-        code += &format!(
-            "    best = closer_hit(best, {i}u, intersect_local(Primitive({}u, {}u, {}u, {}u, {}, {}, {}), {}u, ray, best.t));\n",
-            p.tag,
-            p.material,
-            p.flags,
-            p.data,
-            wgsl_vec4(p.a),
-            wgsl_vec4(p.b),
-            wgsl_vec4(p.c),
-            p.tag
-        );
-    }
-    code += "    return best;\n}\n";
     let records: Vec<String> = prims
         .iter()
         .map(|p| {
@@ -309,6 +296,13 @@ pub fn baked_primitives(scene: &crate::scene::FlatScene) -> Option<String> {
             )
         })
         .collect();
+    for (i, (p, record)) in prims.iter().zip(&records).enumerate() {
+        code += &format!(
+            "    best = closer_hit(best, {i}u, intersect_local({record}, {}u, ray, best.t));\n",
+            p.tag
+        );
+    }
+    code += "    return best;\n}\n";
     code += &record_lookup("primitive_record", "Primitive", &records);
     Some(code)
 }
