@@ -523,7 +523,7 @@ pub fn loop_iterations(scene: &FlatScene, paths: bool) -> u64 {
 
 /// Loop iterations of one ray's closest-hit search that grow with the scene.
 fn ray_loop_iterations(scene: &FlatScene) -> u64 {
-    if scene.use_bvh || super::shader::baked_primitives(scene).is_some() {
+    if scene.use_bvh || super::shader::bakes_primitives(scene) {
         0
     } else {
         scene.primitives.len() as u64 + 1

@@ -255,6 +255,18 @@ fn wgsl_vec4(v: [f32; 4]) -> String {
     format!("vec4<f32>({})", c.join(", "))
 }
 
+/// Whether [`baked_primitives`] writes the scene's primitives into its shader.
+pub fn bakes_primitives(scene: &crate::scene::FlatScene) -> bool {
+    use crate::scene::records as r;
+    let prims = &scene.primitives;
+    scene.specialize
+        && scene.baked_records
+        && !scene.use_bvh
+        && !prims.is_empty()
+        && prims.len() <= BAKED_PRIMITIVES_MAX
+        && prims.iter().all(|p| p.flags & r::PRIM_FLAG_TRANSFORM == 0)
+}
+
 /// The code generated for a small scene (`BAKED_PRIMITIVES`): `intersect_baked`, the
 /// closest-hit search with every primitive's record written into the shader as a
 /// constant, tested in index order as the CPU's loop does. llvmpipe loads a record from a
@@ -264,17 +276,10 @@ fn wgsl_vec4(v: [f32; 4]) -> String {
 /// scene has a BVH, a transformed primitive, more than [`BAKED_PRIMITIVES_MAX`]
 /// primitives, is not specialized, or was loaded with `--no-baked-records`.
 pub fn baked_primitives(scene: &crate::scene::FlatScene) -> Option<String> {
-    use crate::scene::records as r;
-    let prims = &scene.primitives;
-    if !scene.specialize
-        || !scene.baked_records
-        || scene.use_bvh
-        || prims.is_empty()
-        || prims.len() > BAKED_PRIMITIVES_MAX
-        || prims.iter().any(|p| p.flags & r::PRIM_FLAG_TRANSFORM != 0)
-    {
+    if !bakes_primitives(scene) {
         return None;
     }
+    let prims = &scene.primitives;
     let mut code = format!(
         "// The scene's {} primitives as constants (gpu::shader::baked_primitives).\n\
          fn intersect_baked(ray: Ray, t_max: f32) -> Candidate {{\n    \
