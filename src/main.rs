@@ -317,43 +317,39 @@ fn features(path: &Path) -> anyhow::Result<()> {
             if defines.contains(d) { "yes" } else { "-" }
         );
     }
-    let uniform: Vec<String> = wgtrace::gpu::shader::UNIFORM_DEFINES
-        .iter()
-        .filter(|(d, _)| defines.contains(*d))
-        .map(|(d, _)| d.trim_start_matches("UNIFORM_").to_ascii_lowercase())
-        .collect();
-    println!(
-        "uniform records: {}",
-        if uniform.is_empty() {
+    let wgsl = trace_shader(&spec)?;
+    let bound = used_bindings("trace", &wgsl, "main", 0)?;
+    // a list, or "none"
+    let listed = |names: Vec<String>| {
+        if names.is_empty() {
             "none".to_string()
         } else {
-            uniform.join(", ")
+            names.join(", ")
         }
-    );
-    let size = |d| -> anyhow::Result<(usize, usize, usize)> {
-        let wgsl = trace_shader(d)?;
-        let bindings = used_bindings("trace", &wgsl, "main", 0)?.len();
-        Ok((wgsl.len(), wgsl.lines().count(), bindings))
     };
-    let baked: Vec<&str> = [
+    // the record arrays the shader binds as uniform buffers (not those written into it)
+    let uniform = wgtrace::gpu::shader::UNIFORM_DEFINES
+        .iter()
+        .filter(|(d, binding)| defines.contains(*d) && bound.contains(binding))
+        .map(|(d, _)| d.trim_start_matches("UNIFORM_").to_ascii_lowercase())
+        .collect();
+    println!("uniform records: {}", listed(uniform));
+    let baked = [
         ("BAKED_PRIMITIVES", "primitives"),
         ("BAKED_MATERIALS", "materials"),
         ("BAKED_EMITTERS", "emitters"),
     ]
     .iter()
     .filter(|(d, _)| defines.contains(*d))
-    .map(|&(_, name)| name)
+    .map(|&(_, name)| name.to_string())
     .collect();
-    println!(
-        "records written into the shader: {}",
-        if baked.is_empty() {
-            "none".to_string()
-        } else {
-            baked.join(", ")
-        }
-    );
-    let (sb, sl, sn) = size(&spec)?;
-    let (fb, fl, fn_) = size(&all.into())?;
+    println!("records written into the shader: {}", listed(baked));
+    let size = |wgsl: &str| -> anyhow::Result<(usize, usize, usize)> {
+        let bindings = used_bindings("trace", wgsl, "main", 0)?.len();
+        Ok((wgsl.len(), wgsl.lines().count(), bindings))
+    };
+    let (sb, sl, sn) = size(&wgsl)?;
+    let (fb, fl, fn_) = size(&trace_shader(&all.into())?)?;
     println!(
         "trace shader: specialized {sb} bytes, {sl} lines, {sn} bindings; \
          full {fb} bytes, {fl} lines, {fn_} bindings"
