@@ -1,5 +1,6 @@
-// Kernels for tests. `main`: one ray per invocation through the closest-hit search and
-// surface_at, reporting everything the CPU reference computes for the same ray.
+// Kernels for tests. `main`: one ray per invocation through the closest-hit search,
+// surface_at and the shadow-ray search, reporting everything the CPU reference computes for
+// the same ray.
 // `textures_main`: one texture look-up per invocation. Group 0 is the scene, as in
 // trace.wgsl; group 1 holds each kernel's inputs and results.
 #import shared/bindings
@@ -16,7 +17,8 @@ struct KernelHit {
     t: f32,
     prim: u32,
     front_face: u32,
-    pad: u32,
+    // occluded(ray, FAR) in bit 0, occluded(ray, 0.999 t) in bit 1
+    occluded: u32,
     // hit point, .w = error bound
     p: vec4<f32>,
     ng: vec4<f32>,
@@ -36,7 +38,8 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let ray = Ray(rays[i].origin.xyz, rays[i].dir.xyz);
     let cand = intersect_scene(ray, FAR);
-    var out = KernelHit(cand.t, cand.prim, 0u, 0u, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    let occ = select(0u, 1u, occluded(ray, FAR)) | select(0u, 2u, occluded(ray, 0.999 * cand.t));
+    var out = KernelHit(cand.t, cand.prim, 0u, occ, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
     if (cand.prim != NO_HIT) {
         let h = surface_at(ray, cand);
         out.front_face = select(0u, 1u, h.front_face);

@@ -1,14 +1,15 @@
 //! The GPU intersection kernel against the CPU reference, ray by ray: for each primitive
 //! type (and transformed and mesh variants), a batch of rays aimed at the object and rays
 //! started inside it go through the GPU's closest-hit search and surface_at in one small
-//! dispatch, and every field is compared with the CPU functions of the same names. The BVH
-//! and brute force give the same hits on the GPU too.
+//! dispatch, and every field is compared with the CPU functions of the same names, the
+//! shadow-ray search (`occluded`) included. The BVH and brute force give the same hits on
+//! the GPU too.
 
 mod common;
 
 use glam::{Vec3, Vec4};
 use wgtrace::cpu::bindings::Bindings;
-use wgtrace::cpu::intersect::{intersect_scene, surface_at};
+use wgtrace::cpu::intersect::{intersect_scene, occluded, surface_at};
 use wgtrace::cpu::types::{Ray, FAR, NO_HIT};
 use wgtrace::gpu::kernel::intersect_rays;
 use wgtrace::scene::records::{KernelHit, KernelRay};
@@ -73,6 +74,7 @@ fn cpu_hit(scene: &FlatScene, r: &Ray) -> KernelHit {
     let mut out = KernelHit {
         t: c.t,
         prim: c.prim,
+        occluded: occluded(&b, r, FAR) as u32 | (occluded(&b, r, 0.999 * c.t) as u32) << 1,
         ..Default::default()
     };
     if c.prim != NO_HIT {
@@ -97,6 +99,15 @@ fn uv_distance(a: f32, b: f32) -> f32 {
 fn agree(g: &KernelHit, c: &KernelHit) -> Result<(), String> {
     if g.prim != c.prim {
         return Err(format!("prim {} vs {}", g.prim, c.prim));
+    }
+    // a shadow ray to infinity is blocked exactly when there is a hit, and nothing lies
+    // before the closest hit (0.999 t: at t itself, rounding decides)
+    let expected = (c.prim != NO_HIT) as u32;
+    if g.occluded != expected || c.occluded != expected {
+        return Err(format!(
+            "occluded {:#b} (gpu) and {:#b} (cpu), expected {expected:#b}",
+            g.occluded, c.occluded
+        ));
     }
     if c.prim == NO_HIT {
         return Ok(());

@@ -108,6 +108,10 @@ fn env_pdf(d: vec3<f32>) -> f32 {
 
 // The index of the light whose CDF interval holds u: the first with u < cdf.
 fn choose_light(u: f32) -> u32 {
+#ifdef BAKED_EMITTERS
+    // a few lights written into the shader (gpu::shader::baked_records)
+    return choose_light_baked(u);
+#else
     var lo = 0u;
     var hi = params.num_emitters - 1u;
     while (lo < hi) {
@@ -119,6 +123,7 @@ fn choose_light(u: f32) -> u32 {
         }
     }
     return lo;
+#endif
 }
 
 // A direction toward a light from a reference point.

@@ -330,6 +330,13 @@ pub fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f3
     FAR
 }
 
+/// Whether anything lies along the ray before t_max (a shadow ray). The shader's twin
+/// searches a small scene's primitives for any hit rather than the closest; the answer is
+/// the same.
+pub fn occluded(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
+    intersect_scene(b, ray, t_max).prim != NO_HIT
+}
+
 /// Closest hit along the ray before t_max: planes, then the BVH in order (or every
 /// primitive).
 pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {

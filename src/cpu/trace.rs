@@ -4,7 +4,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use super::bindings::Bindings;
-use super::intersect::{intersect_scene, surface_at};
+use super::intersect::{intersect_scene, occluded, surface_at};
 use super::lights::{
     background_radiance, light_pdf, light_pdf_total, power_heuristic, sample_light,
 };
@@ -114,7 +114,7 @@ pub fn direct_light(
         shadow.dir = v / t_max;
         le
     };
-    if intersect_scene(b, &shadow, t_max).prim != NO_HIT {
+    if occluded(b, &shadow, t_max) {
         return Vec3::ZERO;
     }
     let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, pdf_dir));

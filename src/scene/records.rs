@@ -306,15 +306,17 @@ pub struct KernelRay {
     pub dir: [f32; 4],
 }
 
-/// What the intersection kernel reports for one ray: the closest-hit search and the
-/// shading record (`prim` = `NO_HIT` on a miss, the rest then zero).
+/// What the intersection kernel reports for one ray: the closest-hit search, the shading
+/// record (`prim` = `NO_HIT` on a miss, the rest then zero) and the shadow-ray search.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct KernelHit {
     pub t: f32,
     pub prim: u32,
     pub front_face: u32,
-    pub pad: u32,
+    /// `occluded(ray, FAR)` in bit 0, `occluded(ray, 0.999 t)` (anything well before the
+    /// closest hit) in bit 1.
+    pub occluded: u32,
     /// Hit point, `.w` = error bound.
     pub p: [f32; 4],
     pub ng: [f32; 4],
@@ -442,7 +444,7 @@ pub fn record_layouts() -> Vec<RecordLayout> {
             t,
             prim,
             front_face,
-            pad,
+            occluded,
             p,
             ng,
             ns,
