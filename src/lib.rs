@@ -7,6 +7,7 @@
 pub mod checkpoint;
 pub mod converge;
 pub mod cpu;
+pub mod gallery;
 pub mod gpu;
 pub mod image_io;
 pub mod render;

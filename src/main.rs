@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use wgtrace::checkpoint::Checkpoint;
 use wgtrace::gpu::GpuError;
 use wgtrace::image_io::{check_writable, probe_writable, write_error_map, write_image};
-use wgtrace::render::{render_from, Accumulation, StopRule, Stopped};
+use wgtrace::render::{render_from, render_progressive, Accumulation, StopRule, Stopped};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::{BackendChoice, Engine, Overrides};
 
@@ -39,6 +39,17 @@ enum Command {
         /// Scene file (TOML).
         scene: PathBuf,
     },
+    /// Check scene files without rendering them: parse, validate every value, load their
+    /// textures and meshes, build the BVH, and assemble and validate the shader each would
+    /// use. Prints a summary per scene; exits non-zero if any scene has a problem.
+    Validate {
+        /// Scene files (TOML).
+        #[arg(required = true)]
+        scenes: Vec<PathBuf>,
+    },
+    /// Render the README's gallery: every scene of `wgtrace::gallery::ENTRIES` to
+    /// OUT/NAME.png, then the gallery table of the README with each render time.
+    Gallery(GalleryArgs),
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
     /// Combine checkpoints of one scene rendered over disjoint sample ranges
@@ -55,6 +66,27 @@ enum Command {
         #[arg(long, value_name = "PATH")]
         checkpoint: Option<PathBuf>,
     },
+}
+
+#[derive(clap::Args)]
+struct GalleryArgs {
+    /// Folder for the images.
+    #[arg(long, default_value = "docs/gallery")]
+    out: PathBuf,
+    /// README whose gallery block (between its two gallery comment lines) is rewritten.
+    #[arg(long, default_value = "README.md")]
+    readme: PathBuf,
+    /// Render only these images (names as in the table, e.g. `--only box --only sky`); the
+    /// README is then left alone.
+    #[arg(long, value_name = "NAME")]
+    only: Vec<String>,
+    /// Samples per pixel for every image instead of each entry's own (quick looks); the
+    /// README is then left alone.
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Which Vulkan adapter (index from `wgtrace info`).
+    #[arg(long, default_value_t = 0)]
+    adapter: usize,
 }
 
 #[derive(clap::Args)]
@@ -242,6 +274,8 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args),
         Command::Converge(args) => converge(args),
         Command::Features { scene } => features(&scene),
+        Command::Validate { scenes } => validate(&scenes),
+        Command::Gallery(args) => gallery(args),
         Command::Info => info(),
         Command::Merge {
             checkpoints,
@@ -288,6 +322,131 @@ fn merge(inputs: &[PathBuf], output: &Path, checkpoint: Option<&Path>) -> anyhow
         ranges.join(","),
         parts.len()
     );
+    Ok(())
+}
+
+fn validate(paths: &[PathBuf]) -> anyhow::Result<()> {
+    use wgtrace::gpu::shader::{scene_shader, trace_shader, validate};
+    let mut failed = 0;
+    for path in paths {
+        let checked = wgtrace::load_scene(path, &Overrides::default())
+            .map_err(anyhow::Error::from)
+            .and_then(|scene| {
+                let wgsl = trace_shader(&scene_shader(&scene))?;
+                validate("trace", &wgsl)?;
+                Ok(scene)
+            });
+        match checked {
+            Ok(scene) => println!(
+                "{}: ok: {} x {}, {} spp, max depth {}; primitives {}, materials {}, \
+                 textures {}, lights {}{}",
+                path.display(),
+                scene.width,
+                scene.height,
+                scene.spp,
+                scene.max_depth,
+                scene.primitives.len(),
+                scene.materials.len(),
+                scene.textures.len(),
+                scene.emitters.len(),
+                if scene.use_bvh { ", BVH" } else { "" }
+            ),
+            Err(e) => {
+                failed += 1;
+                eprintln!("error: {e:#}");
+            }
+        }
+    }
+    if failed > 0 {
+        anyhow::bail!("{failed} of {} scenes have problems", paths.len());
+    }
+    Ok(())
+}
+
+fn gallery(args: GalleryArgs) -> anyhow::Result<()> {
+    use wgtrace::gallery::{readme_block, replace_block, Rendered, ENTRIES, GALLERY_SPP};
+    let unknown: Vec<&String> = args
+        .only
+        .iter()
+        .filter(|n| !ENTRIES.iter().any(|e| e.name == n.as_str()))
+        .collect();
+    if !unknown.is_empty() {
+        let names: Vec<&str> = ENTRIES.iter().map(|e| e.name).collect();
+        anyhow::bail!(
+            "no gallery image {unknown:?}; the images are: {}",
+            names.join(", ")
+        );
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let mut rendered = Vec::new();
+    let mut device = String::new();
+    for e in ENTRIES
+        .iter()
+        .filter(|e| args.only.is_empty() || args.only.iter().any(|n| n == e.name))
+    {
+        if let Some((file, cargo_args)) = e.generated {
+            if !Path::new(file).exists() {
+                println!(
+                    "{file} is missing; writing it: cargo {}",
+                    cargo_args.join(" ")
+                );
+                let status = std::process::Command::new("cargo")
+                    .args(cargo_args)
+                    .status()
+                    .with_context(|| format!("running cargo to write {file}"))?;
+                anyhow::ensure!(status.success(), "cargo {} failed", cargo_args.join(" "));
+            }
+        }
+        let overrides = Overrides {
+            spp: Some(args.spp.or(e.spp).unwrap_or(GALLERY_SPP)),
+            sampler: e.sampler,
+            ..Default::default()
+        };
+        let scene = wgtrace::load_scene(Path::new(e.scene), &overrides)?;
+        // a first, one-sample render compiles the shader (lavapipe compiles at the first
+        // dispatch), so the time is the render's alone
+        let mut warm = scene.clone();
+        warm.spp = 1;
+        let no_report = |_: &_, _: &mut Engine| Ok::<(), GpuError>(());
+        render_progressive(&mut Engine::gpu(&warm, args.adapter)?, &warm, no_report)?;
+        let mut engine = Engine::gpu(&scene, args.adapter)?;
+        device = engine.name();
+        let progress = render_progressive(&mut engine, &scene, no_report)?;
+        let acc = engine.accumulation()?;
+        let output = args.out.join(format!("{}.png", e.name));
+        write_image(&output, scene.width, scene.height, &acc.to_rgb())?;
+        let seconds = progress.elapsed.as_secs_f64();
+        println!(
+            "{}: {} x {}, {} spp, {seconds:.2} s, {} non-finite",
+            output.display(),
+            scene.width,
+            scene.height,
+            scene.spp,
+            acc.non_finite()
+        );
+        rendered.push(Rendered {
+            entry: *e,
+            width: scene.width,
+            height: scene.height,
+            spp: scene.spp,
+            seconds,
+        });
+    }
+    if !args.only.is_empty() || args.spp.is_some() {
+        println!("{} left alone (a partial gallery)", args.readme.display());
+        return Ok(());
+    }
+    let readme = std::fs::read_to_string(&args.readme)
+        .with_context(|| format!("reading {}", args.readme.display()))?;
+    let base = args.readme.parent().unwrap_or(Path::new(""));
+    let dir = args.out.strip_prefix(base).unwrap_or(&args.out);
+    let block = readme_block(&rendered, &device, &dir.to_string_lossy());
+    let updated = replace_block(&readme, &block)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.readme.display()))?;
+    std::fs::write(&args.readme, updated)
+        .with_context(|| format!("writing {}", args.readme.display()))?;
+    println!("{}: gallery table written", args.readme.display());
     Ok(())
 }
 
