@@ -19,7 +19,15 @@ use wgtrace::{BackendChoice, Engine, Overrides};
     name = "wgtrace",
     version,
     about = "Headless path tracer: TOML scene in, PNG/EXR/PPM out, on any Vulkan GPU \
-             (or lavapipe) with a CPU reference"
+             (or lavapipe) with a CPU reference",
+    after_help = "Examples:\n  \
+        wgtrace render scenes/cornell.toml -o cornell.png\n  \
+        wgtrace render scenes/sky.toml --spp 1024 --time-limit 60 -o sky.exr\n  \
+        wgtrace render scenes/cornell.toml --backend cpu --sampler jittered -o cpu.png\n  \
+        wgtrace validate scenes/*.toml\n  \
+        wgtrace converge scenes/cornell.toml --spp-max 64 --out study\n\n\
+        Every key of a scene file: docs/scene-format.md. `wgtrace COMMAND --help` \
+        describes each command's options."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -47,8 +55,9 @@ enum Command {
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
     },
-    /// Render the README's gallery: every scene of `wgtrace::gallery::ENTRIES` to
-    /// OUT/NAME.png, then the gallery table of the README with each render time.
+    /// Render the README's gallery (every scene of scenes/, and the Cornell box with each
+    /// pixel sampler) to OUT/NAME.png, then rewrite the README's gallery table with each
+    /// render time. Run it from the repository root.
     Gallery(GalleryArgs),
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
@@ -845,4 +854,44 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     }
     println!("{summary}");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// `wgtrace --help` and each command's help describe every command, option and value.
+    #[test]
+    fn every_command_option_and_value_has_help() {
+        let cli = Cli::command();
+        cli.clone().debug_assert();
+        assert!(cli.get_after_help().is_some());
+        for sub in cli.get_subcommands() {
+            let name = sub.get_name();
+            assert!(sub.get_about().is_some(), "`wgtrace {name}` has no help");
+            for arg in sub.get_arguments() {
+                let id = arg.get_id().as_str();
+                if id == "help" {
+                    continue;
+                }
+                assert!(
+                    arg.get_help().is_some(),
+                    "`wgtrace {name}`: {id} has no help"
+                );
+                let values = if arg.get_action().takes_values() {
+                    arg.get_possible_values()
+                } else {
+                    Vec::new()
+                };
+                for value in values {
+                    assert!(
+                        value.get_help().is_some() || value.is_hide_set(),
+                        "`wgtrace {name}`: {id} value {} has no help",
+                        value.get_name()
+                    );
+                }
+            }
+        }
+    }
 }
