@@ -386,6 +386,16 @@ fn gallery(args: GalleryArgs) -> anyhow::Result<()> {
             names.join(", ")
         );
     }
+    // a full run rewrites the README's table: check it has one before rendering for minutes
+    let full = args.only.is_empty() && args.spp.is_none();
+    let readme = if full {
+        let text = std::fs::read_to_string(&args.readme)
+            .with_context(|| format!("reading {}", args.readme.display()))?;
+        replace_block(&text, "").map_err(|e| anyhow::anyhow!("{}: {e}", args.readme.display()))?;
+        text
+    } else {
+        String::new()
+    };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut rendered = Vec::new();
@@ -442,12 +452,10 @@ fn gallery(args: GalleryArgs) -> anyhow::Result<()> {
             seconds,
         });
     }
-    if !args.only.is_empty() || args.spp.is_some() {
+    if !full {
         println!("{} left alone (a partial gallery)", args.readme.display());
         return Ok(());
     }
-    let readme = std::fs::read_to_string(&args.readme)
-        .with_context(|| format!("reading {}", args.readme.display()))?;
     let base = args.readme.parent().unwrap_or(Path::new(""));
     let dir = args.out.strip_prefix(base).unwrap_or(&args.out);
     let block = readme_block(&rendered, &device, &dir.to_string_lossy());

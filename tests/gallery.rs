@@ -74,7 +74,7 @@ fn the_gallery_block_is_replaced_between_its_markers_only() {
 }
 
 #[test]
-fn gallery_renders_the_chosen_images_and_leaves_the_readme_alone() {
+fn gallery_renders_the_chosen_images_leaves_the_readme_alone_and_checks_it_first() {
     let dir = common::tmp_dir("gallery-only");
     let out = dir.display().to_string();
     let o = wgtrace(&["gallery", "--only", "plane", "--spp", "1", "--out", &out]);
@@ -89,6 +89,24 @@ fn gallery_renders_the_chosen_images_and_leaves_the_readme_alone() {
     assert!(
         stderr.contains("nope") && stderr.contains("showcase"),
         "{stderr}"
+    );
+    // a full run checks the README's markers before it renders anything
+    let readme = dir.join("README.md");
+    std::fs::write(&readme, "# no gallery here\n").unwrap();
+    let full_out = dir.join("full");
+    let o = wgtrace(&[
+        "gallery",
+        "--readme",
+        &readme.display().to_string(),
+        "--out",
+        &full_out.display().to_string(),
+    ]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(stderr.contains(README_START), "{stderr}");
+    assert!(
+        !full_out.exists(),
+        "images were rendered before the README was checked"
     );
 }
 
