@@ -98,23 +98,6 @@ pub struct Config {
     pub max_depth: Option<u32>,
 }
 
-fn sampler_name(s: SamplerKind) -> &'static str {
-    match s {
-        SamplerKind::Random => "random",
-        SamplerKind::Jittered => "jittered",
-        SamplerKind::Hammersley => "hammersley",
-        SamplerKind::Sobol => "sobol",
-    }
-}
-
-fn strategy_name(s: LightSampling) -> &'static str {
-    match s {
-        LightSampling::Bsdf => "bsdf",
-        LightSampling::Mixture => "mixture",
-        LightSampling::Mis => "mis",
-    }
-}
-
 impl Config {
     /// `sampler:strategy` or `sampler:strategy:depth`, e.g. `sobol:mis` or `random:bsdf:4`.
     pub fn parse(s: &str) -> Result<Config, String> {
@@ -178,11 +161,7 @@ impl Config {
 
     /// The name used in tables, plots and `--configs`.
     pub fn label(&self) -> String {
-        let mut s = format!(
-            "{}:{}",
-            sampler_name(self.sampler),
-            strategy_name(self.strategy)
-        );
+        let mut s = format!("{}:{}", self.sampler.name(), self.strategy.name());
         if let Some(d) = self.max_depth {
             let _ = write!(s, ":{d}");
         }

@@ -207,7 +207,7 @@ pub fn readme_block(rendered: &[Rendered], device: &str, image_dir: &str) -> Str
     for r in rendered {
         let e = &r.entry;
         let sampler = match e.sampler {
-            Some(kind) => format!(" `--sampler {}`", sampler_name(kind)),
+            Some(kind) => format!(" `--sampler {}`", kind.name()),
             None => String::new(),
         };
         s += &format!(
@@ -217,16 +217,6 @@ pub fn readme_block(rendered: &[Rendered], device: &str, image_dir: &str) -> Str
         );
     }
     s + "\n" + README_END
-}
-
-/// The sampler's name in scene files and on the command line.
-pub fn sampler_name(kind: SamplerKind) -> &'static str {
-    match kind {
-        SamplerKind::Random => "random",
-        SamplerKind::Jittered => "jittered",
-        SamplerKind::Hammersley => "hammersley",
-        SamplerKind::Sobol => "sobol",
-    }
 }
 
 /// `readme` with its gallery block (from [`README_START`] to [`README_END`]) replaced by

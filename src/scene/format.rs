@@ -68,6 +68,29 @@ pub enum SamplerKind {
     Sobol,
 }
 
+impl LightSampling {
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSampling::Bsdf => "bsdf",
+            LightSampling::Mixture => "mixture",
+            LightSampling::Mis => "mis",
+        }
+    }
+}
+
+impl SamplerKind {
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Random => "random",
+            SamplerKind::Jittered => "jittered",
+            SamplerKind::Hammersley => "hammersley",
+            SamplerKind::Sobol => "sobol",
+        }
+    }
+}
+
 impl Default for RenderDesc {
     fn default() -> Self {
         Self {
