@@ -13,7 +13,7 @@ use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use wgtrace::scene::bvh::{self, Aabb};
-use wgtrace::{Engine, FlatScene, Overrides};
+use wgtrace::{Engine, FlatScene, Overrides, Session, SessionOptions, StopRule, Tuning};
 
 /// Triangle counts asked of the generator (2 N^2 for an N x N grid).
 const SIZES: [u64; 4] = [1_000, 10_000, 100_000, 1_000_000];
@@ -55,17 +55,28 @@ fn scene_text(mesh: &Path) -> String {
     )
 }
 
-/// Samples per second of `engine` on `scene`: one warm-up pass, then passes until MIN_TIME.
-fn samples_per_second(engine: &mut Engine, scene: &FlatScene) -> f64 {
-    engine.render_pass(0).expect("warm-up pass");
-    let start = Instant::now();
-    let mut passes = 0u32;
-    while passes == 0 || start.elapsed() < MIN_TIME {
-        passes += 1;
-        engine.render_pass(passes).expect("pass");
-    }
-    (passes as u64 * scene.width as u64 * scene.height as u64) as f64
-        / start.elapsed().as_secs_f64()
+/// Samples per second of `engine` on `scene` in a session: one warm-up pass, then passes
+/// for MIN_TIME.
+fn samples_per_second(engine: Engine, scene: &FlatScene) -> f64 {
+    let opts = SessionOptions {
+        passes: wgtrace::session::Passes::Uncapped,
+        ..Default::default()
+    };
+    let mut session = Session::with_engine(scene.clone(), engine, opts).expect("session");
+    let warm = StopRule {
+        until: Some(1),
+        ..Default::default()
+    };
+    session.run(&warm, |_| {}).expect("warm-up pass");
+    let timed = StopRule {
+        time_limit: Some(MIN_TIME),
+        ..Default::default()
+    };
+    session
+        .run(&timed, |_| {})
+        .expect("passes")
+        .progress
+        .samples_per_second()
 }
 
 struct Row {
@@ -76,7 +87,7 @@ struct Row {
     nodes: usize,
     depth: u32,
     /// GPU and CPU, with and without the BVH, in samples per second; None where the GPU
-    /// refuses the work (llvmpipe's loop limit, see `gpu::render::LLVMPIPE_LOOP_LIMIT`).
+    /// refuses the work (llvmpipe's loop limit, see `gpu::limits::LLVMPIPE_LOOP_LIMIT`).
     rates: [Option<f64>; 4],
 }
 
@@ -86,14 +97,13 @@ fn main() {
     for &n in &SIZES {
         let path = mesh(n);
         let src = scene_text(&path);
-        let load = |no_bvh| {
-            wgtrace::load_scene_str(
+        let load = |no_bvh: bool| {
+            let knobs = if no_bvh { "no-bvh" } else { "" };
+            wgtrace::scene::load_scene_str(
                 &src,
                 Path::new("bench.toml"),
-                &Overrides {
-                    no_bvh,
-                    ..Default::default()
-                },
+                &Overrides::default(),
+                Tuning::parse(knobs).unwrap().build(),
             )
             .expect("bench scene")
         };
@@ -119,14 +129,14 @@ fn main() {
         let mut rates = [None; 4];
         for (k, scene) in [&with, &without].into_iter().enumerate() {
             match Engine::gpu(scene, 0) {
-                Ok(mut gpu) => {
+                Ok(gpu) => {
                     device = gpu.name();
-                    rates[k] = Some(samples_per_second(&mut gpu, scene));
+                    rates[k] = Some(samples_per_second(gpu, scene));
                 }
                 Err(e @ wgtrace::gpu::GpuError::LoopLimit { .. }) => eprintln!("GPU: {e}"),
                 Err(e) => panic!("the benchmark needs a Vulkan adapter: {e}"),
             }
-            rates[2 + k] = Some(samples_per_second(&mut Engine::cpu(scene), scene));
+            rates[2 + k] = Some(samples_per_second(Engine::cpu(scene), scene));
         }
         let row = Row {
             triangles: with.primitives.len(),
@@ -228,7 +238,7 @@ fn report(rows: &[Row], device: &str) -> String {
          counted over all loops together, and then silently ends them, so brute force over \
          more primitives than that (times max_depth) cannot run there; the renderer refuses \
          it (`GpuError::LoopLimit`) instead of returning a wrong image.",
-        wgtrace::gpu::render::LLVMPIPE_LOOP_LIMIT
+        wgtrace::gpu::limits::LLVMPIPE_LOOP_LIMIT
     );
     s
 }

@@ -16,8 +16,8 @@ use std::process::Command;
 use std::time::Instant;
 
 use wgtrace::converge::rel_mse;
+use wgtrace::gpu::bindings::{Slot, UNIFORM_BYTES};
 use wgtrace::gpu::render::{ACCUM_BYTES_PER_PIXEL, MAX_DISPATCHES_PER_SUBMISSION, MAX_TILE_PIXELS};
-use wgtrace::gpu::shader::{UNIFORM_BYTES, UNIFORM_DEFINES};
 use wgtrace::scene::textures::load_image;
 
 const ROUNDS: usize = 3;
@@ -270,45 +270,37 @@ fn adapter_line() -> String {
         .unwrap_or_else(|| "an unknown adapter".into())
 }
 
-/// The optimization toggles, cumulative: (label, flags).
+/// The optimization toggles, cumulative: (label, `--tune` knobs turned off).
 fn variants() -> Vec<(&'static str, Vec<&'static str>)> {
+    let tuned = |knobs: &'static str| -> Vec<&'static str> {
+        if knobs.is_empty() {
+            Vec::new()
+        } else {
+            vec!["--tune", knobs]
+        }
+    };
     vec![
         (
             "before: storage buffers, BVH, no Russian roulette",
-            vec![
-                "--no-uniform-records",
-                "--bvh",
-                "--no-russian-roulette",
-                "--no-baked-records",
-                "--no-sample-groups",
-            ],
+            tuned("no-uniform-records,bvh,no-russian-roulette,no-baked-records,no-sample-groups"),
         ),
         (
             "+ uniform-buffer records",
-            vec![
-                "--bvh",
-                "--no-russian-roulette",
-                "--no-baked-records",
-                "--no-sample-groups",
-            ],
+            tuned("bvh,no-russian-roulette,no-baked-records,no-sample-groups"),
         ),
         (
             "+ plain loop for small scenes",
-            vec![
-                "--no-russian-roulette",
-                "--no-baked-records",
-                "--no-sample-groups",
-            ],
+            tuned("no-russian-roulette,no-baked-records,no-sample-groups"),
         ),
         (
             "+ Russian roulette",
-            vec!["--no-baked-records", "--no-sample-groups"],
+            tuned("no-baked-records,no-sample-groups"),
         ),
         (
             "+ records written into the shader",
-            vec!["--no-sample-groups"],
+            tuned("no-sample-groups"),
         ),
-        ("+ sample groups (all kept)", vec![]),
+        ("+ sample groups (all kept)", tuned("")),
     ]
 }
 
@@ -451,14 +443,21 @@ fn optimizations(md: &mut String, dir: &Path, scene: &Path) {
     let _ = writeln!(
         md,
         "## What each optimization gave\n\nCornell (`bench/cornell.toml`) at 256 x 256, 16 \
-         spp, on lavapipe, each optimization added to the ones above it (the flags turn \
-         each back off). Russian roulette adds noise, so its row also gives relMSE x \
+         spp, on lavapipe, each optimization added to the ones above it (the `--tune` \
+         knobs turn each back off). Russian roulette adds noise, so its row also gives relMSE x \
          seconds against a 256-spp render without it (lower is better).\n"
     );
     let reference = dir.join("opt-ref.exr");
     wgtrace(
         scene,
-        &["--spp", "256", "--seed", "77", "--no-russian-roulette"],
+        &[
+            "--spp",
+            "256",
+            "--seed",
+            "77",
+            "--tune",
+            "no-russian-roulette",
+        ],
         &reference,
     );
     let reference = rgb(&reference);
@@ -679,7 +678,7 @@ fn memory(md: &mut String, dir: &Path, scene: &Path) {
         let per_pixel = ACCUM_BYTES_PER_PIXEL as f64;
         let band = pixels.min(MAX_TILE_PIXELS as f64);
         let params = MAX_DISPATCHES_PER_SUBMISSION as f64 * 256.0;
-        let records = UNIFORM_DEFINES.len() as f64 * UNIFORM_BYTES as f64;
+        let records = Slot::RECORDS.len() as f64 * UNIFORM_BYTES as f64;
         let gpu = (per_pixel * (pixels + band) + params + records) / (1u64 << 20) as f64;
         let _ = writeln!(
             md,

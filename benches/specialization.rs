@@ -1,5 +1,5 @@
 //! Specialization benchmark: for every scene in `scenes/`, the trace shader specialized to
-//! the scene's features against the full shader (`--no-specialize`), side by side in one
+//! the scene's features against the full shader (`--tune no-specialize`), side by side in one
 //! run on the first Vulkan adapter: shader size, bindings bound, pipeline compile time, time
 //! to the first image, and samples per second. Then what the caches on disk give a second
 //! process. Writes `docs/specialization.md`.
@@ -13,9 +13,10 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-use wgtrace::gpu::shader::{scene_defines, scene_shader, FEATURE_DEFINES};
+use wgtrace::gpu::plan::{scene_features, Feature, GpuPlan};
 use wgtrace::gpu::{GpuContext, GpuRenderer};
-use wgtrace::{FlatScene, Overrides};
+use wgtrace::session::Passes;
+use wgtrace::{FlatScene, Overrides, Session, SessionOptions, StopRule, Tuning};
 
 /// Image width of every measurement (height keeps the scene's aspect).
 const WIDTH: u32 = 128;
@@ -64,33 +65,51 @@ fn child(scene_path: &Path, full: bool) {
     let ctx = GpuContext::shared(0)
         .unwrap_or_else(|e| panic!("the benchmark needs a Vulkan adapter: {e}"));
     let open = start.elapsed().as_secs_f64();
-    let scene = load(scene_path, full);
+    let scene = load(scene_path);
+    let tuning = if full {
+        Tuning::parse("no-specialize").unwrap()
+    } else {
+        Tuning::default()
+    };
     let start = Instant::now();
+    let plan = GpuPlan::new(&scene, &ctx.fit(), &tuning);
     let pipeline = ctx
-        .trace_pipeline(&scene_shader(&scene))
+        .trace_pipeline(&plan.shader)
         .expect("compile the trace pipeline");
     let compile = pipeline.compile_time.as_secs_f64();
-    let mut r = GpuRenderer::new(ctx.clone(), &scene).expect("renderer");
-    r.render_pass(0).expect("first pass");
-    r.accumulation().expect("readback");
+    let session = |scene: &FlatScene| {
+        let r = GpuRenderer::new(ctx.clone(), scene, &tuning).expect("renderer");
+        let engine = wgtrace::Engine::Gpu(Box::new(r));
+        let opts = SessionOptions {
+            passes: Passes::Uncapped,
+            ..Default::default()
+        };
+        Session::with_engine(scene.clone(), engine, opts).expect("session")
+    };
+    let one = StopRule {
+        until: Some(1),
+        ..Default::default()
+    };
+    let mut s = session(&scene);
+    s.run(&one, |_| {}).expect("first pass");
     let first_image = start.elapsed().as_secs_f64();
+    // passes for MIN_TIME, in the session's own batches
+    let timed = StopRule {
+        time_limit: Some(MIN_TIME),
+        ..Default::default()
+    };
+    let rate = s
+        .run(&timed, |_| {})
+        .expect("passes")
+        .progress
+        .samples_per_second();
     let start = Instant::now();
-    let mut passes = 0u32;
-    while passes == 0 || start.elapsed() < MIN_TIME {
-        passes += 1;
-        r.render_pass(passes).expect("pass");
-    }
-    let rate = (passes as u64 * scene.width as u64 * scene.height as u64) as f64
-        / start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let mut again = GpuRenderer::new(ctx.clone(), &scene).expect("renderer");
-    again.render_pass(0).expect("pass");
-    again.accumulation().expect("readback");
+    session(&scene).run(&one, |_| {}).expect("pass");
     let second = start.elapsed().as_secs_f64();
     println!(
         "RESULT {open} {compile} {first_image} {rate} {second} {} {}",
         pipeline.shader_bytes,
-        pipeline.bindings.len()
+        pipeline.slots.len()
     );
 }
 
@@ -166,11 +185,8 @@ struct Row {
     full: Measure,
 }
 
-fn short(define: &str) -> String {
-    define.trim_start_matches("HAS_").to_ascii_lowercase()
-}
-
-fn load(path: &Path, full: bool) -> FlatScene {
+/// The scene at [`WIDTH`].
+fn load(path: &Path) -> FlatScene {
     let probe = wgtrace::load_scene(path, &Overrides::default()).expect("scene");
     let height = ((WIDTH as f64 * probe.height as f64 / probe.width as f64).round() as u32).max(1);
     wgtrace::load_scene(
@@ -178,7 +194,6 @@ fn load(path: &Path, full: bool) -> FlatScene {
         &Overrides {
             width: Some(WIDTH),
             height: Some(height),
-            no_specialize: full,
             ..Default::default()
         },
     )
@@ -196,7 +211,7 @@ fn fresh_dir(tag: &str) -> PathBuf {
 /// Every scene's rows: in each round, specialized cold then warm and full warm (in
 /// alternating order), each in its own process.
 fn scene_row(path: &Path, full_cache: &Path) -> Row {
-    let scene = load(path, false);
+    let scene = load(path);
     let mut runs: [Vec<Measure>; 3] = Default::default();
     for round in 0..ROUNDS {
         let cache = fresh_dir("scene");
@@ -215,7 +230,7 @@ fn scene_row(path: &Path, full_cache: &Path) -> Row {
         name: path.file_name().unwrap().to_string_lossy().into_owned(),
         width: scene.width,
         height: scene.height,
-        features: scene_defines(&scene).iter().map(|d| short(d)).collect(),
+        features: scene_features(&scene).iter().map(Feature::name).collect(),
         cold: medians(&runs[0]),
         warm: medians(&runs[1]),
         full: medians(&runs[2]),
@@ -274,7 +289,7 @@ fn report(rows: &[Row], full_cold: &Measure, first: &Path, device: &str, disk: b
         "Written by `cargo bench --bench specialization` on {device}. For each scene in \
          `scenes/`, at {WIDTH} pixels wide (the scene's aspect), the trace shader assembled \
          for the scene's features (*spec.*) is measured against the full shader that \
-         `--no-specialize` uses (*full*: all {} feature defines; sampler, light sampling and \
+         `--tune no-specialize` uses (*full*: all {} feature defines; sampler, light sampling and \
          BVH chosen at run time). Each figure comes from its own process, the median of \
          {ROUNDS} rounds in alternating order. *cold*: Mesa's shader cache starts empty; \
          *warm*: a second process with the cache the first one filled. Pipeline: creating \
@@ -282,7 +297,7 @@ fn report(rows: &[Row], full_cold: &Measure, first: &Path, device: &str, disk: b
          image: pipeline, upload, one sample per pixel, readback. Samples/s: the passes after \
          the first, for at least {:.1} s, one submission per pass. One run on one shared \
          machine: compare ratios within a table.\n",
-        FEATURE_DEFINES.len(),
+        Feature::ALL.len(),
         MIN_TIME.as_secs_f64()
     );
     let _ = writeln!(

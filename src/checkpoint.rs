@@ -8,18 +8,22 @@
 //! per pixel. Written to a temporary name and renamed, so a checkpoint on disk is always
 //! whole.
 
-use std::hash::{Hash, Hasher};
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
-use crate::render::Accumulation;
-use crate::scene::records::{SAMPLER_HAMMERSLEY, SAMPLER_JITTERED};
-use crate::scene::FlatScene;
+use crate::accumulation::Accumulation;
+use crate::scene::flat::FlatScene;
 
 const MAGIC: &str = "wgtrace checkpoint";
 
 /// The renderer version a checkpoint must come from.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// The checkpoint format (the `format` line of the header). 2: the scene hash is 64-bit
+/// FNV-1a ([`scene_hash`]), the same on every build. Format 1 (no `format` line) hashed
+/// with Rust's `DefaultHasher`, which a new Rust release may change, so a rebuilt binary
+/// could refuse a good checkpoint or accept a wrong one; such files are refused.
+pub const FORMAT: u32 = 2;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
@@ -85,18 +89,30 @@ pub fn parse_range(s: &str) -> Result<Range<u32>, String> {
     Ok(a..b)
 }
 
+/// 64-bit FNV-1a (Fowler, Noll, Vo; offset basis 0xcbf29ce484222325, prime 0x100000001b3)
+/// over `bytes`, continuing from `hash`: a specified hash, so the value is the same on every
+/// build and platform.
+pub fn fnv1a64(hash: u64, bytes: &[u8]) -> u64 {
+    bytes.iter().fold(hash, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// FNV-1a's offset basis: the hash of nothing.
+pub const FNV1A64_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
+
 /// A hash of everything that decides a render's samples: the records both backends read
-/// and the parameters (camera, size, seed, sampler, light sampling, depth). The sample
-/// count is left out, so a resumed render may ask for more samples, except under the
-/// Hammersley and jittered samplers, whose points depend on it.
+/// and the parameters (camera, size, seed, sampler, light sampling, depth), as their
+/// little-endian bytes, each array preceded by its length. The sample count is left out,
+/// so a resumed render may ask for more samples, except for samplers whose points depend
+/// on it (`SamplerKind::depends_on_spp`).
 pub fn scene_hash(scene: &FlatScene) -> u64 {
-    let mut h = std::collections::hash_map::DefaultHasher::new();
     let mut params = scene.params(0, scene.full_tile());
-    if params.sampler != SAMPLER_HAMMERSLEY && params.sampler != SAMPLER_JITTERED {
+    if !scene.sampler.depends_on_spp() {
         params.spp = 0;
         params.strata_log2 = 0;
     }
-    let bytes: [&[u8]; 8] = [
+    let parts: [&[u8]; 8] = [
         bytemuck::bytes_of(&params),
         bytemuck::cast_slice(&scene.primitives),
         bytemuck::cast_slice(&scene.materials),
@@ -106,10 +122,10 @@ pub fn scene_hash(scene: &FlatScene) -> u64 {
         bytemuck::cast_slice(&scene.textures),
         bytemuck::cast_slice(&scene.texels),
     ];
-    for b in bytes {
-        b.hash(&mut h);
-    }
-    h.finish()
+    parts.iter().fold(FNV1A64_BASIS, |h, part| {
+        let h = fnv1a64(h, &(part.len() as u64).to_le_bytes());
+        fnv1a64(h, part)
+    })
 }
 
 impl Checkpoint {
@@ -186,7 +202,7 @@ impl Checkpoint {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let acc = &self.accumulation;
         let mut bytes = format!(
-            "{MAGIC}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\nsamples = {}\n\n",
+            "{MAGIC}\nformat = {FORMAT}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\nsamples = {}\n\n",
             self.version,
             self.scene_hash,
             acc.width,
@@ -236,6 +252,27 @@ impl Checkpoint {
                 .parse()
                 .map_err(|_| corrupt(format!("{key} is not a number")))
         };
+        let format = match field("format") {
+            Ok(f) => f
+                .parse::<u32>()
+                .map_err(|_| corrupt("format is not a number".into()))?,
+            Err(_) => 1,
+        };
+        if format != FORMAT {
+            return Err(CheckpointError::Mismatch {
+                path: path.to_path_buf(),
+                reason: format!(
+                    "is checkpoint format {format}, this wgtrace reads format {FORMAT}{}; \
+                     render again",
+                    if format < FORMAT {
+                        " (format 1 hashed the scene with Rust's DefaultHasher, which may \
+                         change between builds, so its hash cannot be trusted)"
+                    } else {
+                        " (written by a newer wgtrace)"
+                    }
+                ),
+            });
+        }
         let scene_hash = u64::from_str_radix(field("scene_hash")?, 16)
             .map_err(|_| corrupt("scene_hash is not a hex number".into()))?;
         let (width, height) = (number("width")?, number("height")?);
@@ -274,9 +311,10 @@ impl Checkpoint {
         })
     }
 
-    /// Whether this checkpoint can continue a render of `scene` (read from `path`): same
-    /// renderer version, same scene and settings, same size, no more passes than it asks.
-    pub fn check(&self, scene: &FlatScene, path: &Path) -> Result<(), CheckpointError> {
+    /// Whether this checkpoint can continue a render of `scene` (read from `path`) that
+    /// ends before sample `end`: same renderer version, same scene and settings, same
+    /// size, no samples past the end.
+    pub fn check(&self, scene: &FlatScene, end: u32, path: &Path) -> Result<(), CheckpointError> {
         let mismatch = |reason: String| CheckpointError::Mismatch {
             path: path.to_path_buf(),
             reason,
@@ -301,11 +339,10 @@ impl Checkpoint {
                     .into(),
             ));
         }
-        let end = self.samples.last().map_or(0, |r| r.end);
-        if end > scene.spp {
+        let held = self.samples.last().map_or(0, |r| r.end);
+        if held > end {
             return Err(mismatch(format!(
-                "already holds samples up to index {end}, more than the {} asked for",
-                scene.spp
+                "already holds samples up to index {held}, more than the {end} asked for"
             )));
         }
         Ok(())

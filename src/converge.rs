@@ -10,10 +10,14 @@ use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
-use crate::gpu::GpuError;
-use crate::render::{Accumulation, BackendChoice, Engine, REL_MSE_EPSILON};
+use crate::accumulation::REL_MSE_EPSILON;
+use crate::engine::BackendChoice;
+use crate::gpu::error::GpuError;
+use crate::scene::error::SceneError;
+use crate::scene::flat::FlatScene;
 use crate::scene::format::{LightSampling, SamplerKind};
-use crate::scene::{FlatScene, Overrides};
+use crate::scene::load::Overrides;
+use crate::session::{load_scene, Finished, Session, SessionError, SessionOptions, StopRule};
 
 /// Root mean squared error over every channel of every pixel (linear RGB, same layout).
 pub fn rmse(x: &[f32], reference: &[f32]) -> f64 {
@@ -169,10 +173,10 @@ impl Config {
     }
 
     /// Whether a render's first k passes are the image a k-pass render would make, so one
-    /// render can be measured at every point of the ladder. Hammersley's points depend on
-    /// the total count (i / N), so it renders each point separately.
+    /// render can be measured at every point of the ladder; a sampler whose points depend
+    /// on the total count renders each point separately.
     fn prefix_is_a_render(&self) -> bool {
-        self.sampler != SamplerKind::Hammersley
+        !self.sampler.depends_on_spp()
     }
 }
 
@@ -238,9 +242,11 @@ pub enum Event<'a> {
 #[derive(Debug, thiserror::Error)]
 pub enum ConvergeError {
     #[error(transparent)]
-    Scene(#[from] crate::scene::SceneError),
+    Scene(#[from] SceneError),
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Session(#[from] SessionError),
     #[error(transparent)]
     Image(#[from] crate::image_io::ImageError),
     #[error("{}: {message}", path.display())]
@@ -297,7 +303,18 @@ fn run_seed(config: usize, run: u32) -> u32 {
 const REFERENCE_SEED: u32 = 0x5eed_0000;
 
 fn load(scene: &Path, overrides: &Overrides) -> Result<FlatScene, ConvergeError> {
-    Ok(crate::scene::load_scene(scene, overrides)?)
+    Ok(load_scene(scene, overrides)?)
+}
+
+/// A session rendering `scene` on `backend`, writing nothing.
+fn session(scene: FlatScene, backend: BackendChoice) -> Result<Session, ConvergeError> {
+    Ok(Session::open(
+        scene,
+        SessionOptions {
+            backend,
+            ..Default::default()
+        },
+    )?)
 }
 
 /// The reference image (linear RGB), rendered or read, and what it is.
@@ -308,20 +325,11 @@ pub fn reference(
 ) -> Result<(Vec<f32>, ReferenceInfo, PathBuf), ConvergeError> {
     let probe = load(&opts.scene, &opts.overrides)?;
     if let Some(path) = &opts.reference {
-        let img = crate::scene::textures::load_image(path).map_err(|e| file_err(path, e))?;
-        if (img.width, img.height) != (probe.width, probe.height) {
-            return Err(file_err(
-                path,
-                format!(
-                    "is {}x{}, the renders are {}x{} (set --width and --height to match)",
-                    img.width, img.height, probe.width, probe.height
-                ),
-            ));
-        }
+        let rgb = given_reference(path, &probe)?;
         let info = ReferenceInfo {
             scene: opts.scene.display().to_string(),
-            width: img.width,
-            height: img.height,
+            width: probe.width,
+            height: probe.height,
             spp: 0,
             seed: 0,
             max_depth: 0,
@@ -332,30 +340,16 @@ pub fn reference(
             est_rel_mse: 0.0,
         };
         event(Event::ReferenceReady { path, cached: true });
-        let rgb = img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
         return Ok((rgb, info, path.clone()));
     }
     let exr = opts.out.join("reference.exr");
     let meta = opts.out.join("reference.toml");
-    let wanted = |info: &ReferenceInfo| {
-        info.scene == opts.scene.display().to_string()
-            && (info.width, info.height) == (probe.width, probe.height)
-            && info.max_depth == max_depth
-            && info.spp >= opts.reference_spp
-    };
-    if let (Ok(text), true) = (std::fs::read_to_string(&meta), exr.exists()) {
-        if let Ok(info) = toml::from_str::<ReferenceInfo>(&text) {
-            if wanted(&info) {
-                let img =
-                    crate::scene::textures::load_image(&exr).map_err(|e| file_err(&exr, e))?;
-                event(Event::ReferenceReady {
-                    path: &exr,
-                    cached: true,
-                });
-                let rgb = img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
-                return Ok((rgb, info, exr));
-            }
-        }
+    if let Some((rgb, info)) = cached_reference(opts, &probe, max_depth)? {
+        event(Event::ReferenceReady {
+            path: &exr,
+            cached: true,
+        });
+        return Ok((rgb, info, exr));
     }
     let overrides = Overrides {
         spp: Some(opts.reference_spp),
@@ -366,17 +360,17 @@ pub fn reference(
         ..opts.overrides
     };
     let scene = load(&opts.scene, &overrides)?;
-    let mut engine = open(&scene, opts.reference_backend)?;
+    let mut session = session(scene.clone(), opts.reference_backend)?;
     let start = Instant::now();
-    for pass in 0..scene.spp {
-        engine.render_pass(pass)?;
+    let Finished {
+        accumulation: acc, ..
+    } = session.run(&StopRule::default(), |p| {
         event(Event::Reference {
             spp: scene.spp,
-            done: pass + 1,
-        });
-    }
+            done: p.passes_done,
+        })
+    })?;
     let seconds = start.elapsed().as_secs_f64();
-    let acc = engine.accumulation()?;
     let rgb = acc.to_rgb();
     crate::image_io::write_image(&exr, scene.width, scene.height, &rgb)?;
     let info = ReferenceInfo {
@@ -388,7 +382,7 @@ pub fn reference(
         max_depth,
         sampler: "sobol".into(),
         light_sampling: "mis".into(),
-        backend: engine.name(),
+        backend: session.device(),
         seconds,
         est_rel_mse: acc.estimated_rel_mse(),
     };
@@ -401,11 +395,46 @@ pub fn reference(
     Ok((rgb, info, exr))
 }
 
-fn open(scene: &FlatScene, choice: BackendChoice) -> Result<Engine, ConvergeError> {
-    Ok(match choice {
-        BackendChoice::Cpu => Engine::cpu(scene),
-        BackendChoice::Gpu { adapter } => Engine::gpu(scene, adapter)?,
-    })
+/// A reference EXR the user gave, which must have the renders' size.
+fn given_reference(path: &Path, probe: &FlatScene) -> Result<Vec<f32>, ConvergeError> {
+    let img = crate::scene::textures::load_image(path).map_err(|e| file_err(path, e))?;
+    if (img.width, img.height) != (probe.width, probe.height) {
+        return Err(file_err(
+            path,
+            format!(
+                "is {}x{}, the renders are {}x{} (set --width and --height to match)",
+                img.width, img.height, probe.width, probe.height
+            ),
+        ));
+    }
+    Ok(img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect())
+}
+
+/// The reference an earlier study left in the output folder, when it was rendered for
+/// this scene, size and path length with at least the samples asked for.
+fn cached_reference(
+    opts: &Options,
+    probe: &FlatScene,
+    max_depth: u32,
+) -> Result<Option<(Vec<f32>, ReferenceInfo)>, ConvergeError> {
+    let exr = opts.out.join("reference.exr");
+    let meta = opts.out.join("reference.toml");
+    let (Ok(text), true) = (std::fs::read_to_string(&meta), exr.exists()) else {
+        return Ok(None);
+    };
+    let Ok(info) = toml::from_str::<ReferenceInfo>(&text) else {
+        return Ok(None);
+    };
+    let wanted = info.scene == opts.scene.display().to_string()
+        && (info.width, info.height) == (probe.width, probe.height)
+        && info.max_depth == max_depth
+        && info.spp >= opts.reference_spp;
+    if !wanted {
+        return Ok(None);
+    }
+    let img = crate::scene::textures::load_image(&exr).map_err(|e| file_err(&exr, e))?;
+    let rgb = img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
+    Ok(Some((rgb, info)))
 }
 
 const CSV_HEADER: &str =
@@ -451,6 +480,7 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
     }
     std::fs::create_dir_all(&opts.out).map_err(|e| file_err(&opts.out, e))?;
     let base = load(&opts.scene, &opts.overrides)?;
+    let pixels = base.pixels();
     let max_depth = opts
         .configs
         .iter()
@@ -511,45 +541,63 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
                         ..overrides
                     },
                 )?;
-                let mut engine = open(&scene, opts.backend)?;
-                study.device = engine.name();
+                let mut session = session(scene, opts.backend)?;
+                study.device = session.device();
                 let mut busy = Duration::ZERO;
-                for pass in 0..last {
-                    let t = Instant::now();
-                    engine.render_pass(pass)?;
-                    busy += t.elapsed();
-                    done += 1;
-                    event(Event::Passes { done, total });
-                    if points.contains(&(pass + 1)) {
-                        let acc: Accumulation = engine.accumulation()?;
-                        let rgb = acc.to_rgb();
-                        let seconds = busy.as_secs_f64();
-                        let rel = rel_mse(&rgb, &reference);
-                        let m = Measurement {
-                            config: config.label(),
-                            run,
-                            spp: pass + 1,
-                            seconds,
-                            msamples_per_s: f64::from(pass + 1)
-                                * f64::from(scene.width * scene.height)
-                                / seconds.max(1e-9)
-                                / 1e6,
-                            rmse: rmse(&rgb, &reference),
-                            rel_mse: rel,
-                            est_rel_mse: acc.estimated_rel_mse(),
-                            efficiency: efficiency(rel, seconds),
-                        };
-                        writeln!(csv, "{}", csv_row(&m)).map_err(|e| file_err(&csv_path, e))?;
-                        csv.flush().map_err(|e| file_err(&csv_path, e))?;
-                        event(Event::Measured(&m));
-                        study.measurements.push(m);
-                    }
+                for &spp in &points {
+                    // one run of the session up to each point, its sums read back there
+                    let from = done;
+                    let finished = session.run(
+                        &StopRule {
+                            until: Some(spp),
+                            ..Default::default()
+                        },
+                        |p| {
+                            event(Event::Passes {
+                                done: from + p.samples / pixels,
+                                total,
+                            })
+                        },
+                    )?;
+                    busy += finished.progress.elapsed;
+                    done = from + finished.progress.samples / pixels;
+                    let m = measurement(config, run, spp, busy, &finished, &reference);
+                    writeln!(csv, "{}", csv_row(&m)).map_err(|e| file_err(&csv_path, e))?;
+                    csv.flush().map_err(|e| file_err(&csv_path, e))?;
+                    event(Event::Measured(&m));
+                    study.measurements.push(m);
                 }
             }
         }
         write_report(&study, &opts.out)?;
     }
     Ok(study)
+}
+
+/// The measurement of a render of `config` holding `spp` samples after `busy` seconds.
+fn measurement(
+    config: &Config,
+    run: u32,
+    spp: u32,
+    busy: Duration,
+    finished: &Finished,
+    reference: &[f32],
+) -> Measurement {
+    let acc = &finished.accumulation;
+    let rgb = acc.to_rgb();
+    let seconds = busy.as_secs_f64();
+    let rel = rel_mse(&rgb, reference);
+    Measurement {
+        config: config.label(),
+        run,
+        spp,
+        seconds,
+        msamples_per_s: f64::from(spp) * acc.pixel_count() as f64 / seconds.max(1e-9) / 1e6,
+        rmse: rmse(&rgb, reference),
+        rel_mse: rel,
+        est_rel_mse: acc.estimated_rel_mse(),
+        efficiency: efficiency(rel, seconds),
+    }
 }
 
 /// Mean over runs of one configuration's measurements at each sample count, in spp order.

@@ -2,7 +2,13 @@
 //! `docs/gallery/` and listed in the README's gallery table with their render times. The
 //! list lives here, so the command, the README and the test that checks them agree.
 
+use std::path::Path;
+
+use crate::engine::BackendChoice;
+use crate::image_io::write_image;
 use crate::scene::format::SamplerKind;
+use crate::scene::load::Overrides;
+use crate::session::{load_scene, Session, SessionError, SessionOptions, StopRule};
 
 /// Samples per pixel of a gallery image unless its entry says otherwise.
 pub const GALLERY_SPP: u32 = 256;
@@ -192,6 +198,52 @@ pub struct Rendered {
     pub height: u32,
     pub spp: u32,
     pub seconds: f64,
+    /// The adapter that rendered it.
+    pub device: String,
+    /// Samples dropped as not finite (there should be none).
+    pub non_finite: u64,
+}
+
+/// Renders `entry` on Vulkan adapter `adapter` to `out/NAME.png`, with `spp` samples per
+/// pixel instead of its own when given. A first, one-sample render compiles the shader
+/// (lavapipe compiles at the first dispatch), so the seconds are the render's alone.
+pub fn render(
+    entry: &Entry,
+    spp: Option<u32>,
+    adapter: usize,
+    out: &Path,
+) -> Result<Rendered, SessionError> {
+    let overrides = Overrides {
+        spp: Some(spp.or(entry.spp).unwrap_or(GALLERY_SPP)),
+        sampler: entry.sampler,
+        ..Default::default()
+    };
+    let scene = load_scene(Path::new(entry.scene), &overrides)?;
+    let opts = SessionOptions {
+        backend: BackendChoice::Gpu { adapter },
+        ..Default::default()
+    };
+    let mut warm = scene.clone();
+    warm.spp = 1;
+    Session::open(warm, opts.clone())?.run(&StopRule::default(), |_| {})?;
+    let mut session = Session::open(scene.clone(), opts)?;
+    let done = session.run(&StopRule::default(), |_| {})?;
+    let acc = &done.accumulation;
+    write_image(
+        &out.join(format!("{}.png", entry.name)),
+        scene.width,
+        scene.height,
+        &acc.to_rgb(),
+    )?;
+    Ok(Rendered {
+        entry: *entry,
+        width: scene.width,
+        height: scene.height,
+        spp: scene.spp,
+        seconds: done.progress.elapsed.as_secs_f64(),
+        device: session.device(),
+        non_finite: acc.non_finite(),
+    })
 }
 
 /// The README's gallery block: a paragraph on how it was made and one table row per image,

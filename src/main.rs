@@ -8,11 +8,15 @@ use clap::{Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressStyle};
 
 use wgtrace::checkpoint::Checkpoint;
-use wgtrace::gpu::GpuError;
-use wgtrace::image_io::{check_writable, probe_writable, write_error_map, write_image};
-use wgtrace::render::{render_from, render_progressive, Accumulation, StopRule, Stopped};
+use wgtrace::gpu::limits::DeviceFit;
+use wgtrace::gpu::plan::{Feature, GpuPlan};
+use wgtrace::image_io::{check_writable, write_image};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
-use wgtrace::{BackendChoice, Engine, Overrides};
+use wgtrace::session::{
+    Output, Passes, Saving, Session, SessionError, SessionOptions, StopRule, Stopped,
+};
+use wgtrace::tuning::{Tuning, KNOBS};
+use wgtrace::{BackendChoice, Overrides};
 
 #[derive(Parser)]
 #[command(
@@ -192,8 +196,8 @@ struct RenderArgs {
     #[arg(long, value_enum)]
     light_sampling: Option<LightSampling>,
     /// Stop after as many passes as fit in this many seconds, then write the image. Without
-    /// --spp the scene's spp no longer caps the passes (except for hammersley, whose point
-    /// set depends on it).
+    /// --spp the scene's spp no longer caps the passes (except for hammersley and jittered,
+    /// whose points depend on it).
     #[arg(long, value_name = "SECONDS", value_parser = positive_f64)]
     time_limit: Option<f64>,
     /// Stop once the estimated relative error (sqrt of mean (variance / n) / (mean^2 +
@@ -205,32 +209,12 @@ struct RenderArgs {
     /// show them in colour (log scale, 0.1% dark blue to 100% yellow).
     #[arg(long, value_name = "PATH")]
     error_map: Option<PathBuf>,
-    /// Test every primitive on every ray instead of traversing the BVH (for comparisons).
-    #[arg(long)]
-    no_bvh: bool,
-    /// Run the full shader instead of one specialized to the scene's features (for
-    /// comparisons and debugging).
-    #[arg(long)]
-    no_specialize: bool,
-    /// Walk the BVH even in a scene of at most 16 untransformed primitives, where a plain
-    /// loop over them is the default (for comparisons).
-    #[arg(long, conflicts_with = "no_bvh")]
-    bvh: bool,
-    /// Keep every scene record in a storage buffer, none in a uniform buffer (for
-    /// comparisons).
-    #[arg(long)]
-    no_uniform_records: bool,
-    /// Read a small scene's primitives, materials and lights from their buffers instead
-    /// of writing them into its shader as constants (for comparisons).
-    #[arg(long)]
-    no_baked_records: bool,
-    /// Trace one sample per GPU invocation instead of a group of 16 (for comparisons).
-    #[arg(long)]
-    no_sample_groups: bool,
-    /// Trace every path to max_depth without Russian roulette (for comparisons; Russian
-    /// roulette from the fourth ray on is unbiased).
-    #[arg(long)]
-    no_russian_roulette: bool,
+    /// Knobs of how the render runs, for benchmarks and comparisons: a comma-separated
+    /// list of no-bvh, bvh, no-specialize, no-uniform-records, no-baked-records,
+    /// no-sample-groups, no-russian-roulette (each described by `wgtrace render --help`).
+    /// The image is the same up to noise; the defaults are the fastest.
+    #[arg(long, value_name = "KNOBS", value_parser = Tuning::parse, long_help = tune_help())]
+    tune: Option<Tuning>,
     /// Keep the render's state in this checkpoint file (written whole: temporary file,
     /// then rename) every --checkpoint-every seconds and at the end; `--resume` continues
     /// from it. Ctrl-C or SIGTERM always writes one (here, or beside the image as .ckpt).
@@ -259,13 +243,22 @@ struct RenderArgs {
     quiet: bool,
 }
 
-/// Set by Ctrl-C (SIGINT) or SIGTERM: the render stops after the current pass.
-static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
 /// A render that Ctrl-C or SIGTERM stopped, its image and checkpoint written.
 #[derive(Debug, thiserror::Error)]
 #[error("interrupted")]
 struct Interrupted;
+
+/// `--tune`'s long help: the list, and what each knob does.
+fn tune_help() -> String {
+    let mut s = "Knobs of how the render runs, for benchmarks and comparisons: a \
+                 comma-separated list; the image is the same up to noise, and the defaults \
+                 are the fastest."
+        .to_string();
+    for (name, what) in KNOBS {
+        s += &format!("\n  {name}: {what}");
+    }
+    s
+}
 
 fn positive_f64(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
@@ -273,9 +266,6 @@ fn positive_f64(s: &str) -> Result<f64, String> {
         _ => Err(format!("must be a number > 0, got {s}")),
     }
 }
-
-/// The pass cap of a render limited by time or error when --spp is not given.
-const UNCAPPED_PASSES: u32 = 1 << 20;
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
@@ -335,14 +325,13 @@ fn merge(inputs: &[PathBuf], output: &Path, checkpoint: Option<&Path>) -> anyhow
 }
 
 fn validate(paths: &[PathBuf]) -> anyhow::Result<()> {
-    use wgtrace::gpu::shader::{scene_shader, trace_shader, validate};
     let mut failed = 0;
     for path in paths {
         let checked = wgtrace::load_scene(path, &Overrides::default())
             .map_err(anyhow::Error::from)
             .and_then(|scene| {
-                let wgsl = trace_shader(&scene_shader(&scene))?;
-                validate("trace", &wgsl)?;
+                let plan = GpuPlan::new(&scene, &DeviceFit::portable(), &Tuning::default());
+                wgtrace::gpu::shader::validate("trace", &plan.shader.wgsl("trace")?)?;
                 Ok(scene)
             });
         match checked {
@@ -373,7 +362,7 @@ fn validate(paths: &[PathBuf]) -> anyhow::Result<()> {
 }
 
 fn gallery(args: GalleryArgs) -> anyhow::Result<()> {
-    use wgtrace::gallery::{readme_block, replace_block, Rendered, ENTRIES, GALLERY_SPP};
+    use wgtrace::gallery::{readme_block, replace_block, ENTRIES};
     let unknown: Vec<&String> = args
         .only
         .iter()
@@ -399,7 +388,6 @@ fn gallery(args: GalleryArgs) -> anyhow::Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let mut rendered = Vec::new();
-    let mut device = String::new();
     for e in ENTRIES
         .iter()
         .filter(|e| args.only.is_empty() || args.only.iter().any(|n| n == e.name))
@@ -417,41 +405,19 @@ fn gallery(args: GalleryArgs) -> anyhow::Result<()> {
                 anyhow::ensure!(status.success(), "cargo {} failed", cargo_args.join(" "));
             }
         }
-        let overrides = Overrides {
-            spp: Some(args.spp.or(e.spp).unwrap_or(GALLERY_SPP)),
-            sampler: e.sampler,
-            ..Default::default()
-        };
-        let scene = wgtrace::load_scene(Path::new(e.scene), &overrides)?;
-        // a first, one-sample render compiles the shader (lavapipe compiles at the first
-        // dispatch), so the time is the render's alone
-        let mut warm = scene.clone();
-        warm.spp = 1;
-        let no_report = |_: &_, _: &mut Engine| Ok::<(), GpuError>(());
-        render_progressive(&mut Engine::gpu(&warm, args.adapter)?, &warm, no_report)?;
-        let mut engine = Engine::gpu(&scene, args.adapter)?;
-        device = engine.name();
-        let progress = render_progressive(&mut engine, &scene, no_report)?;
-        let acc = engine.accumulation()?;
-        let output = args.out.join(format!("{}.png", e.name));
-        write_image(&output, scene.width, scene.height, &acc.to_rgb())?;
-        let seconds = progress.elapsed.as_secs_f64();
+        let r = wgtrace::gallery::render(e, args.spp, args.adapter, &args.out)?;
         println!(
-            "{}: {} x {}, {} spp, {seconds:.2} s, {} non-finite",
-            output.display(),
-            scene.width,
-            scene.height,
-            scene.spp,
-            acc.non_finite()
+            "{}: {} x {}, {} spp, {:.2} s, {} non-finite",
+            args.out.join(format!("{}.png", e.name)).display(),
+            r.width,
+            r.height,
+            r.spp,
+            r.seconds,
+            r.non_finite
         );
-        rendered.push(Rendered {
-            entry: *e,
-            width: scene.width,
-            height: scene.height,
-            spp: scene.spp,
-            seconds,
-        });
+        rendered.push(r);
     }
+    let device = rendered.last().map_or(String::new(), |r| r.device.clone());
     if !full {
         println!("{} left alone (a partial gallery)", args.readme.display());
         return Ok(());
@@ -479,57 +445,56 @@ fn info() -> anyhow::Result<()> {
 }
 
 fn features(path: &Path) -> anyhow::Result<()> {
-    use wgtrace::gpu::shader::{all_defines, scene_shader, trace_shader, used_bindings};
+    use wgtrace::gpu::bindings::{Placement, Slot};
+    use wgtrace::gpu::plan::ShaderSpec;
     let scene = wgtrace::load_scene(path, &Overrides::default())?;
-    let spec = scene_shader(&scene);
-    let defines = &spec.defines;
-    let all = all_defines();
+    let plan = GpuPlan::new(&scene, &DeviceFit::portable(), &Tuning::default());
+    let spec = &plan.shader;
     println!("{}: features", path.display());
-    for d in &all {
-        let name = d.trim_start_matches("HAS_").to_ascii_lowercase();
-        println!(
-            "  {:<16} {}",
-            name,
-            if defines.contains(d) { "yes" } else { "-" }
-        );
+    for f in Feature::ALL {
+        let on = if spec.features.contains(f) {
+            "yes"
+        } else {
+            "-"
+        };
+        println!("  {:<16} {on}", f.name());
     }
-    let wgsl = trace_shader(&spec)?;
-    let bound = used_bindings("trace", &wgsl, "main", 0)?;
     // a list, or "none"
-    let listed = |names: Vec<String>| {
+    let listed = |names: Vec<&str>| {
         if names.is_empty() {
             "none".to_string()
         } else {
             names.join(", ")
         }
     };
-    // the record arrays the shader binds as uniform buffers (not those written into it)
-    let uniform = wgtrace::gpu::shader::UNIFORM_DEFINES
-        .iter()
-        .filter(|(d, binding)| defines.contains(*d) && bound.contains(binding))
-        .map(|(d, _)| d.trim_start_matches("UNIFORM_").to_ascii_lowercase())
-        .collect();
-    println!("uniform records: {}", listed(uniform));
-    let baked = [
-        ("BAKED_PRIMITIVES", "primitives"),
-        ("BAKED_MATERIALS", "materials"),
-        ("BAKED_EMITTERS", "emitters"),
-    ]
-    .iter()
-    .filter(|(d, _)| defines.contains(*d))
-    .map(|&(_, name)| name.to_string())
-    .collect();
-    println!("records written into the shader: {}", listed(baked));
-    let size = |wgsl: &str| -> anyhow::Result<(usize, usize, usize)> {
-        let bindings = used_bindings("trace", wgsl, "main", 0)?.len();
-        Ok((wgsl.len(), wgsl.lines().count(), bindings))
+    let bound = spec.trace_slots();
+    let placed = |p: Placement| {
+        let names = Slot::RECORDS
+            .into_iter()
+            .filter(|&s| {
+                spec.placements.get(s) == p && (p == Placement::Shader || bound.contains(&s))
+            })
+            .map(Slot::name)
+            .collect();
+        listed(names)
     };
-    let (sb, sl, sn) = size(&wgsl)?;
-    let (fb, fl, fn_) = size(&trace_shader(&all.into())?)?;
+    // the record arrays the shader binds as uniform buffers (not those written into it)
+    println!("uniform records: {}", placed(Placement::Uniform));
+    println!(
+        "records written into the shader: {}",
+        placed(Placement::Shader)
+    );
+    let size = |spec: &ShaderSpec| -> anyhow::Result<(usize, usize, usize)> {
+        let wgsl = spec.wgsl("trace")?;
+        Ok((wgsl.len(), wgsl.lines().count(), spec.trace_slots().len()))
+    };
+    let (sb, sl, sn) = size(spec)?;
+    let (fb, fl, fn_) = size(&ShaderSpec::full())?;
     println!(
         "trace shader: specialized {sb} bytes, {sl} lines, {sn} bindings; \
          full {fb} bytes, {fl} lines, {fn_} bindings"
     );
+    println!("samples per invocation: {}", plan.sample_group);
     Ok(())
 }
 
@@ -564,15 +529,10 @@ fn converge(args: ConvergeArgs) -> anyhow::Result<()> {
         backend: backend_choice(args.backend, args.adapter),
         out: args.out.clone(),
     };
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(1)
-    };
-    bar.set_style(
-        ProgressStyle::with_template("{elapsed_precise} [{bar:30}] {pos}/{len} {msg}")
-            .expect("valid template")
-            .progress_chars("=> "),
+    let bar = progress_bar(
+        args.quiet,
+        1,
+        "{elapsed_precise} [{bar:30}] {pos}/{len} {msg}",
     );
     let study = converge::run(&opts, |e| match e {
         Event::Reference { spp, done } => {
@@ -620,41 +580,37 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         .output
         .clone()
         .unwrap_or_else(|| default_output(&args.scene));
-    // Refuse a bad output name or place before spending time on the render.
+    // refuse a bad output name or place before spending time on loading
     check_writable(&output)?;
-    if let Some(map) = &args.error_map {
-        check_writable(map)?;
-    }
-    let checkpoint_path = args
-        .checkpoint
-        .clone()
-        .or_else(|| args.resume.clone())
-        .unwrap_or_else(|| output.with_extension("ckpt"));
-    probe_writable(&checkpoint_path)
-        .with_context(|| format!("{}: cannot write checkpoint", checkpoint_path.display()))?;
     let overrides = Overrides {
         width: args.width,
         height: args.height,
         spp: args.spp,
         max_depth: args.max_depth,
         seed: args.seed,
-        no_bvh: args.no_bvh,
         sampler: args.sampler,
         light_sampling: args.light_sampling,
-        no_specialize: args.no_specialize,
-        force_bvh: args.bvh,
-        no_uniform_records: args.no_uniform_records,
-        no_baked_records: args.no_baked_records,
-        no_sample_groups: args.no_sample_groups,
-        no_russian_roulette: args.no_russian_roulette,
     };
+    let tuning = args.tune.unwrap_or_default();
     let loading = std::time::Instant::now();
-    let mut scene = wgtrace::load_scene(&args.scene, &overrides)?;
+    let scene = wgtrace::scene::load_scene(&args.scene, &overrides, tuning.build())?;
+    // the first signal stops after the current pass and keeps the work; a second one, for
+    // a pass that takes too long, exits at once
+    let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    let flag = interrupt.clone();
+    ctrlc::set_handler(move || {
+        if flag.swap(true, std::sync::atomic::Ordering::SeqCst) {
+            std::process::exit(130);
+        }
+    })
+    .context("installing the Ctrl-C handler")?;
     let limited = args.time_limit.is_some() || args.target_error.is_some();
-    if limited && args.spp.is_none() && scene.sampler != wgtrace::scene::records::SAMPLER_HAMMERSLEY
-    {
-        scene.spp = UNCAPPED_PASSES;
-    }
+    let rule = StopRule {
+        time_limit: args.time_limit.map(std::time::Duration::from_secs_f64),
+        target_error: args.target_error,
+        interrupt: Some(interrupt),
+        until: None,
+    };
     if !args.quiet {
         eprintln!(
             "scene: {} primitives ({} unbounded), {} BVH nodes of depth {}, {:.2} s to load",
@@ -665,203 +621,143 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             loading.elapsed().as_secs_f64()
         );
     }
-    let choice = backend_choice(args.backend, args.adapter);
-    let (mut engine, note) = Engine::open(&scene, choice)?;
-    if let Some(note) = note {
+    let opts = session_options(&args, tuning, output.clone(), limited);
+    let mut session = Session::open(scene, opts)?;
+    if let Some(note) = session.note() {
         eprintln!("{note}");
     }
-    eprintln!("device: {}", engine.name());
-    let range = args.sample_range.clone().unwrap_or(0..scene.spp);
-    if range.end > scene.spp {
-        anyhow::bail!(
-            "--sample-range {}..{} ends past the render's {} samples per pixel",
-            range.start,
-            range.end,
-            scene.spp
-        );
+    eprintln!("device: {}", session.device());
+    if let (Some(at), Some(path)) = (session.resumed_at(), &args.resume) {
+        eprintln!("resuming {} at sample {at}", path.display());
     }
-    let mut first = range.start;
-    if let Some(path) = &args.resume {
-        let ckpt = Checkpoint::read(path)?;
-        ckpt.check(&scene, path)?;
-        let held = ckpt.contiguous().filter(|r| r.start == range.start);
-        let Some(held) = held else {
-            anyhow::bail!(
-                "{}: holds samples {:?}, which do not start this render's samples {}..{}",
-                path.display(),
-                ckpt.samples,
-                range.start,
-                range.end
-            );
-        };
-        engine.set_accumulation(&ckpt.accumulation)?;
-        first = held.end;
-        eprintln!("resuming {} at sample {first}", path.display());
-    }
-    let save_acc = |acc: Accumulation, passes: u32| -> anyhow::Result<()> {
-        let ckpt = Checkpoint::new(&scene, range.start..passes, acc);
-        ckpt.write(&checkpoint_path)
-            .with_context(|| format!("writing checkpoint {}", checkpoint_path.display()))
-    };
-    // the first signal stops after the current pass and keeps the work; a second one, for
-    // a pass that takes too long, exits at once
-    ctrlc::set_handler(|| {
-        if INTERRUPTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
-            std::process::exit(130);
-        }
-    })
-    .context("installing the Ctrl-C handler")?;
-
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(scene.spp as u64)
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{elapsed_precise} [{bar:30}] {pos}/{len} passes  {msg}  ETA {eta}",
-        )
-        .expect("valid template")
-        .progress_chars("=> "),
+    let bar = progress_bar(
+        args.quiet,
+        session.range().end as u64,
+        "{elapsed_precise} [{bar:30}] {pos}/{len} passes  {msg}  ETA {eta}",
     );
-    let (w, h) = (scene.width, scene.height);
-    let write_acc = |acc: &Accumulation| -> anyhow::Result<()> {
-        write_image(&output, w, h, &acc.to_rgb())?;
-        Ok(())
-    };
-    let write = |engine: &mut Engine| -> anyhow::Result<()> { write_acc(&engine.accumulation()?) };
-    let rule = StopRule {
-        time_limit: args.time_limit.map(std::time::Duration::from_secs_f64),
-        target_error: args.target_error,
-    };
-    engine.set_submission_target(std::time::Duration::from_secs_f64(args.submission_time));
-    // for tests of a device lost mid-render: the device is destroyed once this many
-    // samples are done
-    let lose_device_at: Option<u32> = std::env::var("WGTRACE_LOSE_DEVICE_AT_SAMPLE")
-        .ok()
-        .and_then(|v| v.parse().ok());
-    let mut passes_done = first;
-    let mut last_save = std::time::Instant::now();
-    // Without --checkpoint, the accumulation read back every --checkpoint-every seconds
-    // is kept here instead, to be written out if the device is lost.
-    let mut kept: Option<(u32, Accumulation)> = None;
-    // whether the checkpoint file holds this render's state (as --resume left it, or as
-    // written since)
-    let mut on_disk = args.resume.as_ref() == Some(&checkpoint_path);
-    let result = render_from(&mut engine, &scene, rule, first..range.end, |p, engine| {
-        let before = passes_done;
-        passes_done = p.passes_done;
+    let first = session.range().start;
+    let result = session.run(&rule, |p| {
         bar.set_position(p.passes_done as u64);
         bar.set_message(format!("{:.2} Msamples/s", p.samples_per_second() / 1e6));
-        if let Some(n) = args.preview_every {
-            if p.passes_done / n > before / n && p.passes_done < p.passes_total {
-                write(engine).context("writing preview")?;
-            }
-        }
-        if INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst) {
-            return Err(Interrupted.into());
-        }
-        if last_save.elapsed().as_secs_f64() >= args.checkpoint_every {
-            let acc = engine.accumulation()?;
-            if args.checkpoint.is_some() {
-                save_acc(acc, p.passes_done)?;
-                on_disk = true;
-            } else {
-                kept = Some((p.passes_done, acc));
-            }
-            last_save = std::time::Instant::now();
-        }
-        if lose_device_at.is_some_and(|n| p.passes_done >= n) {
-            engine.lose_device();
-        }
-        Ok::<(), anyhow::Error>(())
     });
     bar.finish_and_clear();
-    // the sums are read back once; a device lost at any point up to here ends below
-    let result = result.and_then(|done| Ok((done, engine.accumulation()?)));
-    if let Err(e) = &result {
-        if let Some(lost @ (GpuError::Lost(_) | GpuError::Failed(_))) = e.downcast_ref::<GpuError>()
-        {
-            // the device's sums are gone: write the last ones read back
-            let held = match kept.take() {
-                Some((held, acc)) => {
-                    write_acc(&acc)?;
-                    save_acc(acc, held)?;
-                    held
-                }
-                None if on_disk => {
-                    let ckpt = Checkpoint::read(&checkpoint_path)?;
-                    write_acc(&ckpt.accumulation)?;
-                    ckpt.samples.last().map_or(range.start, |r| r.end)
-                }
-                None => anyhow::bail!(
-                    "{lost} at sample {passes_done}; no samples had been read back yet \
-                     (that happens every --checkpoint-every {} s), so nothing was written",
-                    args.checkpoint_every
-                ),
-            };
-            anyhow::bail!(
-                "{lost} at sample {passes_done}; wrote samples {}..{held} (the last read \
-                 back) to {} and checkpoint {}; continue with\n  wgtrace render {} --resume {} \
-                 (and the same options)",
-                range.start,
-                output.display(),
-                checkpoint_path.display(),
-                args.scene.display(),
-                checkpoint_path.display()
-            );
+    let done = match result {
+        Ok(done) => done,
+        Err(e) => {
+            let resume = e.resumable().map(|ckpt| {
+                format!(
+                    "; continue with\n  wgtrace render {} --resume {} (and the same options)",
+                    args.scene.display(),
+                    ckpt.display()
+                )
+            });
+            if let SessionError::Interrupted { .. } = e {
+                eprintln!("{e}{}", resume.unwrap_or_default());
+                return Err(Interrupted.into());
+            }
+            anyhow::bail!("{e}{}", resume.unwrap_or_default());
         }
-    }
-    let ((done, stopped, estimate), acc) = match result {
-        Err(e) if e.is::<Interrupted>() => {
-            let acc = engine.accumulation()?;
-            write_acc(&acc)?;
-            save_acc(acc, passes_done)?;
-            eprintln!(
-                "interrupted at sample {passes_done}: wrote {} and checkpoint {}; continue with\n  \
-                 wgtrace render {} --resume {} (and the same options)",
-                output.display(),
-                checkpoint_path.display(),
-                args.scene.display(),
-                checkpoint_path.display()
-            );
-            return Err(e);
-        }
-        r => r?,
     };
-    write_acc(&acc)?;
-    if let Some(map) = &args.error_map {
-        let errors: Vec<f32> = (0..acc.pixel_count())
-            .map(|i| acc.pixel_rel_mse(i).sqrt() as f32)
-            .collect();
-        write_error_map(map, w, h, &errors)?;
-    }
-    // every sample that was not finite was dropped and counted; there should be none
-    let dropped = acc.non_finite();
-    if args.checkpoint.is_some() || args.resume.is_some() || args.sample_range.is_some() {
-        save_acc(acc, done.passes_done)?;
-    }
-    let mut summary = format!(
-        "{}: {}x{}, {} spp, {:.3} s, {:.3} Msamples/s",
-        output.display(),
-        w,
-        h,
-        done.passes_done - range.start,
-        done.elapsed.as_secs_f64(),
-        done.samples_per_second() / 1e6
+    println!(
+        "{}",
+        summary(&output, &done, first, limited && args.spp.is_some())
     );
-    summary += &format!(", {dropped} non-finite");
-    if let Some(e) = estimate {
+    Ok(())
+}
+
+/// The session a render's flags ask for: the checkpoint file (`--checkpoint`, else the
+/// one resumed, else beside the image) is written on an interrupt or a lost device, every
+/// `--checkpoint-every` seconds with `--checkpoint`, and at the end when a later run will
+/// continue or merge it.
+fn session_options(
+    args: &RenderArgs,
+    tuning: Tuning,
+    output: PathBuf,
+    limited: bool,
+) -> SessionOptions {
+    let checkpoint = args
+        .checkpoint
+        .clone()
+        .or_else(|| args.resume.clone())
+        .unwrap_or_else(|| output.with_extension("ckpt"));
+    SessionOptions {
+        backend: backend_choice(args.backend, args.adapter),
+        cpu_fallback: true,
+        tuning,
+        passes: match (&args.sample_range, limited, args.spp) {
+            (Some(r), _, _) => Passes::Range(r.clone()),
+            // limited by time or error, the scene's spp no longer caps the passes
+            (None, true, None) => Passes::Uncapped,
+            _ => Passes::Scene,
+        },
+        resume: args.resume.clone(),
+        saving: Some(Saving {
+            path: checkpoint,
+            periodic: args.checkpoint.is_some(),
+            every: std::time::Duration::from_secs_f64(args.checkpoint_every),
+            at_end: args.checkpoint.is_some()
+                || args.resume.is_some()
+                || args.sample_range.is_some(),
+        }),
+        output: Some(Output {
+            image: output,
+            error_map: args.error_map.clone(),
+            preview_every: args.preview_every,
+        }),
+        submission_target: std::time::Duration::from_secs_f64(args.submission_time),
+        // for tests of a device lost mid-render
+        lose_device_at: std::env::var("WGTRACE_LOSE_DEVICE_AT_SAMPLE")
+            .ok()
+            .and_then(|v| v.parse().ok()),
+    }
+}
+
+/// The line a finished render prints: the image, its size, samples, time and rate, the
+/// samples dropped as not finite (there should be none), the error estimate, why it
+/// stopped.
+fn summary(
+    output: &Path,
+    done: &wgtrace::session::Finished,
+    first: u32,
+    limited_spp: bool,
+) -> String {
+    let p = &done.progress;
+    let acc = &done.accumulation;
+    let mut summary = format!(
+        "{}: {}x{}, {} spp, {:.3} s, {:.3} Msamples/s, {} non-finite",
+        output.display(),
+        acc.width,
+        acc.height,
+        p.passes_done - first,
+        p.elapsed.as_secs_f64(),
+        p.samples_per_second() / 1e6,
+        acc.non_finite()
+    );
+    if let Some(e) = done.estimate {
         summary += &format!(", estimated relative error {e:.4}");
     }
-    match stopped {
+    match done.stopped {
         Stopped::TimeLimit => summary += " (time limit)",
         Stopped::TargetError => summary += " (target error reached)",
-        Stopped::AllPasses if limited && args.spp.is_some() => summary += " (all passes)",
+        Stopped::AllPasses if limited_spp => summary += " (all passes)",
         Stopped::AllPasses => {}
     }
-    println!("{summary}");
-    Ok(())
+    summary
+}
+
+/// A progress bar of `len` steps with `template`, or a hidden one.
+fn progress_bar(quiet: bool, len: u64, template: &str) -> ProgressBar {
+    let bar = if quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(len)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(template)
+            .expect("valid template")
+            .progress_chars("=> "),
+    );
+    bar
 }
 
 #[cfg(test)]

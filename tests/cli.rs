@@ -63,6 +63,14 @@ fn renders_png_exr_and_ppm_of_the_requested_size_and_reports() {
         );
         let stderr = String::from_utf8_lossy(&o.stderr);
         assert!(stderr.contains("device: "), "{stderr}");
+        // a render that succeeds says nothing that reads as an error (Mesa's device-select
+        // layer used to print `error: XDG_RUNTIME_DIR is invalid ...` on headless machines)
+        assert!(
+            !stderr
+                .lines()
+                .any(|l| l.to_ascii_lowercase().contains("error")),
+            "{stderr}"
+        );
     }
     // EXR holds linear radiance; PNG and PPM hold its sRGB encoding.
     let exr = image::open(dir.join("cornell.exr")).unwrap().to_rgb32f();
@@ -246,8 +254,8 @@ fn info_lists_the_vulkan_adapters() {
     assert!(s.contains("Vulkan"), "{s}");
 }
 
-/// `features` lists what a scene uses and the shader sizes; `--no-specialize` renders with
-/// the full shader.
+/// `features` lists what a scene uses and the shader sizes; `--tune no-specialize` renders
+/// with the full shader, and an unknown knob is refused with the list of knobs.
 #[test]
 fn features_lists_the_scene_and_no_specialize_renders() {
     let scene = cornell();
@@ -273,8 +281,16 @@ fn features_lists_the_scene_and_no_specialize_renders() {
         "{text}"
     );
     let out = tmp_dir("full").join("f.png");
-    let o = render_to(&out, &["--no-specialize"]);
+    let o = render_to(&out, &["--tune", "no-specialize,no-russian-roulette"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = wgtrace(&["render", &scene, "--tune", "fast"]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success()
+            && err.contains("unknown tuning knob \"fast\"")
+            && err.contains("no-bvh"),
+        "{err}"
+    );
 }
 
 /// A render saves the driver's pipeline cache in `WGTRACE_CACHE_DIR` when the adapter

@@ -430,15 +430,8 @@ fn overrides_replace_render_settings_and_are_validated() {
         spp: Some(3),
         max_depth: Some(2),
         seed: Some(9),
-        no_bvh: false,
         sampler: None,
         light_sampling: Some(wgtrace::scene::format::LightSampling::Mixture),
-        no_specialize: true,
-        force_bvh: false,
-        no_uniform_records: false,
-        no_baked_records: false,
-        no_sample_groups: false,
-        no_russian_roulette: false,
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
     assert_eq!(
@@ -447,7 +440,7 @@ fn overrides_replace_render_settings_and_are_validated() {
     );
     assert_eq!(
         s.light_sampling,
-        wgtrace::scene::records::LIGHT_SAMPLING_MIXTURE
+        wgtrace::scene::format::LightSampling::Mixture
     );
     let zero = Overrides {
         width: Some(0),
@@ -513,10 +506,10 @@ fn the_benchmark_cornell_box_is_the_scenes_one_with_random_samples() {
         &Overrides::default(),
     )
     .unwrap();
-    assert_eq!(bench.sampler, wgtrace::scene::records::SAMPLER_RANDOM);
+    assert_eq!(bench.sampler, wgtrace::scene::format::SamplerKind::Random);
     assert_eq!(
         bench.light_sampling,
-        wgtrace::scene::records::LIGHT_SAMPLING_MIS
+        wgtrace::scene::format::LightSampling::Mis
     );
     assert_eq!(bench.primitives, scene.primitives);
     assert_eq!(bench.materials, scene.materials);

@@ -511,20 +511,23 @@ fn specialized_and_full_shaders_render_the_same_image() {
         }
     }
     for (path, variant) in cases {
-        let o = |no_specialize| Overrides {
+        let o = Overrides {
             width: Some(32),
             height: Some(24),
             spp: Some(4),
             seed: Some(11),
-            no_specialize,
             sampler: variant.map(|v| v.0),
             light_sampling: variant.map(|v| v.1),
-            no_bvh: variant.is_some_and(|v| v.2),
             ..Default::default()
         };
-        let special = wgtrace::load_scene(&path, &o(false)).unwrap();
-        let full = wgtrace::load_scene(&path, &o(true)).unwrap();
-        let (a, b) = (render_gpu(&special), render_gpu(&full));
+        let no_bvh = if variant.is_some_and(|v| v.2) {
+            "no-bvh"
+        } else {
+            ""
+        };
+        let scene = common::load_tuned(&path, &o, no_bvh);
+        let a = common::render_gpu_tuned(&scene, no_bvh);
+        let b = common::render_gpu_tuned(&scene, &format!("{no_bvh},no-specialize"));
         let identical = (0..a.pixel_count())
             .filter(|&i| a.mean(i) == b.mean(i))
             .count() as f64
@@ -566,10 +569,12 @@ radius = 1
 material = "grey"
 "#;
     let scene = common::scene_from_str(src);
-    assert!(!wgtrace::gpu::shader::scene_defines(&scene).contains("HAS_EMISSION"));
-    let mut full = scene.clone();
-    full.specialize = false;
-    for acc in [render_gpu(&scene), render_gpu(&full)] {
+    let features = wgtrace::gpu::plan::scene_features(&scene);
+    assert!(!features.contains(wgtrace::gpu::plan::Feature::Emission));
+    for acc in [
+        render_gpu(&scene),
+        common::render_gpu_tuned(&scene, "no-specialize"),
+    ] {
         assert!((0..acc.pixel_count()).all(|i| acc.mean(i) == [0.0; 3]));
     }
 }
@@ -579,7 +584,7 @@ material = "grey"
 #[test]
 fn pipelines_are_compiled_once_per_feature_set_and_process() {
     use std::sync::Arc;
-    use wgtrace::gpu::shader::{all_defines, scene_shader};
+    use wgtrace::gpu::plan::{GpuPlan, ShaderSpec};
     let ctx = wgtrace::gpu::GpuContext::shared(0)
         .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter: {e}"));
     assert!(Arc::ptr_eq(
@@ -588,12 +593,13 @@ fn pipelines_are_compiled_once_per_feature_set_and_process() {
     ));
     let scene =
         wgtrace::load_scene(&common::repo_path("scenes/box.toml"), &Overrides::default()).unwrap();
-    let a = ctx.trace_pipeline(&scene_shader(&scene)).unwrap();
-    let b = ctx.trace_pipeline(&scene_shader(&scene)).unwrap();
-    let full = ctx.trace_pipeline(&all_defines().into()).unwrap();
+    let plan = GpuPlan::new(&scene, &ctx.fit(), &wgtrace::Tuning::default());
+    let a = ctx.trace_pipeline(&plan.shader).unwrap();
+    let b = ctx.trace_pipeline(&plan.shader).unwrap();
+    let full = ctx.trace_pipeline(&ShaderSpec::full()).unwrap();
     assert!(Arc::ptr_eq(&a, &b));
     assert!(!Arc::ptr_eq(&a, &full));
-    assert!(a.shader_bytes < full.shader_bytes && a.bindings.len() < full.bindings.len());
+    assert!(a.shader_bytes < full.shader_bytes && a.slots.len() < full.slots.len());
 }
 
 /// A thin-lens camera (aperture > 0): both backends agree on the blurred image, and it
@@ -638,8 +644,7 @@ fn a_thin_lens_renders_the_same_on_both_backends() {
 #[test]
 fn submissions_adapt_to_their_time_and_leave_the_image_unchanged() {
     use std::time::Duration;
-    use wgtrace::render::render_progressive;
-    use wgtrace::Engine;
+    use wgtrace::{Engine, Session, SessionOptions, StopRule};
     let o = Overrides {
         width: Some(64),
         height: Some(48),
@@ -648,23 +653,27 @@ fn submissions_adapt_to_their_time_and_leave_the_image_unchanged() {
     };
     let scene = wgtrace::load_scene(&common::repo_path("scenes/cornell.toml"), &o).unwrap();
     let run = |target: Duration| {
-        let mut engine = common::gpu_engine(&scene);
-        engine.set_submission_target(target);
-        render_progressive(&mut engine, &scene, |_, _| {
-            Ok::<(), wgtrace::gpu::GpuError>(())
-        })
-        .expect("render");
-        let Engine::Gpu(g) = &engine else {
+        let opts = SessionOptions {
+            submission_target: target,
+            ..Default::default()
+        };
+        let mut session =
+            Session::with_engine(scene.clone(), common::gpu_engine(&scene), opts).unwrap();
+        let acc = session
+            .run(&StopRule::default(), |_| {})
+            .expect("render")
+            .accumulation;
+        let Engine::Gpu(g) = session.engine() else {
             unreachable!("a GPU engine")
         };
         let (count, budget) = (g.submission_count(), g.submission_budget());
-        (engine.accumulation().unwrap(), count, budget)
+        (acc, count, budget)
     };
     let (sliced, sliced_count, sliced_budget) = run(Duration::from_micros(1));
     let (batched, batched_count, _) = run(Duration::from_secs(60));
     // a microsecond is never met: the budget falls to one row of one sample group per
     // submission
-    let group = wgtrace::gpu::render::SAMPLE_GROUP;
+    let group = wgtrace::gpu::plan::SAMPLE_GROUP;
     assert_eq!(
         sliced_budget,
         64 * group as u64,
@@ -686,7 +695,8 @@ fn submissions_adapt_to_their_time_and_leave_the_image_unchanged() {
 /// A dispatch traces a group of at most SAMPLE_GROUP consecutive samples.
 #[test]
 fn samples_go_to_dispatches_in_consecutive_groups() {
-    use wgtrace::gpu::render::{group_parts, SAMPLE_GROUP as G};
+    use wgtrace::gpu::plan::SAMPLE_GROUP as G;
+    use wgtrace::gpu::render::group_parts;
     assert_eq!(
         group_parts(3..2 * G + 5, G),
         vec![3..G + 3, G + 3..2 * G + 3, 2 * G + 3..2 * G + 5]
@@ -743,7 +753,9 @@ fn a_lost_device_is_an_error_not_a_panic() {
     };
     let scene = wgtrace::load_scene(&common::repo_path("scenes/spheres.toml"), &o).unwrap();
     let ctx = Arc::new(common::gpu_context());
-    let mut engine = Engine::Gpu(Box::new(GpuRenderer::new(ctx.clone(), &scene).unwrap()));
+    let mut engine = Engine::Gpu(Box::new(
+        GpuRenderer::new(ctx.clone(), &scene, &wgtrace::Tuning::default()).unwrap(),
+    ));
     engine.render_pass(0).expect("a pass before the loss");
     assert!(ctx.check().is_ok());
     engine.lose_device();

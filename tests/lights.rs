@@ -13,9 +13,9 @@ use wgtrace::cpu::bindings::Bindings;
 use wgtrace::cpu::lights::{
     choose_light, env_coords, env_direction, env_pdf, light_pdf, sample_light,
 };
-use wgtrace::render::Accumulation;
 use wgtrace::scene::format::LightSampling;
 use wgtrace::scene::records::NO_LIGHT;
+use wgtrace::Accumulation;
 use wgtrace::{FlatScene, Overrides};
 
 const STRATEGIES: [LightSampling; 3] = [
@@ -674,7 +674,12 @@ material = "glow"
     let scene = common::scene_from_file_str(src, "scenes/test.toml");
     assert_eq!(scene.emitters.len(), 1280);
     assert_eq!(
-        wgtrace::gpu::render::loop_iterations(&scene, true),
+        wgtrace::gpu::GpuPlan::new(
+            &scene,
+            &wgtrace::gpu::limits::DeviceFit::portable(),
+            &wgtrace::Tuning::default()
+        )
+        .path_loops,
         64 * (1 + 1280)
     );
     let llvmpipe = common::gpu_context().info.name.contains("llvmpipe");
@@ -692,6 +697,6 @@ material = "glow"
         ),
     }
     let mut mis = scene.clone();
-    mis.light_sampling = wgtrace::scene::records::LIGHT_SAMPLING_MIS;
+    mis.light_sampling = wgtrace::scene::format::LightSampling::Mis;
     assert!(wgtrace::Engine::gpu(&mis, 0).is_ok());
 }

@@ -149,11 +149,12 @@ material = "wall"
 "#;
     // every path runs all 24 rays, so each pixel is exactly the sum (Russian roulette
     // would make it a random estimate of it)
-    let no_rr = Overrides {
-        no_russian_roulette: true,
-        ..Default::default()
-    };
-    let scene = load(src, &dir, no_rr);
+    let no_rr = wgtrace::Tuning::parse("no-russian-roulette")
+        .unwrap()
+        .build();
+    let scene =
+        wgtrace::scene::load_scene_str(src, &dir.join("scene.toml"), &Overrides::default(), no_rr)
+            .unwrap_or_else(|e| panic!("{e}"));
     let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
     let mut state = 4242u32;
     let mut rays = Vec::new();

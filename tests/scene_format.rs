@@ -210,7 +210,7 @@ fn the_reference_minimal_scene_loads() {
     let text = std::fs::read_to_string(DOC).unwrap();
     let start = text.find("```toml\n").expect("a toml block") + "```toml\n".len();
     let end = start + text[start..].find("```").unwrap();
-    let scene = wgtrace::scene::load_scene_str(
+    let scene = wgtrace::load_scene_str(
         &text[start..end],
         std::path::Path::new("scenes/minimal.toml"),
         &Default::default(),

@@ -1,43 +1,112 @@
-//! Shaders validate with naga, the preprocessor behaves, and every record shared with WGSL
-//! has the layout naga gives the shader's struct. No GPU needed.
+//! Shaders validate with naga, the preprocessor behaves, every record shared with WGSL
+//! has the layout naga gives the shader's struct, every constant and binding the two
+//! languages share has one value, and a plan binds exactly what its shader reads. No GPU
+//! needed.
 
 mod common;
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 
-use wgtrace::gpu::shader::{
-    all_defines, kernel_shader, preprocess, scene_defines, scene_shader, trace_shader,
-    used_bindings, validate, BAKED_PRIMITIVES_MAX, BAKED_RECORDS_MAX, ENTRY_SHADERS,
-    FEATURE_DEFINES, SHADER_FILES,
+use wgtrace::gpu::bindings::{Placement, Placements, Slot, UNIFORM_BYTES};
+use wgtrace::gpu::kernel::KERNEL_IO;
+use wgtrace::gpu::limits::DeviceFit;
+use wgtrace::gpu::plan::{
+    Feature, FeatureSet, GpuPlan, ShaderSpec, BAKED_PRIMITIVES_MAX, BAKED_RECORDS_MAX,
 };
+use wgtrace::gpu::shader::{used_bindings, validate, ENTRY_SHADERS, SHADER_FILES};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
-use wgtrace::scene::records::record_layouts;
-use wgtrace::Overrides;
+use wgtrace::scene::records::{record_layouts, SharedValue, SHARED_CONSTANTS};
+use wgtrace::{Overrides, Tuning};
 
+/// The assembled and validated module of `entry` for `spec`.
+fn module(spec: &ShaderSpec, entry: &str) -> naga::Module {
+    let wgsl = spec.wgsl(entry).unwrap();
+    validate(entry, &wgsl).unwrap_or_else(|e| panic!("{spec:?}: {e}"))
+}
+
+/// The slots naga finds the trace entry point reading.
+fn naga_slots(spec: &ShaderSpec) -> Vec<Slot> {
+    let wgsl = spec.wgsl("trace").unwrap();
+    used_bindings("trace", &wgsl, "main", 0)
+        .unwrap()
+        .into_iter()
+        .map(|b| Slot::ALL[b as usize])
+        .collect()
+}
+
+/// Placements with every record array in `placement`.
+fn all_placed(placement: Placement) -> Placements {
+    let mut p = Placements::default();
+    for slot in Slot::RECORDS {
+        p.set(slot, placement);
+    }
+    p
+}
+
+/// With no feature, each alone and all of them, with the records in storage and in
+/// uniform buffers, both entry shaders validate and the trace shader binds what it reads.
 #[test]
-fn every_entry_shader_validates_with_naga() {
-    // with no feature define, with each alone, and with all of them
-    let mut sets: Vec<BTreeSet<String>> = vec![BTreeSet::new()];
-    sets.extend(
-        FEATURE_DEFINES
-            .iter()
-            .map(|d| BTreeSet::from([d.to_string()])),
-    );
-    sets.push(FEATURE_DEFINES.iter().map(|d| d.to_string()).collect());
-    for entry in ENTRY_SHADERS {
-        for defines in &sets {
-            let src = preprocess(entry, defines).unwrap();
-            validate(entry, &src).unwrap_or_else(|e| panic!("{defines:?}: {e}"));
+fn every_entry_shader_validates_and_binds_what_it_reads() {
+    let mut sets: Vec<FeatureSet> = vec![FeatureSet::default(), FeatureSet::all()];
+    sets.extend(Feature::ALL.map(|f| FeatureSet::default().with(f, true)));
+    // each feature with emission, so that its code is traced
+    sets.extend(Feature::ALL.map(|f| {
+        FeatureSet::default()
+            .with(f, true)
+            .with(Feature::Emission, true)
+    }));
+    for features in sets {
+        for placement in [Placement::Storage, Placement::Uniform] {
+            let spec = ShaderSpec {
+                features,
+                placements: all_placed(placement),
+                scene_code: String::new(),
+            };
+            for entry in ENTRY_SHADERS {
+                module(&spec, entry);
+            }
+            let named: Vec<Feature> = features.iter().collect();
+            assert_eq!(spec.trace_slots(), naga_slots(&spec), "{named:?}");
         }
     }
 }
 
-/// Every feature set that a scene in `scenes/` reaches, under each sampler and each
-/// light-sampling strategy, with and without the BVH, validates with naga; and a trace
-/// shader binds only the scene records it reads.
+/// Every combination of the features that decide which records are read (textures, the
+/// image background, light sampling), with emission, binds what its shader reads.
 #[test]
-fn every_feature_set_the_scenes_reach_validates_and_binds_only_what_it_uses() {
-    let mut sets = BTreeSet::new();
+fn every_combination_of_texture_and_light_features_binds_what_it_reads() {
+    let deciding = [
+        Feature::Textures,
+        Feature::ImageTexture,
+        Feature::NoiseTexture,
+        Feature::EnvMap,
+        Feature::Mis,
+        Feature::Mixture,
+    ];
+    for bits in 0..1u32 << deciding.len() {
+        let features: FeatureSet = deciding
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| bits & (1 << i) != 0)
+            .map(|(_, &f)| f)
+            .chain([Feature::Emission, Feature::Triangle, Feature::Lambertian])
+            .collect();
+        let spec = ShaderSpec::of(features);
+        assert_eq!(
+            spec.trace_slots(),
+            naga_slots(&spec),
+            "{:?}",
+            features.iter().collect::<Vec<_>>()
+        );
+    }
+}
+
+/// Every plan a scene in `scenes/` gets, under each sampler and each light-sampling
+/// strategy, with and without the BVH and the records written in, validates with naga and
+/// binds exactly the slots naga finds its trace shader reading.
+#[test]
+fn every_plan_the_scenes_reach_validates_and_binds_only_what_it_reads() {
+    let mut specs = BTreeSet::new();
     for path in common::scene_files() {
         for sampler in [
             SamplerKind::Random,
@@ -50,62 +119,58 @@ fn every_feature_set_the_scenes_reach_validates_and_binds_only_what_it_uses() {
                 LightSampling::Mixture,
                 LightSampling::Mis,
             ] {
-                for no_bvh in [false, true] {
+                for knobs in ["", "no-bvh", "no-baked-records"] {
                     let o = Overrides {
                         sampler: Some(sampler),
                         light_sampling: Some(light_sampling),
-                        no_bvh,
                         ..Default::default()
                     };
-                    let scene = wgtrace::load_scene(&path, &o).unwrap();
-                    sets.insert(scene_defines(&scene));
+                    let scene = common::load_tuned(&path, &o, knobs);
+                    let tuning = Tuning::parse(knobs).unwrap();
+                    specs.insert(GpuPlan::new(&scene, &DeviceFit::portable(), &tuning).shader);
                 }
             }
         }
     }
-    assert!(sets.len() > 100, "only {} feature sets", sets.len());
+    assert!(specs.len() > 100, "only {} shader specs", specs.len());
     let mut bound = BTreeSet::new();
-    for defines in &sets {
+    for spec in &specs {
         for entry in ENTRY_SHADERS {
-            let src = preprocess(entry, defines).unwrap();
-            validate(entry, &src).unwrap_or_else(|e| panic!("{defines:?}: {e}"));
+            module(spec, entry);
         }
-        let src = preprocess("trace", defines).unwrap();
-        bound.insert(used_bindings("trace", &src, "main", 0).unwrap());
+        assert_eq!(spec.trace_slots(), naga_slots(spec), "{:?}", spec.features);
+        bound.insert(spec.trace_slots());
     }
-    // binding numbers of shaders/shared/bindings.wgsl
-    let (emitters, bvh, textures, texels) = (3, 5, 7, 8);
-    let full = preprocess("trace", &all_defines()).unwrap();
-    assert_eq!(
-        used_bindings("trace", &full, "main", 0).unwrap(),
-        (0..=8).collect::<Vec<u32>>()
-    );
-    let defines = |names: &[&str]| names.iter().map(|s| s.to_string()).collect();
-    let cornell = defines(&[
-        "HAS_BVH",
-        "HAS_EMISSION",
-        "HAS_LAMBERTIAN",
-        "HAS_SOBOL",
-        "HAS_SPHERE",
-        "HAS_TRIANGLE",
-    ]);
-    let used = |d: &BTreeSet<String>| {
-        used_bindings("trace", &preprocess("trace", d).unwrap(), "main", 0).unwrap()
-    };
-    // without light sampling or textures, their records are not bound
-    for absent in [emitters, textures, texels] {
-        assert!(!used(&cornell).contains(&absent), "{:?}", used(&cornell));
-    }
-    let mut no_bvh = cornell.clone();
-    no_bvh.remove("HAS_BVH");
-    no_bvh.insert("HAS_PRIMITIVE_LOOP".into());
-    assert!(used(&cornell).contains(&bvh) && !used(&no_bvh).contains(&bvh));
-    let mut mis = cornell.clone();
-    mis.insert("HAS_MIS".into());
-    assert!(used(&mis).contains(&emitters));
-    // nothing emits: no path is traced, and only the parameters and the sums are bound
-    assert_eq!(used(&BTreeSet::new()), vec![0, 4]);
     assert!(bound.len() > 4, "{bound:?}");
+    // the full shader reads everything
+    assert_eq!(ShaderSpec::full().trace_slots(), Slot::ALL.to_vec());
+    // nothing emits: no path is traced, and only the parameters and the sums are bound
+    assert_eq!(
+        ShaderSpec::of(FeatureSet::default()).trace_slots(),
+        vec![Slot::Params, Slot::Accum]
+    );
+    // without light sampling or textures their records are not bound; the BVH only with it
+    let cornell: FeatureSet = [
+        Feature::Bvh,
+        Feature::Emission,
+        Feature::Lambertian,
+        Feature::Sobol,
+        Feature::Sphere,
+        Feature::Triangle,
+    ]
+    .into_iter()
+    .collect();
+    let slots = |f: FeatureSet| ShaderSpec::of(f).trace_slots();
+    for absent in [Slot::Emitters, Slot::Textures, Slot::Texels] {
+        assert!(!slots(cornell).contains(&absent));
+    }
+    let no_bvh: FeatureSet = cornell
+        .iter()
+        .filter(|&f| f != Feature::Bvh)
+        .chain([Feature::PrimitiveLoop])
+        .collect();
+    assert!(slots(cornell).contains(&Slot::Bvh) && !slots(no_bvh).contains(&Slot::Bvh));
+    assert!(slots(cornell.with(Feature::Mis, true)).contains(&Slot::Emitters));
 }
 
 /// Every scene of `scenes/` small enough (no BVH, nothing transformed, at most
@@ -116,46 +181,40 @@ fn every_feature_set_the_scenes_reach_validates_and_binds_only_what_it_uses() {
 fn small_scenes_get_their_primitives_as_constants_exactly() {
     let mut baked = Vec::new();
     for path in common::scene_files() {
-        for (no_bvh, no_baked) in [(false, false), (true, false), (false, true)] {
-            let o = Overrides {
-                no_bvh,
-                no_baked_records: no_baked,
-                ..Default::default()
-            };
-            let scene = wgtrace::load_scene(&path, &o).unwrap();
-            let spec = scene_shader(&scene);
-            let expect = !no_baked
+        for knobs in ["", "no-bvh", "no-baked-records"] {
+            let scene = common::load_tuned(&path, &Overrides::default(), knobs);
+            let tuning = Tuning::parse(knobs).unwrap();
+            let spec = GpuPlan::new(&scene, &DeviceFit::portable(), &tuning).shader;
+            let in_shader = |s: Slot| spec.placements.get(s) == Placement::Shader;
+            let on = tuning.baked_records;
+            let expect = on
                 && !scene.use_bvh
                 && scene.primitives.len() <= BAKED_PRIMITIVES_MAX
                 && scene
                     .primitives
                     .iter()
                     .all(|p| p.flags & wgtrace::scene::records::PRIM_FLAG_TRANSFORM == 0);
+            let name = path.display();
+            assert_eq!(in_shader(Slot::Primitives), expect, "{name}");
             assert_eq!(
-                spec.defines.contains("BAKED_PRIMITIVES"),
+                spec.defines().contains("BAKED_PRIMITIVES"),
                 expect,
-                "{}",
-                path.display()
+                "{name}"
             );
-            let few = |n: usize| !no_baked && (1..=BAKED_RECORDS_MAX).contains(&n);
+            let few = |n: usize| on && (1..=BAKED_RECORDS_MAX).contains(&n);
+            assert_eq!(in_shader(Slot::Materials), few(scene.materials.len()));
+            assert_eq!(in_shader(Slot::Emitters), few(scene.emitters.len()));
             assert_eq!(
-                spec.defines.contains("BAKED_MATERIALS"),
-                few(scene.materials.len())
-            );
-            assert_eq!(
-                spec.defines.contains("BAKED_EMITTERS"),
-                few(scene.emitters.len())
-            );
-            assert_eq!(
-                spec.defines.contains("SCENE_CODE"),
-                !spec.scene_code.is_empty()
+                spec.scene_code.is_empty(),
+                ![Slot::Primitives, Slot::Materials, Slot::Emitters]
+                    .into_iter()
+                    .any(in_shader)
             );
             if spec.scene_code.is_empty() {
                 continue;
             }
-            let wgsl = trace_shader(&spec).unwrap();
-            let module = validate("trace", &wgsl).unwrap();
-            validate("kernel", &kernel_shader(&spec).unwrap()).unwrap();
+            let module = module(&spec, "trace");
+            validate("kernel", &spec.wgsl("kernel").unwrap()).unwrap();
             if !expect {
                 continue;
             }
@@ -179,8 +238,7 @@ fn small_scenes_get_their_primitives_as_constants_exactly() {
                 for x in p.a.iter().chain(&p.b).chain(&p.c).filter(|&&x| x != 0.0) {
                     assert!(
                         literals.contains(&x.abs().to_bits()) || literals.contains(&x.to_bits()),
-                        "{}: {x:?} not written exactly",
-                        path.display()
+                        "{name}: {x:?} not written exactly"
                     );
                 }
             }
@@ -218,15 +276,16 @@ fn every_shader_file_is_embedded_and_imported() {
         "shaders/ and gpu::shader::SHADER_FILES differ"
     );
     // The trace shader pulls in every shared file exactly once.
-    let src = preprocess("trace", &BTreeSet::new()).unwrap();
+    let src = ShaderSpec::default().wgsl("trace").unwrap();
     assert_eq!(src.matches("fn pcg4d(").count(), 1);
     assert_eq!(src.matches("struct Primitive {").count(), 1);
+    assert_eq!(src.matches("const NO_HIT:").count(), 1);
     assert!(!src.contains("#import"));
 }
 
 #[test]
 fn preprocessor_selects_branches_imports_once_and_reports_errors() {
-    use wgtrace::gpu::shader::preprocess_files;
+    use wgtrace::gpu::shader::{assemble, preprocess_files};
     let files = [
         (
             "main",
@@ -236,8 +295,8 @@ fn preprocessor_selects_branches_imports_once_and_reports_errors() {
         ("b", "B"),
         ("c", "C"),
     ];
-    let defs = |names: &[&str]| names.iter().map(|s| s.to_string()).collect::<BTreeSet<_>>();
-    let lines = |d: &[&str]| preprocess_files("main", &defs(d), &files).unwrap();
+    let defs = |names: &[&'static str]| names.iter().copied().collect::<BTreeSet<&str>>();
+    let lines = |d: &[&'static str]| preprocess_files("main", &defs(d), &files).unwrap();
     assert_eq!(lines(&[]), "B\nA\nslow\nC\nend\n");
     assert_eq!(lines(&["FAST"]), "B\nA\nfast\nnarrow\nend\n");
     assert_eq!(lines(&["FAST", "WIDE"]), "B\nA\nfast\nend\n");
@@ -250,12 +309,15 @@ fn preprocessor_selects_branches_imports_once_and_reports_errors() {
     assert!(bad("#if X\nx").contains("#if without #endif"));
     assert!(bad("#endif").contains("m:1: #endif without #if"));
     assert!(bad("x\n#import nope").contains("m:2: #import of unknown file nope"));
-    let err = preprocess("no/such/file", &defs(&[])).unwrap_err();
+    let err = assemble("no/such/file", &defs(&[]), &[]).unwrap_err();
     assert!(
         err.to_string()
             .contains("no shader file named no/such/file"),
         "{err}"
     );
+    // the shaders need the generated files
+    let err = assemble("trace", &defs(&[]), &[]).unwrap_err().to_string();
+    assert!(err.contains("#import of unknown file generated/"), "{err}");
 }
 
 /// Finds the struct named `name` in a naga module and returns (size, [(member, offset)]).
@@ -281,7 +343,7 @@ fn naga_struct(module: &naga::Module, name: &str) -> Option<(u32, Vec<(String, u
 fn records_match_naga_layout_of_the_shader() {
     let modules: Vec<naga::Module> = ENTRY_SHADERS
         .iter()
-        .map(|name| validate(name, &preprocess(name, &BTreeSet::new()).unwrap()).unwrap())
+        .map(|name| module(&ShaderSpec::default(), name))
         .collect();
     for rec in record_layouts() {
         let (size, members) = modules
@@ -302,78 +364,197 @@ fn records_match_naga_layout_of_the_shader() {
     }
 }
 
-/// Each UNIFORM_* define turns its record array into a uniform buffer of the fixed length
-/// 65536 bytes / record size (the largest whole number of records in `UNIFORM_BYTES`),
-/// alone and all together, in the trace and the kernel shaders; the scenes whose records
-/// fit get them, and the full shader none.
+/// The constants the two languages share have one value: naga's module of each entry
+/// shader holds exactly `SHARED_CONSTANTS`, by name, type and value (the WGSL gets them
+/// written from that list), and no shader file declares a constant of its own.
+#[test]
+fn shared_constants_have_one_value_in_both_languages() {
+    for entry in ENTRY_SHADERS {
+        let m = module(&ShaderSpec::full(), entry);
+        let in_wgsl: BTreeMap<String, SharedValue> = m
+            .constants
+            .iter()
+            .map(|(_, c)| {
+                let value = match m.global_expressions[c.init] {
+                    naga::Expression::Literal(naga::Literal::U32(v)) => SharedValue::U32(v),
+                    naga::Expression::Literal(naga::Literal::F32(v)) => SharedValue::F32(v),
+                    ref e => panic!("{:?} is not a u32 or f32 literal: {e:?}", c.name),
+                };
+                (c.name.clone().unwrap_or_default(), value)
+            })
+            .collect();
+        let in_rust: BTreeMap<String, SharedValue> = SHARED_CONSTANTS
+            .iter()
+            .map(|&(n, v)| (n.to_string(), v))
+            .collect();
+        assert_eq!(in_wgsl.len(), in_rust.len(), "{entry}: {in_wgsl:?}");
+        for (name, v) in &in_rust {
+            let w = in_wgsl
+                .get(name)
+                .unwrap_or_else(|| panic!("{entry}: no {name}"));
+            // compared by bits: FAR is f32::MAX, not a rounded neighbour
+            let bits = |v: &SharedValue| match *v {
+                SharedValue::U32(x) => (0, x),
+                SharedValue::F32(x) => (1, x.to_bits()),
+            };
+            assert_eq!(bits(w), bits(v), "{entry}: {name}");
+        }
+    }
+    for (name, src) in SHADER_FILES {
+        for (i, line) in src.lines().enumerate() {
+            assert!(
+                !line.trim_start().starts_with("const "),
+                "shaders/{name}.wgsl:{}: a constant belongs in SHARED_CONSTANTS \
+                 (src/scene/records.rs): {line}",
+                i + 1
+            );
+        }
+    }
+}
+
+/// Every binding has one number: naga's module holds each slot's variable, by the name
+/// `Slot::name` gives, at `Slot::binding` of group 0, and the kernel's inputs and outputs
+/// at `KERNEL_IO` of group 1.
+#[test]
+fn bindings_have_one_number_in_both_languages() {
+    let m = module(&ShaderSpec::full(), "kernel");
+    let globals: BTreeMap<String, (u32, u32)> = m
+        .global_variables
+        .iter()
+        .filter_map(|(_, v)| {
+            let b = v.binding.as_ref()?;
+            Some((v.name.clone()?, (b.group, b.binding)))
+        })
+        .collect();
+    for slot in Slot::ALL {
+        assert_eq!(
+            globals.get(slot.name()),
+            Some(&(0, slot.binding())),
+            "{slot:?}"
+        );
+    }
+    for (name, binding) in KERNEL_IO {
+        assert_eq!(globals.get(name), Some(&(1, binding)), "{name}");
+    }
+    assert_eq!(
+        globals.len(),
+        Slot::ALL.len() + KERNEL_IO.len(),
+        "{globals:?}"
+    );
+    let numbers: BTreeSet<u32> = Slot::ALL.iter().map(|s| s.binding()).collect();
+    assert_eq!(numbers.len(), Slot::ALL.len());
+}
+
+/// A record array placed in a uniform buffer has the fixed length 65536 bytes / record
+/// size (the largest whole number of records in `UNIFORM_BYTES`), alone and all together,
+/// in the trace and the kernel shaders; the scenes whose records fit get them, and the
+/// full shader none.
 #[test]
 fn uniform_record_arrays_have_the_fixed_lengths_and_bindings() {
-    use wgtrace::gpu::shader::{uniform_bindings, uniform_defines, UNIFORM_BYTES, UNIFORM_DEFINES};
-    let features = all_defines();
-    let mut all = features.clone();
-    for &(name, binding) in UNIFORM_DEFINES {
-        let mut one = features.clone();
-        one.insert(name.to_string());
-        all.insert(name.to_string());
+    let uniform_bindings = |m: &naga::Module| -> Vec<u32> {
+        let mut v: Vec<u32> = m
+            .global_variables
+            .iter()
+            .filter(|(_, v)| v.space == naga::AddressSpace::Uniform)
+            .filter_map(|(_, v)| v.binding.as_ref())
+            .filter(|b| b.group == 0 && b.binding != 0)
+            .map(|b| b.binding)
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    for slot in Slot::RECORDS {
+        let mut spec = ShaderSpec::full();
+        spec.placements.set(slot, Placement::Uniform);
         for entry in ENTRY_SHADERS {
-            let wgsl = preprocess(entry, &one).unwrap();
+            let m = module(&spec, entry);
             assert_eq!(
-                uniform_bindings(entry, &wgsl).unwrap(),
-                vec![binding],
-                "{entry} {name}"
+                uniform_bindings(&m),
+                vec![slot.binding()],
+                "{entry} {slot:?}"
             );
-            let module = validate(entry, &wgsl).unwrap();
-            let var = module
+            let var = m
                 .global_variables
                 .iter()
                 .map(|(_, v)| v)
                 .find(|v| {
                     v.binding
                         .as_ref()
-                        .is_some_and(|b| b.group == 0 && b.binding == binding)
+                        .is_some_and(|b| b.group == 0 && b.binding == slot.binding())
                 })
                 .unwrap();
             let naga::TypeInner::Array {
                 base,
                 size: naga::ArraySize::Constant(len),
                 stride,
-            } = module.types[var.ty].inner
+            } = m.types[var.ty].inner
             else {
-                panic!("{name}: binding {binding} is not a fixed-size array");
+                panic!("{slot:?} is not a fixed-size array");
             };
-            let record = module.types[base].inner.size(module.to_ctx()) as u64;
-            assert_eq!(stride as u64, record, "{name}");
+            let record = m.types[base].inner.size(m.to_ctx()) as u64;
+            assert_eq!(stride as u64, record, "{slot:?}");
             assert_eq!(
                 len.get() as u64,
                 UNIFORM_BYTES / record,
-                "{name}: {len} records of {record} bytes"
+                "{slot:?}: {len} records of {record} bytes"
             );
         }
     }
-    let wgsl = preprocess("trace", &all).unwrap();
+    let mut all = ShaderSpec::full();
+    all.placements = all_placed(Placement::Uniform);
     assert_eq!(
-        uniform_bindings("trace", &wgsl).unwrap(),
+        uniform_bindings(&module(&all, "trace")),
         vec![1, 2, 3, 5, 6, 7]
     );
-    assert!(
-        uniform_bindings("trace", &preprocess("trace", &features).unwrap())
-            .unwrap()
-            .is_empty()
-    );
-    // every scene in scenes/ fits, and its shader gets all its record arrays as uniforms
-    let scene = wgtrace::load_scene(
-        &common::repo_path("scenes/cornell.toml"),
-        &Overrides::default(),
-    )
-    .unwrap();
-    assert_eq!(uniform_defines(&scene).len(), UNIFORM_DEFINES.len());
-    assert!(scene_defines(&scene).contains("UNIFORM_PRIMITIVES"));
-    let full = Overrides {
-        no_specialize: true,
-        ..Default::default()
+    assert!(uniform_bindings(&module(&ShaderSpec::full(), "trace")).is_empty());
+    // the Cornell box fits: every record array not written into its shader is uniform
+    let cornell = common::repo_path("scenes/cornell.toml");
+    let scene = wgtrace::load_scene(&cornell, &Overrides::default()).unwrap();
+    let plan = GpuPlan::new(&scene, &DeviceFit::portable(), &Tuning::default());
+    for slot in Slot::RECORDS {
+        assert_ne!(
+            plan.shader.placements.get(slot),
+            Placement::Storage,
+            "{slot:?}"
+        );
+    }
+    // not on a device that cannot bind that many uniform buffers
+    let small = DeviceFit {
+        uniform_records: false,
+        ..DeviceFit::portable()
     };
-    let scene = wgtrace::load_scene(&common::repo_path("scenes/cornell.toml"), &full).unwrap();
-    assert!(!scene_defines(&scene)
+    let plan = GpuPlan::new(&scene, &small, &Tuning::default());
+    assert!(Slot::RECORDS
         .iter()
-        .any(|d| d.starts_with("UNIFORM_")));
+        .all(|&s| plan.shader.placements.get(s) != Placement::Uniform));
+    // nor in the full shader
+    let full = GpuPlan::new(
+        &scene,
+        &DeviceFit::portable(),
+        &Tuning::parse("no-specialize").unwrap(),
+    );
+    assert_eq!(full.shader, ShaderSpec::full());
+}
+
+/// The plan follows the tuning: the sample group, the full shader, the records.
+#[test]
+fn the_plan_follows_the_tuning() {
+    let cornell = common::repo_path("scenes/cornell.toml");
+    let scene = wgtrace::load_scene(&cornell, &Overrides::default()).unwrap();
+    let fit = DeviceFit::portable();
+    let plan = |knobs: &str| GpuPlan::new(&scene, &fit, &Tuning::parse(knobs).unwrap());
+    assert_eq!(plan("").sample_group, wgtrace::gpu::plan::SAMPLE_GROUP);
+    assert_eq!(plan("no-sample-groups").sample_group, 1);
+    assert!(plan("no-baked-records").shader.scene_code.is_empty());
+    assert!(Slot::RECORDS
+        .iter()
+        .all(|&s| plan("no-uniform-records,no-baked-records")
+            .shader
+            .placements
+            .get(s)
+            == Placement::Storage));
+    assert!(Tuning::parse("no-such-knob")
+        .unwrap_err()
+        .contains("no-russian-roulette"));
+    assert!(Tuning::parse("bvh,no-bvh").is_err());
 }

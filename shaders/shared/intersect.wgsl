@@ -328,8 +328,8 @@ fn intersect_aabb(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3
     return FAR;
 }
 
-// 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps) with eps = 2^-24.
-const BOX_WIDEN: f32 = 1.0000003576278687;
+// BOX_WIDEN (types.wgsl's constants) = 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps)
+// with eps = 2^-24.
 
 // Closest hit along the ray before t_max (FAR: anywhere; a shadow ray's length: whether
 // anything lies in between): every unbounded primitive (planes), then the BVH in order
@@ -339,7 +339,7 @@ const BOX_WIDEN: f32 = 1.0000003576278687;
 // small scene, the search over its primitives written in as constants (BAKED_PRIMITIVES).
 fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
 #ifdef BAKED_PRIMITIVES
-    // a small scene's records are constants of its shader (gpu::shader::baked_primitives)
+    // a small scene's records are constants of its shader (gpu::codegen::baked_primitives)
     return intersect_baked(ray, t_max);
 #else
     var best = Candidate(t_max, NO_HIT, 0.0, 0.0);

@@ -9,9 +9,9 @@
 #import shared/textures
 #import shared/types
 
-// Below this cosine between a light's normal and the direction to it, the light is seen
-// edge-on: pdf 0 and no sample, never an unbounded weight.
-const EDGE_ON_COS: f32 = 1e-6;
+// EDGE_ON_COS (types.wgsl's constants): below this cosine between a light's normal and
+// the direction to it, the light is seen edge-on: pdf 0 and no sample, never an unbounded
+// weight.
 
 // The image background's frame: a world direction turned by minus the rotation about +y.
 fn env_local(d: vec3<f32>) -> vec3<f32> {
@@ -109,7 +109,7 @@ fn env_pdf(d: vec3<f32>) -> f32 {
 // The index of the light whose CDF interval holds u: the first with u < cdf.
 fn choose_light(u: f32) -> u32 {
 #ifdef BAKED_EMITTERS
-    // a few lights written into the shader (gpu::shader::baked_records)
+    // a few lights written into the shader (gpu::codegen::baked_emitters)
     return choose_light_baked(u);
 #else
     var lo = 0u;

@@ -102,10 +102,10 @@ fn scatter_dielectric(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
     return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), weight, 0.0, true);
 }
 
-// Below this GGX alpha the specular lobe is a perfect mirror (a delta, as in pbrt-v4): eval
-// and pdf leave it out and scatter_microfacet samples the mirror direction itself, so
-// roughness 0 never divides by zero.
-const ALPHA_SMOOTH: f32 = 1e-3;
+// ALPHA_SMOOTH (types.wgsl's constants): below this GGX alpha the specular lobe is a
+// perfect mirror (a delta, as in pbrt-v4): eval and pdf leave it out and
+// scatter_microfacet samples the mirror direction itself, so roughness 0 never divides by
+// zero.
 
 fn luminance(c: vec3<f32>) -> f32 {
     return dot(c, vec3<f32>(0.2126, 0.7152, 0.0722));

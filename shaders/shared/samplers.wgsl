@@ -7,16 +7,8 @@
 #import shared/rng
 #import shared/types
 
-// Dimension pairs drawn at each bounce (rand_2d's `dim`).
-const DIM_PIXEL: u32 = 0u;
-const DIM_LENS: u32 = 1u;
-const DIM_BSDF: u32 = 2u;
-// a point on a light
-const DIM_LIGHT: u32 = 3u;
-// .x chooses the light, .y the mixture's strategy
-const DIM_LIGHT_CHOICE: u32 = 4u;
-// .x decides Russian roulette
-const DIM_RR: u32 = 5u;
+// The dimension pairs drawn at each bounce (rand_2d's `dim`: DIM_PIXEL, DIM_LENS,
+// DIM_BSDF, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_RR) come with the constants of types.wgsl.
 
 // Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction numbers
 // v_k = v_{k-1} ^ (v_{k-1} >> 1), v_1 = 2^31, of the set bits of i. Bit a of i reaches

@@ -1,8 +1,7 @@
 // Sampling primitives: orthonormal bases, disks, hemispheres, ray origin offsets.
 #import shared/types
 
-// f32 nearest to pi: the same bits as std::f32::consts::PI on the CPU.
-const PI: f32 = 3.14159265358979;
+// PI (types.wgsl's constants) is the f32 nearest to pi, std::f32::consts::PI on the CPU.
 
 // Orthonormal basis around unit n, branchless (Duff et al., JCGT 2017).
 // Returns (tangent, bitangent); with n they form a right-handed frame.

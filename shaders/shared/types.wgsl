@@ -1,81 +1,12 @@
 // Records shared with the host. Each struct mirrors one `#[repr(C)]` struct in
-// src/scene/records.rs; tests/layout.rs checks sizes and offsets against naga's layout.
+// src/scene/records.rs; tests/shaders.rs checks sizes and offsets against naga's layout.
 // vec3 never appears in a storage struct (16-byte alignment): positions are vec4 with .w used
 // for a scalar or left as padding.
 
-// Primitive tags (switch in intersect.wgsl).
-const PRIM_SPHERE: u32 = 0u;
-const PRIM_TRIANGLE: u32 = 1u;
-const PRIM_PLANE: u32 = 2u;
-const PRIM_BOX: u32 = 3u;
-const PRIM_CYLINDER: u32 = 4u;
-const PRIM_DISK: u32 = 5u;
-
-// Primitive flags.
-// `data` indexes a world-to-object transform in shape_data (6 entries: w2o rows, o2w rows).
-const PRIM_FLAG_TRANSFORM: u32 = 1u;
-// `data` indexes triangle vertex attributes (4 entries: (n0, u0), (n1, u1), (n2, u2), (v0, v1, v2, 0)).
-const PRIM_FLAG_ATTRIBUTES: u32 = 2u;
-// The vertex normals of the attributes are meaningful (smooth shading).
-const PRIM_FLAG_SHADING_NORMALS: u32 = 4u;
-// Cylinders: closed by two cap disks.
-const PRIM_FLAG_CAPS: u32 = 8u;
-
-// Size of the BVH traversal stack; the host builder keeps every leaf within this depth.
-const BVH_STACK_SIZE: u32 = 32u;
-
-// Material tags (switch in materials.wgsl).
-const MAT_LAMBERTIAN: u32 = 0u;
-const MAT_EMISSIVE: u32 = 1u;
-const MAT_METAL: u32 = 2u;
-const MAT_DIELECTRIC: u32 = 3u;
-const MAT_MICROFACET: u32 = 4u;
-
-// Texture tags (switch in textures.wgsl) and flags.
-const TEX_CONSTANT: u32 = 0u;
-const TEX_CHECKER: u32 = 1u;
-const TEX_IMAGE: u32 = 2u;
-const TEX_NOISE: u32 = 3u;
-// checker cells in space rather than in uv
-const TEX_FLAG_SOLID: u32 = 4u;
-// image: wrap mode (0 repeat, 1 clamp, 2 mirror) | noise: kind (0 Perlin, 1 turbulence, 2 marble)
-const TEX_MODE_MASK: u32 = 3u;
-// a colour with no texture
-const NO_TEXTURE: u32 = 0xffffffffu;
-
-// Pixel samplers (Params.sampler).
-const SAMPLER_RANDOM: u32 = 0u;
-const SAMPLER_JITTERED: u32 = 1u;
-const SAMPLER_HAMMERSLEY: u32 = 2u;
-const SAMPLER_SOBOL: u32 = 3u;
-
-// Light-sampling strategies (Params.light_sampling).
-const LIGHT_SAMPLING_BSDF: u32 = 0u;
-const LIGHT_SAMPLING_MIXTURE: u32 = 1u;
-const LIGHT_SAMPLING_MIS: u32 = 2u;
-
-// Background kinds (Params.background_kind).
-const BACKGROUND_CONSTANT: u32 = 0u;
-const BACKGROUND_GRADIENT: u32 = 1u;
-const BACKGROUND_IMAGE: u32 = 2u;
-
-// Light kinds (switch in lights.wgsl).
-const LIGHT_TRIANGLE: u32 = 0u;
-const LIGHT_DISK: u32 = 1u;
-const LIGHT_SPHERE: u32 = 2u;
-const LIGHT_ENVIRONMENT: u32 = 3u;
-// an index that names no light
-const NO_LIGHT: u32 = 0xffffffffu;
-// Primitive.flags >> PRIM_LIGHT_SHIFT = index in the light list + 1, 0 for none
-const PRIM_LIGHT_SHIFT: u32 = 8u;
-
-// Material flags.
-const MAT_FLAG_TWO_SIDED: u32 = 1u;
-
-// A ray that hits nothing reports this primitive index.
-const NO_HIT: u32 = 0xffffffffu;
-// Largest finite f32: "no intersection" and "unbounded" without relying on infinities.
-const FAR: f32 = 3.40282347e+38;
+// The constants both languages read (tags, flags, sampler and light kinds, NO_HIT, FAR,
+// the random-number dimensions, PI, ...) are declared once, in src/scene/records.rs, and
+// written into every shader from there (gpu::codegen::constants):
+#import generated/constants
 
 // In object space when PRIM_FLAG_TRANSFORM is set.
 struct Primitive {

@@ -313,8 +313,7 @@ pub fn closer(b: &Bindings, best: Candidate, i: u32, ray: &Ray) -> Candidate {
     best
 }
 
-/// 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps) with eps = 2^-24.
-pub const BOX_WIDEN: f32 = 1.0 + 3.0 * f32::EPSILON;
+pub use crate::scene::records::BOX_WIDEN;
 
 /// Entry distance into a BVH node's box (clamped to 0), or FAR.
 pub fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {

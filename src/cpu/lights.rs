@@ -13,8 +13,7 @@ use crate::scene::records::{
     LIGHT_TRIANGLE, NO_LIGHT,
 };
 
-/// Below this cosine a light is seen edge-on: pdf 0 and no sample.
-pub const EDGE_ON_COS: f32 = 1e-6;
+pub use crate::scene::records::EDGE_ON_COS;
 
 /// The image background's frame: a world direction turned by minus the rotation.
 pub fn env_local(b: &Bindings, d: Vec3) -> Vec3 {

@@ -138,8 +138,7 @@ pub fn scatter_dielectric(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
     }
 }
 
-/// Below this GGX alpha the specular lobe is a perfect mirror (a delta, as in pbrt-v4).
-pub const ALPHA_SMOOTH: f32 = 1e-3;
+pub use crate::scene::records::ALPHA_SMOOTH;
 
 #[inline]
 pub fn luminance(c: Vec3) -> f32 {

@@ -4,15 +4,9 @@ use super::bindings::Bindings;
 use super::rng::{pcg4d, rand_2d, u32_to_unit_float};
 use crate::scene::records::{SAMPLER_HAMMERSLEY, SAMPLER_JITTERED, SAMPLER_SOBOL};
 
-pub const DIM_PIXEL: u32 = 0;
-pub const DIM_LENS: u32 = 1;
-pub const DIM_BSDF: u32 = 2;
-/// A point on a light.
-pub const DIM_LIGHT: u32 = 3;
-/// `.x` chooses the light, `.y` the mixture's strategy.
-pub const DIM_LIGHT_CHOICE: u32 = 4;
-/// .x decides Russian roulette.
-pub const DIM_RR: u32 = 5;
+pub use crate::scene::records::{
+    DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL, DIM_RR,
+};
 
 /// Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction
 /// numbers of the set bits of i, as five shift-and-mask steps (see samplers.wgsl).

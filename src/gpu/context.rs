@@ -6,45 +6,10 @@ use std::collections::HashMap;
 use std::path::PathBuf;
 use std::sync::{Arc, Mutex, OnceLock};
 
-use super::pipeline::TracePipeline;
-
-#[derive(Debug, thiserror::Error)]
-pub enum GpuError {
-    #[error(
-        "no Vulkan adapter found (install a Vulkan driver; on Debian/Ubuntu the software one is \
-         `apt-get install mesa-vulkan-drivers`)"
-    )]
-    NoAdapter,
-    #[error("adapter index {index} out of range: {count} Vulkan adapter(s) found")]
-    BadAdapterIndex { index: usize, count: usize },
-    #[error("cannot open the GPU device: {0}")]
-    Device(#[from] wgpu::RequestDeviceError),
-    #[error("GPU buffer readback failed: {0}")]
-    Readback(String),
-    #[error(
-        "the scene's {what} buffer needs {needed_mib} MiB, more than this adapter's \
-         {limit_mib} MiB per storage binding; use fewer triangles or --backend cpu"
-    )]
-    SceneTooLarge {
-        what: &'static str,
-        needed_mib: u64,
-        limit_mib: u64,
-    },
-    #[error(
-        "this render would run {iterations} loop iterations per shader invocation (its \
-         group of paths; every primitive on every ray with --no-bvh, every light at every bounce with light_sampling = \
-         \"mixture\"), more than the {limit} that llvmpipe (lavapipe) runs before it \
-         silently stops a shader's loops; use the BVH, light_sampling = \"mis\", or \
-         --backend cpu"
-    )]
-    LoopLimit { iterations: u64, limit: u64 },
-    #[error(transparent)]
-    Shader(#[from] super::shader::ShaderError),
-    #[error("the GPU device was lost ({0})")]
-    Lost(String),
-    #[error("the GPU reported an error: {0}")]
-    Failed(String),
-}
+use super::error::GpuError;
+use super::limits::DeviceFit;
+use super::pipeline::{compile_trace_pipeline, TracePipeline};
+use super::plan::ShaderSpec;
 
 /// An open device on one adapter, with the trace pipelines compiled on it so far (one per
 /// shader spec: feature set and scene code) and, where the driver supports one, a pipeline cache kept on disk.
@@ -53,8 +18,8 @@ pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
-    pub(crate) pipelines: Mutex<HashMap<super::shader::ShaderSpec, Arc<TracePipeline>>>,
-    pub(crate) disk_cache: Option<DiskCache>,
+    pipelines: Mutex<HashMap<ShaderSpec, Arc<TracePipeline>>>,
+    disk_cache: Option<DiskCache>,
     /// The first error wgpu reported outside an error scope, or the device's loss: set by
     /// the device's callbacks, turned into a `GpuError` by [`GpuContext::check`].
     fault: Arc<Mutex<Option<Fault>>>,
@@ -99,7 +64,7 @@ fn catch_panic<T>(f: impl FnOnce() -> T) -> Result<T, String> {
 }
 
 /// A driver pipeline cache and the file it is loaded from and saved to.
-pub(crate) struct DiskCache {
+struct DiskCache {
     pub cache: wgpu::PipelineCache,
     pub path: PathBuf,
 }
@@ -127,9 +92,32 @@ fn shared_contexts() -> &'static Mutex<HashMap<usize, Arc<GpuContext>>> {
 }
 
 fn instance() -> wgpu::Instance {
+    quiet_device_select();
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = wgpu::Backends::VULKAN;
     wgpu::Instance::new(desc)
+}
+
+/// Turns off Mesa's device-selection layer for this process, unless the user configured
+/// it (`MESA_VK_DEVICE_SELECT`, `NODEVICE_SELECT`). The layer only reorders adapters, which
+/// wgtrace ranks itself ([`rank`]); but on a headless machine it asks Wayland for the
+/// default GPU, and libwayland prints `error: XDG_RUNTIME_DIR is invalid or not set in the
+/// environment.` to stderr, once per instance, before renders that then succeed. Turned
+/// off by the variable its manifest names (`"disable_environment": {"NODEVICE_SELECT":
+/// "1"}`), read when the Vulkan loader creates an instance; the driver's own messages are
+/// left alone.
+fn quiet_device_select() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        let configured = ["MESA_VK_DEVICE_SELECT", "NODEVICE_SELECT"]
+            .iter()
+            .any(|v| std::env::var_os(v).is_some());
+        if !configured {
+            // SAFETY (in the 2024 edition's terms): set once, before this process creates
+            // its first Vulkan instance; wgtrace reads no other variable concurrently.
+            std::env::set_var("NODEVICE_SELECT", "1");
+        }
+    });
 }
 
 /// Discrete before integrated before virtual before software; stable otherwise.
@@ -296,9 +284,64 @@ impl GpuContext {
         self.device.destroy();
     }
 
+    /// What the device can hold and run, for its plans.
+    pub fn fit(&self) -> DeviceFit {
+        DeviceFit::new(&self.device.limits(), &self.info.name)
+    }
+
+    /// The trace pipeline for `spec`: compiled on first request, then shared by every
+    /// render of this process.
+    pub fn trace_pipeline(&self, spec: &ShaderSpec) -> Result<Arc<TracePipeline>, GpuError> {
+        let lock = || self.pipelines.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(p) = lock().get(spec) {
+            return Ok(p.clone());
+        }
+        // compiled outside the lock: two renders that race compile twice, and keep one
+        let p = Arc::new(self.compile_trace_pipeline(spec, true)?);
+        let p = lock().entry(spec.clone()).or_insert(p).clone();
+        self.save_disk_cache();
+        Ok(p)
+    }
+
+    /// Compiles the trace pipeline for `spec` afresh, without this process's pipelines,
+    /// and without the pipeline cache on disk unless `disk_cache` (benchmarks time this).
+    pub fn compile_trace_pipeline(
+        &self,
+        spec: &ShaderSpec,
+        disk_cache: bool,
+    ) -> Result<TracePipeline, GpuError> {
+        let cache = self
+            .disk_cache
+            .as_ref()
+            .filter(|_| disk_cache)
+            .map(|d| &d.cache);
+        compile_trace_pipeline(&self.device, spec, cache)
+    }
+
+    /// Maps a MAP_READ buffer whose copy has been submitted, waits, and returns its
+    /// contents.
+    pub fn read_buffer<T: bytemuck::Pod>(&self, buffer: &wgpu::Buffer) -> Result<Vec<T>, GpuError> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+            let _ = tx.send(r);
+        });
+        self.wait()?;
+        rx.recv()
+            .map_err(|e| GpuError::Readback(e.to_string()))?
+            .map_err(|e| GpuError::Readback(e.to_string()))?;
+        let data = {
+            let view = buffer
+                .get_mapped_range(..)
+                .map_err(|e| GpuError::Readback(e.to_string()))?;
+            bytemuck::cast_slice::<u8, T>(&view).to_vec()
+        };
+        buffer.unmap();
+        Ok(data)
+    }
+
     /// Writes the pipeline cache back to its file (write then rename, so a reader never sees
     /// half a file). Failures are ignored: the cache only saves time.
-    pub(crate) fn save_disk_cache(&self) {
+    fn save_disk_cache(&self) {
         let Some(disk) = &self.disk_cache else {
             return;
         };

@@ -4,26 +4,38 @@
 
 use wgpu::util::DeviceExt;
 
-use super::context::{GpuContext, GpuError};
-use super::render::{
-    all_bindings, bind_scene, check_loop_limit, check_scene_fits, read_mapped, scene_buffers,
-    scene_layout,
-};
-use super::shader;
+use super::bindings::{bind_scene, layout, scene_buffers, Slot};
+use super::context::GpuContext;
+use super::error::GpuError;
+use super::plan::GpuPlan;
+use crate::scene::flat::FlatScene;
 use crate::scene::records::{KernelHit, KernelRay, TextureLookup};
-use crate::scene::FlatScene;
+use crate::tuning::Tuning;
 
 /// Workgroup size of `kernel.wgsl`'s entry point.
 const WORKGROUP: u32 = 64;
 
-/// Intersects `rays` with `scene` on the GPU; one [`KernelHit`] per ray, in order.
+/// Group-1 bindings of `kernel.wgsl`: the rays and hits of `main`, the look-ups and colours
+/// of `textures_main` (`tests/shaders.rs` holds them to naga's view of the shader).
+pub const KERNEL_IO: [(&str, u32); 4] = [("rays", 0), ("hits", 1), ("lookups", 2), ("colors", 3)];
+
+/// Intersects `rays` with `scene` on the GPU, under the plan the default tuning gives it;
+/// one [`KernelHit`] per ray, in order.
 pub fn intersect_rays(
     ctx: &GpuContext,
     scene: &FlatScene,
     rays: &[KernelRay],
 ) -> Result<Vec<KernelHit>, GpuError> {
-    check_loop_limit(ctx, scene, false)?;
-    run_kernel(ctx, scene, "main", [0, 1], rays)
+    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
+    plan.fit.check_loops(plan.ray_loops)?;
+    run_kernel(
+        ctx,
+        scene,
+        &plan,
+        "main",
+        [KERNEL_IO[0].1, KERNEL_IO[1].1],
+        rays,
+    )
 }
 
 /// Looks textures up on the GPU (`texture_value`); one linear RGB colour (`.w` = 0) each.
@@ -32,14 +44,23 @@ pub fn lookup_textures(
     scene: &FlatScene,
     lookups: &[TextureLookup],
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    run_kernel(ctx, scene, "textures_main", [2, 3], lookups)
+    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
+    run_kernel(
+        ctx,
+        scene,
+        &plan,
+        "textures_main",
+        [KERNEL_IO[2].1, KERNEL_IO[3].1],
+        lookups,
+    )
 }
 
 /// Dispatches one invocation per input of entry point `entry` of `kernel.wgsl`, with the
-/// scene in group 0 and the inputs and outputs at `bindings` of group 1.
+/// scene in group 0 (every slot bound) and the inputs and outputs at `bindings` of group 1.
 fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
     ctx: &GpuContext,
     scene: &FlatScene,
+    plan: &GpuPlan,
     entry: &str,
     bindings: [u32; 2],
     inputs: &[I],
@@ -48,15 +69,14 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         return Ok(Vec::new());
     }
     let device = &ctx.device;
-    check_scene_fits(device, scene)?;
-    let spec = shader::fit_to_limits(&shader::scene_shader(scene), &device.limits());
-    let wgsl = shader::kernel_shader(&spec)?;
-    let uniform = shader::uniform_bindings("kernel", &wgsl)?;
+    plan.fit.check_scene(scene)?;
+    let spec = &plan.shader;
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some("kernel.wgsl"),
-        source: wgpu::ShaderSource::Wgsl(wgsl.into()),
+        source: wgpu::ShaderSource::Wgsl(spec.wgsl("kernel")?.into()),
     });
-    let scene_bgl = scene_layout(device, &all_bindings(), &uniform);
+    let slots = Slot::ALL;
+    let scene_bgl = layout(device, &slots, &spec.placements);
     let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -92,8 +112,8 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let buffers = scene_buffers(device, &all_bindings(), &uniform, scene, 0);
-    let scene_group = bind_scene(device, &scene_bgl, &all_bindings(), &buffers, &accum);
+    let buffers = scene_buffers(device, &slots, &spec.placements, scene, 0);
+    let scene_group = bind_scene(device, &scene_bgl, &slots, &buffers, &accum);
     let params = scene.params(0, scene.full_tile());
     ctx.queue
         .write_buffer(&buffers.params, 0, bytemuck::bytes_of(&params));
@@ -145,5 +165,5 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
     }
     encoder.copy_buffer_to_buffer(&out_buf, 0, &readback, 0, out_size);
     ctx.queue.submit([encoder.finish()]);
-    read_mapped(ctx, &readback)
+    ctx.read_buffer(&readback)
 }

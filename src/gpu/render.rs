@@ -1,42 +1,32 @@
-//! Progressive rendering on the GPU: buffers, the trace pipeline, passes split into tiles,
-//! and readback of the accumulation buffer.
+//! Progressive rendering on the GPU: the plan's pipeline and buffers, passes split into
+//! bands and submissions sized to a target time, and readback of the sums.
 
-use wgpu::util::DeviceExt;
-
+use std::ops::Range;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::context::{GpuContext, GpuError};
+use super::bindings::{bind_scene, scene_buffers};
+use super::context::{describe, GpuContext};
+use super::error::GpuError;
 use super::pipeline::TracePipeline;
-use super::shader;
-use crate::scene::records::{self, Params};
-use crate::scene::{FlatScene, Tile};
+use super::plan::GpuPlan;
+use crate::scene::flat::{FlatScene, Tile};
+use crate::scene::records::Params;
+use crate::tuning::Tuning;
 
 /// Most pixels of one band (one accumulation buffer, 8 MiB).
 pub const MAX_TILE_PIXELS: u32 = 1 << 18;
 
-/// Accumulation bytes per pixel: two vec4<f32> (sum with count, sum of squares).
+/// Accumulation bytes per pixel: two `vec4<f32>` (sum with count, sum of squares).
 pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
 
 /// Workgroup size of `trace.wgsl`'s entry point.
 const WORKGROUP: u32 = 8;
 
-/// Binding numbers of `shaders/shared/bindings.wgsl`, in order.
-const BINDINGS: [(u32, wgpu::BufferBindingType); 9] = [
-    (0, wgpu::BufferBindingType::Uniform),
-    (1, wgpu::BufferBindingType::Storage { read_only: true }),
-    (2, wgpu::BufferBindingType::Storage { read_only: true }),
-    (3, wgpu::BufferBindingType::Storage { read_only: true }),
-    (4, wgpu::BufferBindingType::Storage { read_only: false }),
-    (5, wgpu::BufferBindingType::Storage { read_only: true }),
-    (6, wgpu::BufferBindingType::Storage { read_only: true }),
-    (7, wgpu::BufferBindingType::Storage { read_only: true }),
-    (8, wgpu::BufferBindingType::Storage { read_only: true }),
-];
-
 pub struct GpuRenderer {
     ctx: Arc<GpuContext>,
     scene: FlatScene,
+    plan: GpuPlan,
     pipeline: Arc<TracePipeline>,
     /// One [`Params`] per dispatch of a submission, `params_stride` bytes apart, bound
     /// with a dynamic offset.
@@ -60,26 +50,8 @@ struct Band {
 /// Most dispatches (sample groups of one band) in one submission.
 pub const MAX_DISPATCHES_PER_SUBMISSION: u32 = 256;
 
-/// Most samples one invocation traces in a row (`shaders/trace.wgsl`, `main`): a lane
-/// whose path ends starts its next sample at once, so the 8 lanes of a SIMD batch stay
-/// busy (llvmpipe runs a loop until its last lane is done), and the pixel's sums are read
-/// and written once per group. Each sample is still added in index order, so the sums do
-/// not depend on how the samples were grouped.
-pub const SAMPLE_GROUP: u32 = 16;
-
-/// The samples one invocation traces for `scene`: [`SAMPLE_GROUP`], fewer when that many
-/// paths would pass llvmpipe's loop limit ([`loop_iterations`]), 1 when it was loaded with
-/// `--no-sample-groups`.
-pub fn sample_group(scene: &FlatScene) -> u32 {
-    if !scene.sample_groups {
-        return 1;
-    }
-    let per_path = path_loop_iterations(scene).max(1);
-    (LLVMPIPE_LOOP_LIMIT / per_path).clamp(1, SAMPLE_GROUP as u64) as u32
-}
-
 /// `samples` in consecutive parts of at most `group`: one dispatch each.
-pub fn group_parts(samples: std::ops::Range<u32>, group: u32) -> Vec<std::ops::Range<u32>> {
+pub fn group_parts(samples: Range<u32>, group: u32) -> Vec<Range<u32>> {
     let mut parts = Vec::new();
     let mut s = samples.start;
     while s < samples.end {
@@ -145,30 +117,6 @@ pub fn band_pixels(limit: u64) -> u32 {
     wanted.min((limit / ACCUM_BYTES_PER_PIXEL).min(u32::MAX as u64) as u32)
 }
 
-/// A storage buffer holding `bytes`, or 256 zero bytes when there are none (WebGPU
-/// forbids empty bindings; every record is smaller).
-fn storage_buffer(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-    let zero = [0u8; 256];
-    let bytes = if bytes.is_empty() { &zero[..] } else { bytes };
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytes,
-        usage: wgpu::BufferUsages::STORAGE,
-    })
-}
-
-/// A uniform buffer of [`shader::UNIFORM_BYTES`] starting with `bytes`: the shader declares
-/// the record array at that fixed size.
-fn uniform_buffer(device: &wgpu::Device, label: &str, bytes: &[u8]) -> wgpu::Buffer {
-    let mut padded = bytes.to_vec();
-    padded.resize(shader::UNIFORM_BYTES as usize, 0);
-    device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: &padded,
-        usage: wgpu::BufferUsages::UNIFORM,
-    })
-}
-
 /// Splits the image into bands of whole rows of at most [`MAX_TILE_PIXELS`] pixels.
 pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
     tiles_within(width, height, MAX_TILE_PIXELS)
@@ -197,35 +145,37 @@ fn params_stride(device: &wgpu::Device) -> u64 {
 }
 
 impl GpuRenderer {
-    /// Uploads `scene` and gets the trace pipeline for its feature set (compiled now, or
-    /// already by an earlier render in this process).
-    pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene) -> Result<Self, GpuError> {
-        let spec = shader::fit_to_limits(&shader::scene_shader(scene), &ctx.device.limits());
-        let pipeline = ctx.trace_pipeline(&spec)?;
-        Self::with_pipeline(ctx, scene, pipeline)
+    /// Plans `scene` for this device under `tuning`, uploads it and gets the trace
+    /// pipeline of its plan (compiled now, or already by an earlier render in this
+    /// process).
+    pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene, tuning: &Tuning) -> Result<Self, GpuError> {
+        let plan = GpuPlan::new(scene, &ctx.fit(), tuning);
+        plan.check(scene)?;
+        let pipeline = ctx.trace_pipeline(&plan.shader)?;
+        Self::with_pipeline(ctx, scene, plan, pipeline)
     }
 
-    /// Uploads `scene` to render with a given trace pipeline (one compiled for the scene's
-    /// feature set or a superset of it; benchmarks time the compilation apart).
+    /// Uploads `scene` to render under `plan` with a given trace pipeline (the plan's, or
+    /// one of a superset of its features; benchmarks time the compilation apart).
     pub fn with_pipeline(
         ctx: Arc<GpuContext>,
         scene: &FlatScene,
+        plan: GpuPlan,
         pipeline: Arc<TracePipeline>,
     ) -> Result<Self, GpuError> {
         ctx.check()?;
+        plan.check(scene)?;
         let device = &ctx.device;
-        check_scene_fits(device, scene)?;
-        check_loop_limit(&ctx, scene, true)?;
-        let limits = device.limits();
-        let limit = limits
-            .max_storage_buffer_binding_size
-            .min(limits.max_buffer_size);
-        let tiles = tiles_within(scene.width, scene.height, band_pixels(limit));
+        let tiles = tiles_within(
+            scene.width,
+            scene.height,
+            band_pixels(plan.fit.storage_bytes),
+        );
         let stride = params_stride(device);
         let buffers = scene_buffers(
             device,
-            &pipeline.bindings,
-            &pipeline.uniform,
+            &pipeline.slots,
+            &plan.shader.placements,
             scene,
             stride * MAX_DISPATCHES_PER_SUBMISSION as u64,
         );
@@ -241,13 +191,7 @@ impl GpuRenderer {
                         | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 });
-                let group = bind_scene(
-                    device,
-                    &pipeline.layout,
-                    &pipeline.bindings,
-                    &buffers,
-                    &accum,
-                );
+                let group = bind_scene(device, &pipeline.layout, &pipeline.slots, &buffers, &accum);
                 Band { tile, accum, group }
             })
             .collect();
@@ -262,6 +206,7 @@ impl GpuRenderer {
         Ok(Self {
             scene: scene.clone(),
             ctx,
+            plan,
             pipeline,
             params: buffers.params,
             params_stride: stride,
@@ -275,6 +220,11 @@ impl GpuRenderer {
         })
     }
 
+    /// The plan this renderer follows.
+    pub fn plan(&self) -> &GpuPlan {
+        &self.plan
+    }
+
     /// Image width and height.
     pub fn size(&self) -> (u32, u32) {
         (self.scene.width, self.scene.height)
@@ -282,7 +232,7 @@ impl GpuRenderer {
 
     /// The adapter's description.
     pub fn name(&self) -> String {
-        super::context::describe(&self.ctx.info)
+        describe(&self.ctx.info)
     }
 
     /// Sets the time one submission should take (default [`DEFAULT_SUBMISSION_TARGET`]).
@@ -306,10 +256,10 @@ impl GpuRenderer {
     }
 
     /// Samples per pixel that one call of [`Self::render_samples`] should ask for, so that
-    /// it makes about one submission per band: whole groups ([`SAMPLE_GROUP`]), at least
-    /// one group.
+    /// it makes about one submission per band: whole groups of the plan's sample group,
+    /// at least one group.
     pub fn samples_per_call(&self) -> u32 {
-        let group = sample_group(&self.scene);
+        let group = self.plan.sample_group;
         if self.submissions.count == 0 {
             return group;
         }
@@ -337,12 +287,12 @@ impl GpuRenderer {
     /// earlier ones took: several groups of a band in one submission when it is quick, a
     /// few of its rows per submission when it is slow. Each pixel adds its samples in
     /// index order, so the sums do not depend on how the work was split.
-    pub fn render_samples(&mut self, samples: std::ops::Range<u32>) -> Result<(), GpuError> {
-        let parts = group_parts(samples, sample_group(&self.scene));
+    pub fn render_samples(&mut self, samples: Range<u32>) -> Result<(), GpuError> {
+        let parts = group_parts(samples, self.plan.sample_group);
         for b in 0..self.bands.len() {
             let band = self.bands[b].tile;
             let band_pixels = band.width as u64 * band.height as u64;
-            let work = |p: &std::ops::Range<u32>| band_pixels * p.len() as u64;
+            let work = |p: &Range<u32>| band_pixels * p.len() as u64;
             let mut i = 0;
             while i < parts.len() {
                 let budget = self.submissions.budget;
@@ -363,7 +313,7 @@ impl GpuRenderer {
                         total += work(&parts[j]);
                         j += 1;
                     }
-                    let dispatches: Vec<(std::ops::Range<u32>, Tile)> =
+                    let dispatches: Vec<(Range<u32>, Tile)> =
                         parts[i..j].iter().map(|p| (p.clone(), band)).collect();
                     self.submit(b, &dispatches)?;
                     i = j;
@@ -393,11 +343,7 @@ impl GpuRenderer {
 
     /// One submission: a dispatch per (samples, tile) of band `b`, each with its own
     /// parameters; waits for it, then adapts the budget to the time it took.
-    fn submit(
-        &mut self,
-        b: usize,
-        dispatches: &[(std::ops::Range<u32>, Tile)],
-    ) -> Result<(), GpuError> {
+    fn submit(&mut self, b: usize, dispatches: &[(Range<u32>, Tile)]) -> Result<(), GpuError> {
         let band = &self.bands[b];
         let stride = self.params_stride as usize;
         let mut bytes = vec![0u8; stride * dispatches.len()];
@@ -444,8 +390,8 @@ impl GpuRenderer {
             took,
             sub.target,
             // the least a submission does: one row of one group
-            self.scene.width as u64 * sample_group(&self.scene) as u64,
-            largest * (MAX_DISPATCHES_PER_SUBMISSION * sample_group(&self.scene)) as u64,
+            self.scene.width as u64 * self.plan.sample_group as u64,
+            largest * (MAX_DISPATCHES_PER_SUBMISSION * self.plan.sample_group) as u64,
         );
         sub.count += 1;
         Ok(())
@@ -479,256 +425,9 @@ impl GpuRenderer {
             encoder.copy_buffer_to_buffer(&band.accum, 0, &self.readback, 0, band.accum.size());
             self.ctx.queue.submit([encoder.finish()]);
             let n = 2 * band.tile.width as usize * band.tile.height as usize;
-            let data: Vec<[f32; 4]> = read_mapped(&self.ctx, &self.readback)?;
+            let data: Vec<[f32; 4]> = self.ctx.read_buffer(&self.readback)?;
             out.extend_from_slice(&data[..n]);
         }
         Ok(out)
     }
-}
-
-/// Loop iterations llvmpipe runs per shader invocation, counted over all loops together,
-/// before it ends them silently (Mesa's `LP_MAX_TGSI_LOOP_ITERATIONS`).
-pub const LLVMPIPE_LOOP_LIMIT: u64 = 65535;
-
-/// Refuses work that llvmpipe would cut short: without the BVH, each ray (camera, bounce,
-/// or MIS shadow ray) runs a loop over every primitive; the 50/50 mixture runs one over
-/// every light at each bounce, with or without the BVH.
-pub(crate) fn check_loop_limit(
-    ctx: &GpuContext,
-    scene: &FlatScene,
-    paths: bool,
-) -> Result<(), GpuError> {
-    if !ctx.info.name.contains("llvmpipe") {
-        return Ok(());
-    }
-    let iterations = loop_iterations(scene, paths);
-    if iterations > LLVMPIPE_LOOP_LIMIT {
-        return Err(GpuError::LoopLimit {
-            iterations,
-            limit: LLVMPIPE_LOOP_LIMIT,
-        });
-    }
-    Ok(())
-}
-
-/// Loop iterations of one invocation's paths (its sample group; or of one kernel ray when
-/// `paths` is false) that grow with the scene: primitive loops without the BVH (none when
-/// the primitives are written into the shader), and the mixture's loop over lights.
-pub fn loop_iterations(scene: &FlatScene, paths: bool) -> u64 {
-    if !paths {
-        return ray_loop_iterations(scene);
-    }
-    sample_group(scene) as u64 * path_loop_iterations(scene)
-}
-
-/// Loop iterations of one ray's closest-hit search that grow with the scene.
-fn ray_loop_iterations(scene: &FlatScene) -> u64 {
-    if scene.use_bvh || super::shader::bakes_primitives(scene) {
-        0
-    } else {
-        scene.primitives.len() as u64 + 1
-    }
-}
-
-/// Loop iterations of one path: a turn of the bounce loop per ray, plus the loops of its
-/// rays and, for the mixture, the loop over lights.
-fn path_loop_iterations(scene: &FlatScene) -> u64 {
-    let lights = scene.light_sampling != records::LIGHT_SAMPLING_BSDF && !scene.emitters.is_empty();
-    let depth = scene.max_depth as u64;
-    let shadow = (lights && scene.light_sampling == records::LIGHT_SAMPLING_MIS) as u64;
-    let mixture = if lights && scene.light_sampling == records::LIGHT_SAMPLING_MIXTURE {
-        scene.emitters.len() as u64
-    } else {
-        0
-    };
-    depth * (1 + (1 + shadow) * ray_loop_iterations(scene) + mixture)
-}
-
-/// Refuses a scene whose buffers exceed the adapter's storage binding limit (wgpu's default
-/// error handler would panic).
-pub(crate) fn check_scene_fits(device: &wgpu::Device, scene: &FlatScene) -> Result<(), GpuError> {
-    let limits = device.limits();
-    let limit = limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size);
-    for (what, bytes) in [
-        ("primitives", std::mem::size_of_val(&scene.primitives[..])),
-        ("emitters", std::mem::size_of_val(&scene.emitters[..])),
-        ("bvh", std::mem::size_of_val(&scene.bvh[..])),
-        ("shape_data", std::mem::size_of_val(&scene.shape_data[..])),
-        ("textures", std::mem::size_of_val(&scene.textures[..])),
-        ("texels", std::mem::size_of_val(&scene.texels[..])),
-    ] {
-        if bytes as u64 > limit {
-            return Err(GpuError::SceneTooLarge {
-                what,
-                needed_mib: (bytes as u64).div_ceil(1 << 20),
-                limit_mib: limit >> 20,
-            });
-        }
-    }
-    Ok(())
-}
-
-/// Every binding of group 0, `shaders/shared/bindings.wgsl`.
-pub(crate) fn all_bindings() -> Vec<u32> {
-    BINDINGS.iter().map(|&(b, _)| b).collect()
-}
-
-/// The layout of group 0 (`shaders/shared/bindings.wgsl`) with `bindings` only: those a
-/// specialized shader uses; those in `uniform` are uniform buffers.
-pub(crate) fn scene_layout(
-    device: &wgpu::Device,
-    bindings: &[u32],
-    uniform: &[u32],
-) -> wgpu::BindGroupLayout {
-    let layout_entries: Vec<wgpu::BindGroupLayoutEntry> = BINDINGS
-        .iter()
-        .filter(|(binding, _)| bindings.contains(binding))
-        .map(|&(binding, ty)| {
-            (
-                binding,
-                if uniform.contains(&binding) {
-                    wgpu::BufferBindingType::Uniform
-                } else {
-                    ty
-                },
-            )
-        })
-        .map(|(binding, ty)| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty,
-                // the parameters of each dispatch of a submission lie at their own offset
-                has_dynamic_offset: binding == 0,
-                min_binding_size: None,
-            },
-            count: None,
-        })
-        .collect();
-    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("trace bindings"),
-        entries: &layout_entries,
-    })
-}
-
-/// The scene's records on the device, for the bindings a shader uses: the parameters
-/// (written before each submission, one block per dispatch, bound at a dynamic offset)
-/// and the storage buffers, all but the accumulation.
-pub(crate) struct SceneBuffers {
-    pub params: wgpu::Buffer,
-    records: Vec<(u32, wgpu::Buffer)>,
-}
-
-/// Uploads the scene records that `bindings` name; records the shader does not use are
-/// neither uploaded nor bound. The parameter buffer has `params_bytes` (at least one
-/// [`Params`]).
-pub(crate) fn scene_buffers(
-    device: &wgpu::Device,
-    bindings: &[u32],
-    uniform: &[u32],
-    scene: &FlatScene,
-    params_bytes: u64,
-) -> SceneBuffers {
-    let records = |label: &str, bytes: &[u8], binding: u32| {
-        if uniform.contains(&binding) {
-            uniform_buffer(device, label, bytes)
-        } else {
-            storage_buffer(device, label, bytes)
-        }
-    };
-    let params = device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("params"),
-        size: params_bytes.max(std::mem::size_of::<Params>() as u64),
-        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
-    let records = bindings
-        .iter()
-        .filter_map(|&binding| {
-            let buffer = match binding {
-                0 | 4 => return None,
-                1 => records("primitives", bytemuck::cast_slice(&scene.primitives), 1),
-                2 => records("materials", bytemuck::cast_slice(&scene.materials), 2),
-                3 => records("emitters", bytemuck::cast_slice(&scene.emitters), 3),
-                5 => records("bvh", bytemuck::cast_slice(&scene.bvh), 5),
-                6 => records("shape_data", bytemuck::cast_slice(&scene.shape_data), 6),
-                7 => records("textures", bytemuck::cast_slice(&scene.textures), 7),
-                8 => records("texels", bytemuck::cast_slice(&scene.texels), 8),
-                _ => unreachable!("binding {binding} is not in BINDINGS"),
-            };
-            Some((binding, buffer))
-        })
-        .collect();
-    SceneBuffers { params, records }
-}
-
-/// Group 0: the scene's buffers with `accum` as the accumulation buffer.
-pub(crate) fn bind_scene(
-    device: &wgpu::Device,
-    layout: &wgpu::BindGroupLayout,
-    bindings: &[u32],
-    buffers: &SceneBuffers,
-    accum: &wgpu::Buffer,
-) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry> = bindings
-        .iter()
-        .map(|&binding| {
-            let buffer = match binding {
-                // one Params at the offset each dispatch gives
-                0 => {
-                    return wgpu::BindGroupEntry {
-                        binding,
-                        resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                            buffer: &buffers.params,
-                            offset: 0,
-                            size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
-                        }),
-                    }
-                }
-                4 => accum,
-                _ => {
-                    &buffers
-                        .records
-                        .iter()
-                        .find(|(b, _)| *b == binding)
-                        .expect("uploaded with scene_buffers")
-                        .1
-                }
-            };
-            wgpu::BindGroupEntry {
-                binding,
-                resource: buffer.as_entire_binding(),
-            }
-        })
-        .collect();
-    device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("scene bind group"),
-        layout,
-        entries: &entries,
-    })
-}
-
-/// Maps a MAP_READ buffer whose copy has been submitted, waits, and returns its contents.
-pub(crate) fn read_mapped<T: bytemuck::Pod>(
-    ctx: &GpuContext,
-    buffer: &wgpu::Buffer,
-) -> Result<Vec<T>, GpuError> {
-    let (tx, rx) = std::sync::mpsc::channel();
-    buffer.slice(..).map_async(wgpu::MapMode::Read, move |r| {
-        let _ = tx.send(r);
-    });
-    ctx.wait()?;
-    rx.recv()
-        .map_err(|e| GpuError::Readback(e.to_string()))?
-        .map_err(|e| GpuError::Readback(e.to_string()))?;
-    let data = {
-        let view = buffer
-            .get_mapped_range(..)
-            .map_err(|e| GpuError::Readback(e.to_string()))?;
-        bytemuck::cast_slice::<u8, T>(&view).to_vec()
-    };
-    buffer.unmap();
-    Ok(data)
 }

@@ -6,14 +6,13 @@
 use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::bvh::{self, Aabb};
-use super::format::{
-    ColorDesc, LightSampling, MaterialDesc, ObjectDesc, SamplerKind, SceneFile, TransformDesc,
-};
+use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
+use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
 use super::lights::{env_distribution, light_list, Environment};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA, NO_TEXTURE};
+use super::shapes::{polygon_normal, record_ok, world_bounds};
 use super::textures::{color_slot, texture_records, ImageData};
-use super::{CameraFrame, EnvironmentMap, FlatScene};
 
 fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
     let slot = |c: &ColorDesc| color_slot(c, textures);
@@ -271,29 +270,9 @@ impl Builder {
                 let attributes = uvs.map(|uv| ([Vec3::ZERO; 3], uv.map(Vec2::from)));
                 self.push_placed_triangle(&at, v, attributes, false, material);
             }
-            ObjectDesc::Polygon { vertices, .. } => {
-                // planar uvs: coordinates from vertex 0 along the first edge and across it
-                let pts: Vec<Vec3> = vertices.iter().map(|&p| Vec3::from(p)).collect();
-                let n = super::validate::polygon_normal(&pts).normalize();
-                let t = (pts[1] - pts[0]).normalize();
-                let b = n.cross(t);
-                let uv = |p: Vec3| Vec2::new((p - pts[0]).dot(t), (p - pts[0]).dot(b));
-                for i in 1..pts.len() - 1 {
-                    let v = [pts[0], pts[i], pts[i + 1]];
-                    let attributes = Some(([Vec3::ZERO; 3], v.map(uv)));
-                    self.push_placed_triangle(&at, v, attributes, false, material);
-                }
-            }
+            ObjectDesc::Polygon { vertices, .. } => self.push_polygon(&at, vertices, material),
             ObjectDesc::Tetrahedron { vertices, .. } => {
-                let p = vertices.map(Vec3::from);
-                for k in 0..4 {
-                    // the face opposite vertex k, wound so its normal points away from it
-                    let mut f = [p[(k + 1) % 4], p[(k + 2) % 4], p[(k + 3) % 4]];
-                    if (f[1] - f[0]).cross(f[2] - f[0]).dot(p[k] - f[0]) > 0.0 {
-                        f.swap(1, 2);
-                    }
-                    self.push_placed_triangle(&at, f, None, false, material);
-                }
+                self.push_tetrahedron(&at, vertices, material)
             }
             ObjectDesc::Plane {
                 point,
@@ -366,178 +345,113 @@ impl Builder {
             }
             ObjectDesc::Mesh { .. } => {
                 let mesh = mesh.expect("meshes are loaded before flattening");
-                let smooth = !mesh.normals.is_empty();
-                let has_attributes = smooth || !mesh.uvs.is_empty();
-                self.bounded.reserve(mesh.triangles.len());
-                for t in &mesh.triangles {
-                    let v = t.map(|i| mesh.positions[i as usize]);
-                    let attributes = has_attributes.then(|| {
-                        let n = if smooth {
-                            t.map(|i| mesh.normals[i as usize])
-                        } else {
-                            [Vec3::ZERO; 3]
-                        };
-                        let uv = if mesh.uvs.is_empty() {
-                            [Vec2::ZERO, Vec2::X, Vec2::Y]
-                        } else {
-                            t.map(|i| mesh.uvs[i as usize])
-                        };
-                        (n, uv)
-                    });
-                    self.push_placed_triangle(&at, v, attributes, smooth, material);
-                }
+                self.push_mesh(&at, mesh, material);
+            }
+        }
+    }
+
+    /// A planar convex polygon, fan-split into triangles with planar uvs: coordinates from
+    /// vertex 0 along the first edge and across it.
+    fn push_polygon(&mut self, at: &Placement, vertices: &[[f32; 3]], material: u32) {
+        let pts: Vec<Vec3> = vertices.iter().map(|&p| Vec3::from(p)).collect();
+        let n = polygon_normal(&pts).normalize();
+        let t = (pts[1] - pts[0]).normalize();
+        let b = n.cross(t);
+        let uv = |p: Vec3| Vec2::new((p - pts[0]).dot(t), (p - pts[0]).dot(b));
+        for i in 1..pts.len() - 1 {
+            let v = [pts[0], pts[i], pts[i + 1]];
+            let attributes = Some(([Vec3::ZERO; 3], v.map(uv)));
+            self.push_placed_triangle(at, v, attributes, false, material);
+        }
+    }
+
+    /// A tetrahedron as four triangles, each wound so its normal points away from the
+    /// vertex opposite.
+    fn push_tetrahedron(&mut self, at: &Placement, vertices: &[[f32; 3]; 4], material: u32) {
+        let p = vertices.map(Vec3::from);
+        for k in 0..4 {
+            let mut f = [p[(k + 1) % 4], p[(k + 2) % 4], p[(k + 3) % 4]];
+            if (f[1] - f[0]).cross(f[2] - f[0]).dot(p[k] - f[0]) > 0.0 {
+                f.swap(1, 2);
+            }
+            self.push_placed_triangle(at, f, None, false, material);
+        }
+    }
+
+    /// A mesh's triangles, with its vertex normals (smooth shading) and uvs when it has them.
+    fn push_mesh(&mut self, at: &Placement, mesh: &MeshData, material: u32) {
+        let smooth = !mesh.normals.is_empty();
+        let has_attributes = smooth || !mesh.uvs.is_empty();
+        self.bounded.reserve(mesh.triangles.len());
+        for t in &mesh.triangles {
+            let v = t.map(|i| mesh.positions[i as usize]);
+            let attributes = has_attributes.then(|| {
+                let n = if smooth {
+                    t.map(|i| mesh.normals[i as usize])
+                } else {
+                    [Vec3::ZERO; 3]
+                };
+                let uv = if mesh.uvs.is_empty() {
+                    [Vec2::ZERO, Vec2::X, Vec2::Y]
+                } else {
+                    t.map(|i| mesh.uvs[i as usize])
+                };
+                (n, uv)
+            });
+            self.push_placed_triangle(at, v, attributes, smooth, material);
+        }
+    }
+}
+
+/// How closest-hit searches find the primitives a ray may hit. Both backends walk the
+/// structure a scene was flattened with, and the choice orders its primitives (and so its
+/// light list), so it is made once, when the scene is loaded.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Acceleration {
+    /// A bounding volume hierarchy over the bounded primitives, which are in its leaves'
+    /// order.
+    Bvh,
+    /// Every bounded primitive tested on every ray, in one list grouped by type (a stable
+    /// sort), so that a backend may run one loop per type; no BVH nodes.
+    List,
+    /// The list for a scene of at most `list_max` bounded primitives, none of them
+    /// transformed; the BVH otherwise. The threshold is the caller's (a tuning value).
+    Auto { list_max: usize },
+}
+
+impl Acceleration {
+    /// Whether `bounded` primitives get the BVH.
+    fn uses_bvh(self, bounded: &[Primitive]) -> bool {
+        match self {
+            Acceleration::Bvh => true,
+            Acceleration::List => false,
+            Acceleration::Auto { list_max } => {
+                bounded.len() > list_max
+                    || bounded
+                        .iter()
+                        .any(|p| p.flags & records::PRIM_FLAG_TRANSFORM != 0)
             }
         }
     }
 }
 
-/// Half-extent along each world axis of a disk of radius r with unit normal n.
-fn disk_extent(n: Vec3, r: f32) -> Vec3 {
-    r * (Vec3::ONE - n * n).max(Vec3::ZERO).powf(0.5)
-}
-
-/// Object-space bounds of a bounded primitive.
-fn local_bounds(p: &Primitive) -> Aabb {
-    let (a, b, c) = (
-        Vec3::from_slice(&p.a),
-        Vec3::from_slice(&p.b),
-        Vec3::from_slice(&p.c),
-    );
-    let r = p.a[3];
-    let (lo, hi) = match p.tag {
-        records::PRIM_SPHERE => (a - r, a + r),
-        records::PRIM_TRIANGLE => (a.min(b).min(c), a.max(b).max(c)),
-        records::PRIM_BOX => (a, b),
-        records::PRIM_CYLINDER => {
-            let e = disk_extent((b - a).normalize(), r);
-            (a.min(b) - e, a.max(b) + e)
-        }
-        records::PRIM_DISK => {
-            let e = disk_extent(b, r);
-            (a - e, a + e)
-        }
-        _ => (Vec3::ZERO, Vec3::ZERO),
-    };
-    Aabb { lo, hi }
-}
-
-/// World-space bounds: transformed primitives bound the eight corners of their object box.
-fn world_bounds(p: &Primitive, shape_data: &[[f32; 4]]) -> Aabb {
-    let local = local_bounds(p);
-    if p.flags & records::PRIM_FLAG_TRANSFORM == 0 {
-        return local;
-    }
-    let d = p.data as usize + 3;
-    let rows = [0, 1, 2].map(|r| glam::Vec4::from_array(shape_data[d + r]));
-    let mut out = Aabb {
-        lo: Vec3::splat(f32::MAX),
-        hi: Vec3::splat(f32::MIN),
-    };
-    for k in 0..8 {
-        let corner = Vec3::select(
-            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
-            local.hi,
-            local.lo,
-        )
-        .extend(1.0);
-        let q = Vec3::new(
-            rows[0].dot(corner),
-            rows[1].dot(corner),
-            rows[2].dot(corner),
-        );
-        out.lo = out.lo.min(q);
-        out.hi = out.hi.max(q);
-    }
-    out
-}
-
-/// Surface area of a primitive in world space (planes: 0, they are never emitters). A
-/// transformed primitive's area is its object-space area times |det|^(2/3), exact for
-/// similarities and an estimate otherwise.
-pub fn primitive_area(p: &Primitive, shape_data: &[[f32; 4]]) -> f32 {
-    use std::f32::consts::PI;
-    let (a, b, c) = (
-        Vec3::from_slice(&p.a),
-        Vec3::from_slice(&p.b),
-        Vec3::from_slice(&p.c),
-    );
-    let r = p.a[3];
-    let local = match p.tag {
-        records::PRIM_SPHERE => 4.0 * PI * r * r,
-        records::PRIM_TRIANGLE => 0.5 * (b - a).cross(c - a).length(),
-        records::PRIM_BOX => {
-            let e = b - a;
-            2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
-        }
-        records::PRIM_CYLINDER => {
-            let caps = if p.flags & records::PRIM_FLAG_CAPS != 0 {
-                2.0 * PI * r * r
-            } else {
-                0.0
-            };
-            2.0 * PI * r * (b - a).length() + caps
-        }
-        records::PRIM_DISK => PI * r * r,
-        _ => 0.0,
-    };
-    if p.flags & records::PRIM_FLAG_TRANSFORM == 0 {
-        return local;
-    }
-    let d = p.data as usize + 3;
-    let m = Mat3::from_cols(
-        Vec3::from_slice(&shape_data[d]),
-        Vec3::from_slice(&shape_data[d + 1]),
-        Vec3::from_slice(&shape_data[d + 2]),
-    );
-    local * m.determinant().abs().powf(2.0 / 3.0)
-}
-
-/// Whether a primitive's record, and its transform and bounds, are usable in f32: finite,
-/// with non-zero sizes and unit normals. A valid scene can still fail this under an extreme
-/// transform (a scale that underflows or overflows f32, a matrix that is singular in f32).
-fn record_ok(p: &Primitive, shape_data: &[[f32; 4]]) -> bool {
-    let (a, b) = (Vec3::from_slice(&p.a), Vec3::from_slice(&p.b));
-    let unit = |n: Vec3| (n.length() - 1.0).abs() < 1e-3;
-    let finite = [p.a, p.b, p.c].iter().flatten().all(|x| x.is_finite());
-    let shape = match p.tag {
-        records::PRIM_SPHERE => p.a[3] > 0.0,
-        records::PRIM_PLANE => unit(b),
-        records::PRIM_DISK => unit(b) && p.a[3] > 0.0,
-        records::PRIM_BOX => a.cmplt(b).all(),
-        records::PRIM_CYLINDER => (b - a).length().is_normal() && p.a[3] > 0.0,
-        _ => true,
-    };
-    let transform = p.flags & records::PRIM_FLAG_TRANSFORM == 0
-        || shape_data[p.data as usize..][..records::TRANSFORM_ENTRIES as usize]
-            .iter()
-            .flatten()
-            .all(|x| x.is_finite());
-    let bounded = p.tag == records::PRIM_PLANE || {
-        let bb = world_bounds(p, shape_data);
-        bb.lo.is_finite() && bb.hi.is_finite()
-    };
-    finite && shape && transform && bounded
-}
-
-/// Whether the shader walks the BVH or tests every bounded primitive in a loop.
+/// Render settings the flattener writes into the scene besides the file's own.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum BvhChoice {
-    /// The loop for a small scene ([`super::SMALL_SCENE_PRIMITIVES`]), else the BVH.
-    Auto,
-    Always,
-    Never,
+pub struct Build {
+    pub acceleration: Acceleration,
+    /// Russian roulette from ray [`RR_DEPTH`] on (else every path runs to max_depth).
+    pub russian_roulette: bool,
 }
 
 /// Flattens a validated scene into records; `meshes[i]` holds object i's mesh when it is
 /// one, `images[i]` texture i's image. With the BVH, the bounded primitives are in its
-/// leaves' order; without it they are sorted by type (stable), for the shader's one loop
-/// per type, and there are no BVH nodes.
+/// leaves' order; without it they are sorted by type (stable), and there are no BVH nodes.
 /// Errors with the indices of objects whose records degenerate in f32 (see `record_ok`).
 pub fn flatten(
     file: &SceneFile,
     meshes: &[Option<MeshData>],
     images: &[Option<ImageData>],
-    bvh_choice: BvhChoice,
+    build: Build,
 ) -> Result<FlatScene, Vec<usize>> {
     let texture_names: Vec<String> = file.textures.keys().cloned().collect();
     let (textures, texels) = texture_records(&file.textures, images);
@@ -547,66 +461,18 @@ pub fn flatten(
         .values()
         .map(|m| material_record(m.get_ref(), &texture_names))
         .collect();
-    let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
-
-    let mut builder = Builder::default();
-    let mut degenerate = Vec::new();
-    for (i, (obj, mesh)) in file.objects.iter().zip(meshes).enumerate() {
-        let o = obj.get_ref();
-        let (u, b) = (builder.unbounded.len(), builder.bounded.len());
-        builder.push_object(o, mesh.as_ref(), material_index(o.material()));
-        let added = builder.unbounded[u..].iter().chain(&builder.bounded[b..]);
-        if !added.clone().all(|p| record_ok(p, &builder.shape_data)) {
-            degenerate.push(i);
-        }
-    }
-    if !degenerate.is_empty() {
-        return Err(degenerate);
-    }
     let Builder {
         unbounded,
         bounded,
         shape_data,
-    } = builder;
-
+    } = build_primitives(file, meshes, &material_names)?;
     let boxes: Vec<Aabb> = bounded
         .iter()
         .map(|p| world_bounds(p, &shape_data))
         .collect();
-    let small = bounded.len() <= super::SMALL_SCENE_PRIMITIVES
-        && !bounded
-            .iter()
-            .any(|p| p.flags & records::PRIM_FLAG_TRANSFORM != 0);
-    let use_bvh = match bvh_choice {
-        BvhChoice::Auto => !small,
-        BvhChoice::Always => true,
-        BvhChoice::Never => false,
-    };
-    let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.union(b));
+    let use_bvh = build.acceleration.uses_bvh(&bounded);
     let num_unbounded = unbounded.len() as u32;
-    let mut primitives = unbounded;
-    let (bvh, bvh_depth) = if use_bvh {
-        let tree = bvh::build(&boxes);
-        primitives.extend(tree.order.iter().map(|&i| bounded[i as usize]));
-        let nodes: Vec<BvhNode> = tree
-            .nodes
-            .iter()
-            .map(|n| BvhNode {
-                offset: if n.count > 0 {
-                    n.offset + num_unbounded
-                } else {
-                    n.offset
-                },
-                ..*n
-            })
-            .collect();
-        (nodes, tree.depth)
-    } else {
-        let mut sorted = bounded;
-        sorted.sort_by_key(|p| p.tag);
-        primitives.extend(sorted);
-        (Vec::new(), 0)
-    };
+    let (mut primitives, bvh, bvh_depth) = order(unbounded, bounded, &boxes, use_bvh);
 
     let bg = &file.background;
     let env_texture = bg.texture.as_ref().map(|name| {
@@ -625,6 +491,8 @@ pub fn flatten(
         });
         env_cdf = texels.len() as u32;
         texels.extend(dist);
+        // the scene's bounding radius, for the background's power
+        let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.union(b));
         let radius = if boxes.is_empty() {
             1.0
         } else {
@@ -648,23 +516,10 @@ pub fn flatten(
         spp: r.spp,
         max_depth: r.max_depth,
         seed: r.seed,
-        sampler: match r.sampler {
-            SamplerKind::Random => records::SAMPLER_RANDOM,
-            SamplerKind::Jittered => records::SAMPLER_JITTERED,
-            SamplerKind::Hammersley => records::SAMPLER_HAMMERSLEY,
-            SamplerKind::Sobol => records::SAMPLER_SOBOL,
-        },
+        sampler: r.sampler,
         camera: camera_frame(file, r.width as f32 / r.height as f32),
-        specialize: true,
-        uniform_records: true,
-        baked_records: true,
-        sample_groups: true,
-        rr_depth: super::RR_DEPTH,
-        light_sampling: match r.light_sampling {
-            LightSampling::Bsdf => records::LIGHT_SAMPLING_BSDF,
-            LightSampling::Mixture => records::LIGHT_SAMPLING_MIXTURE,
-            LightSampling::Mis => records::LIGHT_SAMPLING_MIS,
-        },
+        rr_depth: if build.russian_roulette { RR_DEPTH } else { 0 },
+        light_sampling: r.light_sampling,
         background: bg.bottom.or(bg.color).unwrap_or([0.0; 3]),
         background_top: bg.top,
         env: env_texture.map(|texture| EnvironmentMap {
@@ -686,6 +541,66 @@ pub fn flatten(
         textures,
         texels,
     })
+}
+
+/// Every object's primitives (planes apart) and shape data; errors with the indices of
+/// objects whose records degenerate in f32 (see `record_ok`).
+fn build_primitives(
+    file: &SceneFile,
+    meshes: &[Option<MeshData>],
+    material_names: &[String],
+) -> Result<Builder, Vec<usize>> {
+    let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
+    let mut builder = Builder::default();
+    let mut degenerate = Vec::new();
+    for (i, (obj, mesh)) in file.objects.iter().zip(meshes).enumerate() {
+        let o = obj.get_ref();
+        let (u, b) = (builder.unbounded.len(), builder.bounded.len());
+        builder.push_object(o, mesh.as_ref(), material_index(o.material()));
+        let added = builder.unbounded[u..].iter().chain(&builder.bounded[b..]);
+        if !added.clone().all(|p| record_ok(p, &builder.shape_data)) {
+            degenerate.push(i);
+        }
+    }
+    if degenerate.is_empty() {
+        Ok(builder)
+    } else {
+        Err(degenerate)
+    }
+}
+
+/// The primitives in their final order, with the BVH over the bounded ones and its depth:
+/// planes first, then the bounded primitives in the BVH's leaf order, or, without it,
+/// grouped by type (a stable sort), with no nodes.
+fn order(
+    unbounded: Vec<Primitive>,
+    bounded: Vec<Primitive>,
+    boxes: &[Aabb],
+    use_bvh: bool,
+) -> (Vec<Primitive>, Vec<BvhNode>, u32) {
+    let num_unbounded = unbounded.len() as u32;
+    let mut primitives = unbounded;
+    if !use_bvh {
+        let mut sorted = bounded;
+        sorted.sort_by_key(|p| p.tag);
+        primitives.extend(sorted);
+        return (primitives, Vec::new(), 0);
+    }
+    let tree = bvh::build(boxes);
+    primitives.extend(tree.order.iter().map(|&i| bounded[i as usize]));
+    let nodes: Vec<BvhNode> = tree
+        .nodes
+        .iter()
+        .map(|n| BvhNode {
+            offset: if n.count > 0 {
+                n.offset + num_unbounded
+            } else {
+                n.offset
+            },
+            ..*n
+        })
+        .collect();
+    (primitives, nodes, tree.depth)
 }
 
 fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {

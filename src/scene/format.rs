@@ -5,6 +5,8 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use toml::Spanned;
 
+use super::records;
+
 /// A whole scene file.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -77,6 +79,15 @@ impl LightSampling {
             LightSampling::Mis => "mis",
         }
     }
+
+    /// Its value in `Params::light_sampling` (`records::LIGHT_SAMPLING_*`).
+    pub fn record(self) -> u32 {
+        match self {
+            LightSampling::Bsdf => records::LIGHT_SAMPLING_BSDF,
+            LightSampling::Mixture => records::LIGHT_SAMPLING_MIXTURE,
+            LightSampling::Mis => records::LIGHT_SAMPLING_MIS,
+        }
+    }
 }
 
 impl SamplerKind {
@@ -88,6 +99,27 @@ impl SamplerKind {
             SamplerKind::Hammersley => "hammersley",
             SamplerKind::Sobol => "sobol",
         }
+    }
+
+    /// Its value in `Params::sampler` (`records::SAMPLER_*`).
+    pub fn record(self) -> u32 {
+        match self {
+            SamplerKind::Random => records::SAMPLER_RANDOM,
+            SamplerKind::Jittered => records::SAMPLER_JITTERED,
+            SamplerKind::Hammersley => records::SAMPLER_HAMMERSLEY,
+            SamplerKind::Sobol => records::SAMPLER_SOBOL,
+        }
+    }
+
+    /// Whether the sampler's points depend on the render's total sample count N, so
+    /// that the first k samples of an N-sample render are not those of a k-sample render:
+    /// Hammersley's x = i / N, and jittered's grid of 2^k x 2^k strata with 4^k >= N. The
+    /// one place that says so: a checkpoint's scene hash keeps N for these, a render
+    /// limited by time or error keeps the scene's N as its cap, and a convergence study
+    /// renders each sample count of its ladder apart instead of reading one render's
+    /// prefixes.
+    pub fn depends_on_spp(self) -> bool {
+        matches!(self, SamplerKind::Hammersley | SamplerKind::Jittered)
     }
 }
 

@@ -4,11 +4,11 @@
 
 use glam::{Mat3, Vec3};
 
-use super::flatten::primitive_area;
 use super::records::{
     self, Emitter, Material, Primitive, Texture, LIGHT_DISK, LIGHT_ENVIRONMENT, LIGHT_SPHERE,
     LIGHT_TRIANGLE, NO_HIT, NO_LIGHT, PRIM_LIGHT_SHIFT,
 };
+use super::shapes::primitive_area;
 
 /// Luminance of a linear RGB colour (Rec. 709 weights).
 pub fn luminance(c: [f32; 4]) -> f32 {

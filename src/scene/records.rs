@@ -1,28 +1,146 @@
 //! `#[repr(C)]` records shared with WGSL: the contract both backends read.
 //!
-//! Each struct mirrors the struct of the same name in `shaders/shared/types.wgsl`.
-//! `tests/layout.rs` compares every size and field offset below with naga's layout of the
-//! shader, so a change on one side that is not made on the other fails the tests.
+//! Each struct mirrors the struct of the same name in `shaders/shared/types.wgsl`;
+//! `tests/shaders.rs` compares every size and field offset below with naga's layout of
+//! the shader, so a change on one side that is not made on the other fails the tests. The
+//! constants both languages read are declared once, here ([`SHARED_CONSTANTS`]), and
+//! written into the shaders from this list.
 
 use bytemuck::{Pod, Zeroable};
 
-/// Primitive tags: the cases of the `switch` in `intersect.wgsl`.
-pub const PRIM_SPHERE: u32 = 0;
-pub const PRIM_TRIANGLE: u32 = 1;
-pub const PRIM_PLANE: u32 = 2;
-pub const PRIM_BOX: u32 = 3;
-pub const PRIM_CYLINDER: u32 = 4;
-pub const PRIM_DISK: u32 = 5;
+/// A constant both languages read: its value as the shaders get it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum SharedValue {
+    U32(u32),
+    F32(f32),
+}
 
-/// Primitive flag: `data` indexes a world-to-object transform in `shape_data` (analytic
-/// shapes whose transform cannot be baked exactly).
-pub const PRIM_FLAG_TRANSFORM: u32 = 1;
-/// Primitive flag (triangles): `data` indexes per-vertex attributes in `shape_data`.
-pub const PRIM_FLAG_ATTRIBUTES: u32 = 2;
-/// Primitive flag (triangles with attributes): the vertex normals are meaningful.
-pub const PRIM_FLAG_SHADING_NORMALS: u32 = 4;
-/// Primitive flag (cylinders): closed by two cap disks.
-pub const PRIM_FLAG_CAPS: u32 = 8;
+macro_rules! shared_value {
+    (u32, $v:expr) => {
+        SharedValue::U32($v)
+    };
+    (f32, $v:expr) => {
+        SharedValue::F32($v)
+    };
+}
+
+/// Declares each constant for Rust and lists it in [`SHARED_CONSTANTS`], from which
+/// `gpu::codegen` writes the shaders' `const` declarations: the one source of their values.
+macro_rules! shared_constants {
+    ($( $(#[$doc:meta])* $name:ident : $ty:tt = $value:expr; )*) => {
+        $( $(#[$doc])* pub const $name: $ty = $value; )*
+
+        /// Every constant shared with WGSL, by name, in declaration order.
+        pub const SHARED_CONSTANTS: &[(&str, SharedValue)] =
+            &[$((stringify!($name), shared_value!($ty, $name))),*];
+    };
+}
+
+shared_constants! {
+    /// Primitive tags: the cases of the `switch` in `intersect.wgsl`.
+    PRIM_SPHERE: u32 = 0;
+    PRIM_TRIANGLE: u32 = 1;
+    PRIM_PLANE: u32 = 2;
+    PRIM_BOX: u32 = 3;
+    PRIM_CYLINDER: u32 = 4;
+    PRIM_DISK: u32 = 5;
+
+    /// Primitive flag: `data` indexes a world-to-object transform in `shape_data` (analytic
+    /// shapes whose transform cannot be baked exactly).
+    PRIM_FLAG_TRANSFORM: u32 = 1;
+    /// Primitive flag (triangles): `data` indexes per-vertex attributes in `shape_data`.
+    PRIM_FLAG_ATTRIBUTES: u32 = 2;
+    /// Primitive flag (triangles with attributes): the vertex normals are meaningful.
+    PRIM_FLAG_SHADING_NORMALS: u32 = 4;
+    /// Primitive flag (cylinders): closed by two cap disks.
+    PRIM_FLAG_CAPS: u32 = 8;
+
+    /// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
+    /// within this depth.
+    BVH_STACK_SIZE: u32 = 32;
+
+    /// Material tags: the cases of the `switch` in `materials.wgsl`.
+    MAT_LAMBERTIAN: u32 = 0;
+    MAT_EMISSIVE: u32 = 1;
+    MAT_METAL: u32 = 2;
+    MAT_DIELECTRIC: u32 = 3;
+    MAT_MICROFACET: u32 = 4;
+    /// Material flag: emits from both sides.
+    MAT_FLAG_TWO_SIDED: u32 = 1;
+
+    /// Texture tags: the cases of the `switch` in `textures.wgsl`.
+    TEX_CONSTANT: u32 = 0;
+    TEX_CHECKER: u32 = 1;
+    TEX_IMAGE: u32 = 2;
+    TEX_NOISE: u32 = 3;
+    /// Checker flag: cells in space (x, y, z) rather than in uv.
+    TEX_FLAG_SOLID: u32 = 4;
+    /// Image textures: wrap mode in `flags & 3` (0 repeat, 1 clamp, 2 mirror). Noise
+    /// textures: kind in `flags & 3` (0 Perlin, 1 turbulence, 2 marble).
+    TEX_MODE_MASK: u32 = 3;
+    /// A material colour or checker cell with no texture.
+    NO_TEXTURE: u32 = u32::MAX;
+
+    /// Pixel samplers (`Params::sampler`).
+    SAMPLER_RANDOM: u32 = 0;
+    SAMPLER_JITTERED: u32 = 1;
+    SAMPLER_HAMMERSLEY: u32 = 2;
+    SAMPLER_SOBOL: u32 = 3;
+
+    /// Light-sampling strategies (`Params::light_sampling`).
+    LIGHT_SAMPLING_BSDF: u32 = 0;
+    LIGHT_SAMPLING_MIXTURE: u32 = 1;
+    LIGHT_SAMPLING_MIS: u32 = 2;
+
+    /// Background kinds (`Params::background_kind`).
+    BACKGROUND_CONSTANT: u32 = 0;
+    BACKGROUND_GRADIENT: u32 = 1;
+    BACKGROUND_IMAGE: u32 = 2;
+
+    /// Light kinds (`Emitter::kind`): the cases of the `switch` in `lights.wgsl`.
+    LIGHT_TRIANGLE: u32 = 0;
+    LIGHT_DISK: u32 = 1;
+    LIGHT_SPHERE: u32 = 2;
+    LIGHT_ENVIRONMENT: u32 = 3;
+    /// An index that names no light.
+    NO_LIGHT: u32 = u32::MAX;
+    /// `Primitive::flags >> PRIM_LIGHT_SHIFT` is the primitive's index in the light list
+    /// plus one, or 0 when it is not in the list.
+    PRIM_LIGHT_SHIFT: u32 = 8;
+
+    /// Primitive index reported for a ray that hits nothing.
+    NO_HIT: u32 = u32::MAX;
+    /// Largest finite f32: "no intersection" and "unbounded" without relying on
+    /// infinities.
+    FAR: f32 = f32::MAX;
+
+    /// Dimension pairs of the random numbers a bounce draws (`rand_2d`'s `dim`): the
+    /// position in the pixel.
+    DIM_PIXEL: u32 = 0;
+    /// The point on the lens.
+    DIM_LENS: u32 = 1;
+    /// The BSDF sample.
+    DIM_BSDF: u32 = 2;
+    /// A point on a light.
+    DIM_LIGHT: u32 = 3;
+    /// `.x` chooses the light, `.y` the mixture's strategy.
+    DIM_LIGHT_CHOICE: u32 = 4;
+    /// `.x` decides Russian roulette.
+    DIM_RR: u32 = 5;
+
+    /// The f32 nearest to pi.
+    PI: f32 = std::f32::consts::PI;
+    /// Below this cosine between a light's normal and the direction to it, the light is
+    /// seen edge-on: pdf 0 and no sample, never an unbounded weight.
+    EDGE_ON_COS: f32 = 1e-6;
+    /// Below this GGX alpha the specular lobe is a perfect mirror (a delta, as in
+    /// pbrt-v4): eval and pdf leave it out and the sampler takes the mirror direction
+    /// itself, so roughness 0 never divides by zero.
+    ALPHA_SMOOTH: f32 = 1e-3;
+    /// A BVH node's exit distance is widened by 1 + 2 gamma(3), gamma(n) = n eps /
+    /// (1 - n eps) with eps = 2^-24, so rounding never culls a box a ray touches.
+    BOX_WIDEN: f32 = 1.0 + 3.0 * f32::EPSILON;
+}
 
 /// `shape_data` entries of one transform: world-to-object rows, then object-to-world rows.
 pub const TRANSFORM_ENTRIES: u32 = 6;
@@ -31,70 +149,11 @@ pub const TRANSFORM_ENTRIES: u32 = 6;
 pub const ATTRIBUTE_ENTRIES: u32 = 4;
 /// `Primitive::data` of a primitive with no extra data.
 pub const NO_DATA: u32 = u32::MAX;
-
-/// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
-/// within this depth.
-pub const BVH_STACK_SIZE: u32 = 32;
-
-/// Material tags: the cases of the `switch` in `materials.wgsl`.
-pub const MAT_LAMBERTIAN: u32 = 0;
-pub const MAT_EMISSIVE: u32 = 1;
-pub const MAT_METAL: u32 = 2;
-pub const MAT_DIELECTRIC: u32 = 3;
-pub const MAT_MICROFACET: u32 = 4;
-
-/// Texture tags: the cases of the `switch` in `textures.wgsl`.
-pub const TEX_CONSTANT: u32 = 0;
-pub const TEX_CHECKER: u32 = 1;
-pub const TEX_IMAGE: u32 = 2;
-pub const TEX_NOISE: u32 = 3;
-/// Checker flag: cells in space (x, y, z) rather than in uv.
-pub const TEX_FLAG_SOLID: u32 = 4;
-/// Image textures: wrap mode in `flags & 3` (0 repeat, 1 clamp, 2 mirror). Noise textures:
-/// kind in `flags & 3` (0 Perlin, 1 turbulence, 2 marble).
-pub const TEX_MODE_MASK: u32 = 3;
-/// A material colour or checker cell with no texture.
-pub const NO_TEXTURE: u32 = u32::MAX;
 /// `texels` entries of the Perlin tables: 256 random unit vectors, then 256 rows of the
 /// three permutations (x, y, z) stored as floats.
 pub const NOISE_TABLE_ENTRIES: u32 = 512;
-
-/// Pixel samplers (`Params::sampler`).
-pub const SAMPLER_RANDOM: u32 = 0;
-pub const SAMPLER_JITTERED: u32 = 1;
-pub const SAMPLER_HAMMERSLEY: u32 = 2;
-pub const SAMPLER_SOBOL: u32 = 3;
-
-/// Light-sampling strategies (`Params::light_sampling`).
-pub const LIGHT_SAMPLING_BSDF: u32 = 0;
-pub const LIGHT_SAMPLING_MIXTURE: u32 = 1;
-pub const LIGHT_SAMPLING_MIS: u32 = 2;
-
-/// Background kinds (`Params::background_kind`).
-pub const BACKGROUND_CONSTANT: u32 = 0;
-pub const BACKGROUND_GRADIENT: u32 = 1;
-pub const BACKGROUND_IMAGE: u32 = 2;
-
-/// Light kinds (`Emitter::kind`): the cases of the `switch` in `lights.wgsl`.
-pub const LIGHT_TRIANGLE: u32 = 0;
-pub const LIGHT_DISK: u32 = 1;
-pub const LIGHT_SPHERE: u32 = 2;
-pub const LIGHT_ENVIRONMENT: u32 = 3;
-/// An index that names no light.
-pub const NO_LIGHT: u32 = u32::MAX;
-/// `Primitive::flags >> PRIM_LIGHT_SHIFT` is the primitive's index in the light list plus
-/// one, or 0 when it is not in the list.
-pub const PRIM_LIGHT_SHIFT: u32 = 8;
 /// Most lights a scene may have (the index must fit the flag bits above the shift).
 pub const MAX_LIGHTS: u32 = (1 << (32 - PRIM_LIGHT_SHIFT)) - 2;
-
-/// Material flag: emits from both sides.
-pub const MAT_FLAG_TWO_SIDED: u32 = 1;
-
-/// Primitive index reported for a ray that hits nothing.
-pub const NO_HIT: u32 = u32::MAX;
-/// Largest finite f32: "no intersection" without relying on infinities.
-pub const FAR: f32 = f32::MAX;
 
 /// A tagged primitive (object space when `PRIM_FLAG_TRANSFORM` is set):
 /// - sphere: `a` = (center, radius)
@@ -342,119 +401,180 @@ pub struct RecordLayout {
     pub fields: Vec<(&'static str, usize)>,
 }
 
-macro_rules! layout {
+/// One field's value, as a record written into a shader needs it (`gpu::codegen`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FieldValue {
+    U32(u32),
+    F32(f32),
+    Vec3([f32; 3]),
+    Vec4([f32; 4]),
+}
+
+impl From<u32> for FieldValue {
+    fn from(v: u32) -> Self {
+        FieldValue::U32(v)
+    }
+}
+impl From<f32> for FieldValue {
+    fn from(v: f32) -> Self {
+        FieldValue::F32(v)
+    }
+}
+impl From<[f32; 3]> for FieldValue {
+    fn from(v: [f32; 3]) -> Self {
+        FieldValue::Vec3(v)
+    }
+}
+impl From<[f32; 4]> for FieldValue {
+    fn from(v: [f32; 4]) -> Self {
+        FieldValue::Vec4(v)
+    }
+}
+
+/// A record shared with WGSL: its struct's name there, its fields in order with their
+/// values, and its layout. The field order is written once, in `shared_record!`'s list,
+/// which must name every field (it destructures the struct without `..`), and which the
+/// layout test holds to naga's view of the WGSL struct.
+pub trait SharedRecord {
+    /// The WGSL struct's name.
+    const NAME: &'static str;
+    /// Every field, in declaration order, with its value.
+    fn fields(&self) -> Vec<(&'static str, FieldValue)>;
+    /// Size and field offsets.
+    fn layout() -> RecordLayout;
+}
+
+macro_rules! shared_record {
     ($ty:ident { $($field:ident),* $(,)? }) => {
-        RecordLayout {
-            name: stringify!($ty),
-            size: core::mem::size_of::<$ty>(),
-            fields: vec![$((stringify!($field), core::mem::offset_of!($ty, $field))),*],
+        impl SharedRecord for $ty {
+            const NAME: &'static str = stringify!($ty);
+            fn fields(&self) -> Vec<(&'static str, FieldValue)> {
+                let $ty { $($field),* } = *self;
+                vec![$((stringify!($field), FieldValue::from($field))),*]
+            }
+            fn layout() -> RecordLayout {
+                RecordLayout {
+                    name: stringify!($ty),
+                    size: core::mem::size_of::<$ty>(),
+                    fields: vec![$((stringify!($field), core::mem::offset_of!($ty, $field))),*],
+                }
+            }
         }
     };
 }
 
-/// Every record shared with WGSL, with every field. A field added to a struct here must be
-/// added to this list (the test also checks the field count against the shader).
+shared_record!(Primitive {
+    tag,
+    material,
+    flags,
+    data,
+    a,
+    b,
+    c
+});
+shared_record!(Material {
+    tag,
+    flags,
+    tex_albedo,
+    tex_emission,
+    albedo,
+    emission,
+    params,
+    extra,
+    tex_extra,
+    pad0,
+    pad1,
+    pad2
+});
+shared_record!(Texture {
+    tag,
+    flags,
+    even,
+    odd,
+    width,
+    height,
+    offset,
+    pad,
+    color0,
+    color1,
+    params
+});
+shared_record!(Emitter {
+    primitive,
+    kind,
+    prob,
+    cdf,
+    a,
+    b,
+    c,
+    area,
+    power,
+    pad0,
+    pad1
+});
+shared_record!(Params {
+    cam_origin,
+    cam_right,
+    cam_up,
+    cam_forward,
+    background,
+    background_top,
+    env,
+    width,
+    height,
+    max_depth,
+    seed,
+    sample_index,
+    num_primitives,
+    num_emitters,
+    tile_x,
+    tile_y,
+    tile_width,
+    tile_height,
+    num_unbounded,
+    use_bvh,
+    sampler,
+    strata_log2,
+    spp,
+    light_sampling,
+    background_kind,
+    env_texture,
+    env_cdf,
+    env_light,
+    accum_y,
+    rr_depth,
+    sample_count
+});
+shared_record!(KernelRay { origin, dir });
+shared_record!(TextureLookup { uv, p });
+shared_record!(KernelHit {
+    t,
+    prim,
+    front_face,
+    occluded,
+    p,
+    ng,
+    ns,
+    uv
+});
+shared_record!(BvhNode {
+    lo,
+    offset,
+    hi,
+    count
+});
+
+/// The layout of every record shared with WGSL.
 pub fn record_layouts() -> Vec<RecordLayout> {
     vec![
-        layout!(Primitive {
-            tag,
-            material,
-            flags,
-            data,
-            a,
-            b,
-            c
-        }),
-        layout!(Material {
-            tag,
-            flags,
-            tex_albedo,
-            tex_emission,
-            albedo,
-            emission,
-            params,
-            extra,
-            tex_extra,
-            pad0,
-            pad1,
-            pad2
-        }),
-        layout!(Texture {
-            tag,
-            flags,
-            even,
-            odd,
-            width,
-            height,
-            offset,
-            pad,
-            color0,
-            color1,
-            params
-        }),
-        layout!(Emitter {
-            primitive,
-            kind,
-            prob,
-            cdf,
-            a,
-            b,
-            c,
-            area,
-            power,
-            pad0,
-            pad1
-        }),
-        layout!(Params {
-            cam_origin,
-            cam_right,
-            cam_up,
-            cam_forward,
-            background,
-            background_top,
-            env,
-            width,
-            height,
-            max_depth,
-            seed,
-            sample_index,
-            num_primitives,
-            num_emitters,
-            tile_x,
-            tile_y,
-            tile_width,
-            tile_height,
-            num_unbounded,
-            use_bvh,
-            sampler,
-            strata_log2,
-            spp,
-            light_sampling,
-            background_kind,
-            env_texture,
-            env_cdf,
-            env_light,
-            accum_y,
-            rr_depth,
-            sample_count
-        }),
-        layout!(KernelRay { origin, dir }),
-        layout!(TextureLookup { uv, p }),
-        layout!(KernelHit {
-            t,
-            prim,
-            front_face,
-            occluded,
-            p,
-            ng,
-            ns,
-            uv
-        }),
-        layout!(BvhNode {
-            lo,
-            offset,
-            hi,
-            count
-        }),
+        Primitive::layout(),
+        Material::layout(),
+        Texture::layout(),
+        Emitter::layout(),
+        Params::layout(),
+        KernelRay::layout(),
+        TextureLookup::layout(),
+        KernelHit::layout(),
+        BvhNode::layout(),
     ]
 }

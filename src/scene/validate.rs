@@ -3,8 +3,21 @@
 use glam::Vec3;
 
 use super::error::Problem;
-use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TextureDesc, TransformDesc};
-use super::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE, MAX_SPP};
+use toml::Spanned;
+
+use super::format::{
+    CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, RenderDesc, SceneFile, TextureDesc,
+    TransformDesc,
+};
+use super::shapes::polygon_normal;
+
+/// Largest image side accepted.
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+/// Most samples per pixel accepted (2^24): sample indices stay exact in f32 and far from
+/// the u32 limit of the random streams.
+pub const MAX_SPP: u32 = 1 << 24;
+/// Longest path accepted (rays per path).
+pub const MAX_DEPTH_LIMIT: u32 = 1024;
 
 /// Collects every problem of a parsed scene (not only the first). `overridden` names the
 /// `[render]` keys whose values came from the command line (`--spp` for `spp`), so their
@@ -26,308 +39,17 @@ pub fn validate(file: &SceneFile, src: &str, overridden: &[&str]) -> Vec<Problem
             })
             .collect(),
     };
-    let r = &file.render;
-    v.range_u32("render.width", r.width, 1, MAX_IMAGE_SIDE, 0);
-    v.range_u32("render.height", r.height, 1, MAX_IMAGE_SIDE, 0);
-    v.range_u32("render.spp", r.spp, 1, MAX_SPP, 0);
-    v.range_u32("render.max_depth", r.max_depth, 1, MAX_DEPTH_LIMIT, 0);
-
-    let c = &file.camera;
-    v.finite3("camera.look_from", c.look_from, 0);
-    v.finite3("camera.look_at", c.look_at, 0);
-    v.finite3("camera.up", c.up, 0);
-    let forward = Vec3::from(c.look_at) - Vec3::from(c.look_from);
-    if forward.length_squared() == 0.0 {
-        v.push(0, "camera.look_at", "must differ from look_from".into());
-    } else if forward.cross(Vec3::from(c.up)).length_squared() <= 1e-12 * forward.length_squared() {
-        v.push(
-            0,
-            "camera.up",
-            "must not be parallel to the view direction".into(),
-        );
-    }
-    if !(c.vfov > 0.0 && c.vfov < 180.0) {
-        v.push(
-            0,
-            "camera.vfov",
-            format!("must be in (0, 180) degrees, got {}", c.vfov),
-        );
-    }
-    if !(c.aperture >= 0.0 && c.aperture.is_finite()) {
-        v.push(
-            0,
-            "camera.aperture",
-            format!("must be >= 0, got {}", c.aperture),
-        );
-    }
-    if let Some(fd) = c.focus_distance {
-        if !(fd > 0.0 && fd.is_finite()) {
-            v.push(0, "camera.focus_distance", format!("must be > 0, got {fd}"));
-        }
-    }
-    let bg = &file.background;
-    for (key, c) in [
-        ("background.color", bg.color),
-        ("background.top", bg.top),
-        ("background.bottom", bg.bottom),
-    ] {
-        if let Some(c) = c {
-            v.nonnegative3(key, c, 0);
-        }
-    }
-    let kinds = [
-        bg.color.is_some(),
-        bg.top.is_some() || bg.bottom.is_some(),
-        bg.texture.is_some(),
-    ];
-    if kinds.iter().filter(|&&k| k).count() > 1 {
-        v.push(
-            0,
-            "background",
-            "give one of color, top and bottom, or texture".into(),
-        );
-    }
-    if let Some(name) = &bg.texture {
-        match file.textures.get(name).map(|t| t.get_ref()) {
-            Some(TextureDesc::Image { .. }) => {}
-            Some(_) => v.push(
-                0,
-                "background.texture",
-                format!("\"{name}\" is not an image texture; an environment needs an image"),
-            ),
-            None => {
-                let known: Vec<&str> = file.textures.keys().map(String::as_str).collect();
-                v.push(
-                    0,
-                    "background.texture",
-                    format!(
-                        "no texture named \"{name}\" (textures: {})",
-                        known.join(", ")
-                    ),
-                );
-            }
-        }
-    } else if bg.rotation.is_some() || bg.strength.is_some() {
-        v.push(
-            0,
-            "background",
-            "rotation and strength apply to a texture background only".into(),
-        );
-    }
-    if let Some(r) = bg.rotation {
-        if !r.is_finite() {
-            v.push(0, "background.rotation", format!("must be finite, got {r}"));
-        }
-    }
-    if let Some(k) = bg.strength {
-        if !(k >= 0.0 && k.is_finite()) {
-            v.push(0, "background.strength", format!("must be >= 0, got {k}"));
-        }
-    }
-    if bg.top.is_some() != bg.bottom.is_some() {
-        v.push(
-            0,
-            "background",
-            "a gradient needs both top and bottom".into(),
-        );
-    }
-
+    v.render(&file.render);
+    v.camera(&file.camera);
+    v.background(file);
     for (name, t) in &file.textures {
-        let at = t.span().start;
-        let key = format!("textures.{name}");
-        match t.get_ref() {
-            TextureDesc::Constant { color } => v.nonnegative3(&format!("{key}.color"), *color, at),
-            TextureDesc::Checker {
-                even, odd, scale, ..
-            } => {
-                for (cell, c) in [("even", even), ("odd", odd)] {
-                    let ckey = format!("{key}.{cell}");
-                    v.color(&ckey, c, false, at);
-                    if let Some(child) = c.texture() {
-                        if v.textures.iter().any(|(n, checker)| n == child && *checker) {
-                            v.push(at, &ckey, format!("\"{child}\" is a checker; a checker's cells must be colours or other textures"));
-                        }
-                    }
-                }
-                v.positive(&format!("{key}.scale"), *scale, at);
-            }
-            TextureDesc::Image { path, .. } => {
-                if path.is_empty() {
-                    v.push(at, &format!("{key}.path"), "must name an image file".into());
-                }
-            }
-            TextureDesc::Noise { scale, color, .. } => {
-                v.positive(&format!("{key}.scale"), *scale, at);
-                v.nonnegative3(&format!("{key}.color"), *color, at);
-            }
-        }
+        v.texture(name, t);
     }
-
     for (name, m) in &file.materials {
-        let at = m.span().start;
-        let key = format!("materials.{name}");
-        match m.get_ref() {
-            MaterialDesc::Lambertian {
-                albedo, emission, ..
-            } => {
-                v.color(&format!("{key}.albedo"), albedo, true, at);
-                v.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Metal {
-                albedo,
-                fuzz,
-                emission,
-                ..
-            } => {
-                v.color(&format!("{key}.albedo"), albedo, true, at);
-                if !(0.0..=1.0).contains(fuzz) {
-                    v.push(
-                        at,
-                        &format!("{key}.fuzz"),
-                        format!("must be in [0, 1], got {fuzz}"),
-                    );
-                }
-                v.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Dielectric {
-                ior,
-                tint,
-                absorption,
-                emission,
-                ..
-            } => {
-                if !(*ior > 0.0 && ior.is_finite()) {
-                    v.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
-                }
-                v.color(&format!("{key}.tint"), tint, true, at);
-                v.nonnegative3(&format!("{key}.absorption"), *absorption, at);
-                v.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Microfacet {
-                albedo,
-                specular,
-                roughness,
-                ior,
-                emission,
-                ..
-            } => {
-                v.color(&format!("{key}.albedo"), albedo, true, at);
-                if let Some(ks) = specular {
-                    v.color(&format!("{key}.specular"), ks, true, at);
-                }
-                if !(0.0..=1.0).contains(roughness) {
-                    v.push(
-                        at,
-                        &format!("{key}.roughness"),
-                        format!("must be in [0, 1], got {roughness}"),
-                    );
-                }
-                if !(*ior > 0.0 && ior.is_finite()) {
-                    v.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
-                }
-                v.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Emissive { radiance, .. } => {
-                v.color(&format!("{key}.radiance"), radiance, false, at);
-            }
-        }
+        v.material(name, m);
     }
-
     for (i, obj) in file.objects.iter().enumerate() {
-        let at = obj.span().start;
-        let key = format!("objects[{i}]");
-        let o = obj.get_ref();
-        if !file.materials.contains_key(o.material()) {
-            let known: Vec<&str> = file.materials.keys().map(String::as_str).collect();
-            v.push(
-                at,
-                &format!("{key}.material"),
-                format!(
-                    "unknown material \"{}\" (defined: {})",
-                    o.material(),
-                    if known.is_empty() {
-                        "none".to_string()
-                    } else {
-                        known.join(", ")
-                    }
-                ),
-            );
-        }
-        if let Some(t) = o.transform() {
-            v.transform(&format!("{key}.transform"), &t, at);
-        }
-        match o {
-            ObjectDesc::Sphere { center, radius, .. } => {
-                v.finite3(&format!("{key}.center"), *center, at);
-                v.positive(&format!("{key}.radius"), *radius, at);
-            }
-            ObjectDesc::Triangle { vertices, uvs, .. } => {
-                v.polygon(&key, vertices, at);
-                if let Some(uvs) = uvs {
-                    if !uvs.iter().flatten().all(|x| x.is_finite()) {
-                        v.push(at, &format!("{key}.uvs"), "must be finite".into());
-                    }
-                }
-            }
-            ObjectDesc::Polygon { vertices, .. } => {
-                v.polygon(&key, vertices, at);
-            }
-            ObjectDesc::Tetrahedron { vertices, .. } => {
-                v.tetrahedron(&key, vertices, at);
-            }
-            ObjectDesc::Plane {
-                point,
-                normal,
-                uv_scale,
-                ..
-            } => {
-                v.finite3(&format!("{key}.point"), *point, at);
-                v.direction(&format!("{key}.normal"), *normal, at);
-                if !(uv_scale.is_finite() && *uv_scale != 0.0) {
-                    v.push(
-                        at,
-                        &format!("{key}.uv_scale"),
-                        format!("must be finite and non-zero, got {uv_scale}"),
-                    );
-                }
-            }
-            ObjectDesc::Box { min, max, .. } => {
-                let ok = v.finite3(&format!("{key}.min"), *min, at)
-                    & v.finite3(&format!("{key}.max"), *max, at);
-                if ok && (0..3).any(|i| min[i] >= max[i]) {
-                    v.push(
-                        at,
-                        &format!("{key}.max"),
-                        format!("must exceed min on every axis, got min {min:?}, max {max:?}"),
-                    );
-                }
-            }
-            ObjectDesc::Cylinder {
-                base, top, radius, ..
-            } => {
-                let ok = v.finite3(&format!("{key}.base"), *base, at)
-                    & v.finite3(&format!("{key}.top"), *top, at);
-                if ok && base == top {
-                    v.push(at, &format!("{key}.top"), "must differ from base".into());
-                }
-                v.positive(&format!("{key}.radius"), *radius, at);
-            }
-            ObjectDesc::Disk {
-                center,
-                normal,
-                radius,
-                ..
-            } => {
-                v.finite3(&format!("{key}.center"), *center, at);
-                v.direction(&format!("{key}.normal"), *normal, at);
-                v.positive(&format!("{key}.radius"), *radius, at);
-            }
-            ObjectDesc::Mesh { path, .. } => {
-                if path.is_empty() {
-                    v.push(at, &format!("{key}.path"), "must name an OBJ file".into());
-                }
-            }
-        }
+        v.object(i, obj, file);
     }
     v.problems
 }
@@ -345,6 +67,334 @@ struct Validator<'a> {
 }
 
 impl Validator<'_> {
+    /// `[render]`: sizes, samples and path length in range.
+    fn render(&mut self, r: &RenderDesc) {
+        self.range_u32("render.width", r.width, 1, MAX_IMAGE_SIDE, 0);
+        self.range_u32("render.height", r.height, 1, MAX_IMAGE_SIDE, 0);
+        self.range_u32("render.spp", r.spp, 1, MAX_SPP, 0);
+        self.range_u32("render.max_depth", r.max_depth, 1, MAX_DEPTH_LIMIT, 0);
+    }
+
+    /// `[camera]`: finite, a view direction, an up vector off it, a field of view and lens.
+    fn camera(&mut self, c: &CameraDesc) {
+        self.finite3("camera.look_from", c.look_from, 0);
+        self.finite3("camera.look_at", c.look_at, 0);
+        self.finite3("camera.up", c.up, 0);
+        let forward = Vec3::from(c.look_at) - Vec3::from(c.look_from);
+        if forward.length_squared() == 0.0 {
+            self.push(0, "camera.look_at", "must differ from look_from".into());
+        } else if forward.cross(Vec3::from(c.up)).length_squared()
+            <= 1e-12 * forward.length_squared()
+        {
+            self.push(
+                0,
+                "camera.up",
+                "must not be parallel to the view direction".into(),
+            );
+        }
+        if !(c.vfov > 0.0 && c.vfov < 180.0) {
+            self.push(
+                0,
+                "camera.vfov",
+                format!("must be in (0, 180) degrees, got {}", c.vfov),
+            );
+        }
+        if !(c.aperture >= 0.0 && c.aperture.is_finite()) {
+            self.push(
+                0,
+                "camera.aperture",
+                format!("must be >= 0, got {}", c.aperture),
+            );
+        }
+        if let Some(fd) = c.focus_distance {
+            if !(fd > 0.0 && fd.is_finite()) {
+                self.push(0, "camera.focus_distance", format!("must be > 0, got {fd}"));
+            }
+        }
+    }
+
+    /// `[background]`: one kind of background, its colours, texture, rotation and strength.
+    fn background(&mut self, file: &SceneFile) {
+        let bg = &file.background;
+        for (key, c) in [
+            ("background.color", bg.color),
+            ("background.top", bg.top),
+            ("background.bottom", bg.bottom),
+        ] {
+            if let Some(c) = c {
+                self.nonnegative3(key, c, 0);
+            }
+        }
+        let kinds = [
+            bg.color.is_some(),
+            bg.top.is_some() || bg.bottom.is_some(),
+            bg.texture.is_some(),
+        ];
+        if kinds.iter().filter(|&&k| k).count() > 1 {
+            self.push(
+                0,
+                "background",
+                "give one of color, top and bottom, or texture".into(),
+            );
+        }
+        if let Some(name) = &bg.texture {
+            match file.textures.get(name).map(|t| t.get_ref()) {
+                Some(TextureDesc::Image { .. }) => {}
+                Some(_) => self.push(
+                    0,
+                    "background.texture",
+                    format!("\"{name}\" is not an image texture; an environment needs an image"),
+                ),
+                None => {
+                    let known: Vec<&str> = file.textures.keys().map(String::as_str).collect();
+                    self.push(
+                        0,
+                        "background.texture",
+                        format!(
+                            "no texture named \"{name}\" (textures: {})",
+                            known.join(", ")
+                        ),
+                    );
+                }
+            }
+        } else if bg.rotation.is_some() || bg.strength.is_some() {
+            self.push(
+                0,
+                "background",
+                "rotation and strength apply to a texture background only".into(),
+            );
+        }
+        if let Some(r) = bg.rotation {
+            if !r.is_finite() {
+                self.push(0, "background.rotation", format!("must be finite, got {r}"));
+            }
+        }
+        if let Some(k) = bg.strength {
+            if !(k >= 0.0 && k.is_finite()) {
+                self.push(0, "background.strength", format!("must be >= 0, got {k}"));
+            }
+        }
+        if bg.top.is_some() != bg.bottom.is_some() {
+            self.push(
+                0,
+                "background",
+                "a gradient needs both top and bottom".into(),
+            );
+        }
+    }
+
+    /// One `[textures.NAME]`.
+    fn texture(&mut self, name: &str, t: &Spanned<TextureDesc>) {
+        let at = t.span().start;
+        let key = format!("textures.{name}");
+        match t.get_ref() {
+            TextureDesc::Constant { color } => {
+                self.nonnegative3(&format!("{key}.color"), *color, at)
+            }
+            TextureDesc::Checker {
+                even, odd, scale, ..
+            } => {
+                for (cell, c) in [("even", even), ("odd", odd)] {
+                    let ckey = format!("{key}.{cell}");
+                    self.color(&ckey, c, false, at);
+                    if let Some(child) = c.texture() {
+                        if self
+                            .textures
+                            .iter()
+                            .any(|(n, checker)| n == child && *checker)
+                        {
+                            self.push(at, &ckey, format!("\"{child}\" is a checker; a checker's cells must be colours or other textures"));
+                        }
+                    }
+                }
+                self.positive(&format!("{key}.scale"), *scale, at);
+            }
+            TextureDesc::Image { path, .. } => {
+                if path.is_empty() {
+                    self.push(at, &format!("{key}.path"), "must name an image file".into());
+                }
+            }
+            TextureDesc::Noise { scale, color, .. } => {
+                self.positive(&format!("{key}.scale"), *scale, at);
+                self.nonnegative3(&format!("{key}.color"), *color, at);
+            }
+        }
+    }
+
+    /// One `[materials.NAME]`.
+    fn material(&mut self, name: &str, m: &Spanned<MaterialDesc>) {
+        let at = m.span().start;
+        let key = format!("materials.{name}");
+        match m.get_ref() {
+            MaterialDesc::Lambertian {
+                albedo, emission, ..
+            } => {
+                self.color(&format!("{key}.albedo"), albedo, true, at);
+                self.color(&format!("{key}.emission"), emission, false, at);
+            }
+            MaterialDesc::Metal {
+                albedo,
+                fuzz,
+                emission,
+                ..
+            } => {
+                self.color(&format!("{key}.albedo"), albedo, true, at);
+                if !(0.0..=1.0).contains(fuzz) {
+                    self.push(
+                        at,
+                        &format!("{key}.fuzz"),
+                        format!("must be in [0, 1], got {fuzz}"),
+                    );
+                }
+                self.color(&format!("{key}.emission"), emission, false, at);
+            }
+            MaterialDesc::Dielectric {
+                ior,
+                tint,
+                absorption,
+                emission,
+                ..
+            } => {
+                if !(*ior > 0.0 && ior.is_finite()) {
+                    self.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
+                }
+                self.color(&format!("{key}.tint"), tint, true, at);
+                self.nonnegative3(&format!("{key}.absorption"), *absorption, at);
+                self.color(&format!("{key}.emission"), emission, false, at);
+            }
+            MaterialDesc::Microfacet {
+                albedo,
+                specular,
+                roughness,
+                ior,
+                emission,
+                ..
+            } => {
+                self.color(&format!("{key}.albedo"), albedo, true, at);
+                if let Some(ks) = specular {
+                    self.color(&format!("{key}.specular"), ks, true, at);
+                }
+                if !(0.0..=1.0).contains(roughness) {
+                    self.push(
+                        at,
+                        &format!("{key}.roughness"),
+                        format!("must be in [0, 1], got {roughness}"),
+                    );
+                }
+                if !(*ior > 0.0 && ior.is_finite()) {
+                    self.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
+                }
+                self.color(&format!("{key}.emission"), emission, false, at);
+            }
+            MaterialDesc::Emissive { radiance, .. } => {
+                self.color(&format!("{key}.radiance"), radiance, false, at);
+            }
+        }
+    }
+
+    /// One `[[objects]]` entry: its material, transform and shape.
+    fn object(&mut self, i: usize, obj: &Spanned<ObjectDesc>, file: &SceneFile) {
+        let at = obj.span().start;
+        let key = format!("objects[{i}]");
+        let o = obj.get_ref();
+        if !file.materials.contains_key(o.material()) {
+            let known: Vec<&str> = file.materials.keys().map(String::as_str).collect();
+            self.push(
+                at,
+                &format!("{key}.material"),
+                format!(
+                    "unknown material \"{}\" (defined: {})",
+                    o.material(),
+                    if known.is_empty() {
+                        "none".to_string()
+                    } else {
+                        known.join(", ")
+                    }
+                ),
+            );
+        }
+        if let Some(t) = o.transform() {
+            self.transform(&format!("{key}.transform"), &t, at);
+        }
+        self.shape(&key, o, at);
+    }
+
+    /// An object's shape: finite, non-degenerate, in range.
+    fn shape(&mut self, key: &str, o: &ObjectDesc, at: usize) {
+        match o {
+            ObjectDesc::Sphere { center, radius, .. } => {
+                self.finite3(&format!("{key}.center"), *center, at);
+                self.positive(&format!("{key}.radius"), *radius, at);
+            }
+            ObjectDesc::Triangle { vertices, uvs, .. } => {
+                self.polygon(key, vertices, at);
+                if let Some(uvs) = uvs {
+                    if !uvs.iter().flatten().all(|x| x.is_finite()) {
+                        self.push(at, &format!("{key}.uvs"), "must be finite".into());
+                    }
+                }
+            }
+            ObjectDesc::Polygon { vertices, .. } => {
+                self.polygon(key, vertices, at);
+            }
+            ObjectDesc::Tetrahedron { vertices, .. } => {
+                self.tetrahedron(key, vertices, at);
+            }
+            ObjectDesc::Plane {
+                point,
+                normal,
+                uv_scale,
+                ..
+            } => {
+                self.finite3(&format!("{key}.point"), *point, at);
+                self.direction(&format!("{key}.normal"), *normal, at);
+                if !(uv_scale.is_finite() && *uv_scale != 0.0) {
+                    self.push(
+                        at,
+                        &format!("{key}.uv_scale"),
+                        format!("must be finite and non-zero, got {uv_scale}"),
+                    );
+                }
+            }
+            ObjectDesc::Box { min, max, .. } => {
+                let ok = self.finite3(&format!("{key}.min"), *min, at)
+                    & self.finite3(&format!("{key}.max"), *max, at);
+                if ok && (0..3).any(|i| min[i] >= max[i]) {
+                    self.push(
+                        at,
+                        &format!("{key}.max"),
+                        format!("must exceed min on every axis, got min {min:?}, max {max:?}"),
+                    );
+                }
+            }
+            ObjectDesc::Cylinder {
+                base, top, radius, ..
+            } => {
+                let ok = self.finite3(&format!("{key}.base"), *base, at)
+                    & self.finite3(&format!("{key}.top"), *top, at);
+                if ok && base == top {
+                    self.push(at, &format!("{key}.top"), "must differ from base".into());
+                }
+                self.positive(&format!("{key}.radius"), *radius, at);
+            }
+            ObjectDesc::Disk {
+                center,
+                normal,
+                radius,
+                ..
+            } => {
+                self.finite3(&format!("{key}.center"), *center, at);
+                self.direction(&format!("{key}.normal"), *normal, at);
+                self.positive(&format!("{key}.radius"), *radius, at);
+            }
+            ObjectDesc::Mesh { path, .. } => {
+                if path.is_empty() {
+                    self.push(at, &format!("{key}.path"), "must name an OBJ file".into());
+                }
+            }
+        }
+    }
+
     fn push(&mut self, offset: usize, key: &str, message: String) {
         if self.overridden.iter().any(|k| k == key) {
             let flag = key.trim_start_matches("render.").replace('_', "-");
@@ -530,13 +580,4 @@ impl Validator<'_> {
             }
         }
     }
-}
-
-/// Area-weighted normal of a planar polygon (Newell's method): length = 2 x area.
-pub fn polygon_normal(pts: &[Vec3]) -> Vec3 {
-    let mut n = Vec3::ZERO;
-    for i in 1..pts.len() - 1 {
-        n += (pts[i] - pts[0]).cross(pts[i + 1] - pts[0]);
-    }
-    n
 }

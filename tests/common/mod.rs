@@ -5,8 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use wgtrace::render::{render_progressive, Accumulation};
-use wgtrace::{Engine, FlatScene, Overrides};
+use wgtrace::{Accumulation, Engine, FlatScene, Overrides, Session, SessionOptions, StopRule};
 
 /// Opens the GPU backend or fails the test: GPU tests never skip.
 pub fn gpu_engine(scene: &FlatScene) -> Engine {
@@ -23,13 +22,14 @@ pub fn gpu_context() -> wgtrace::gpu::GpuContext {
         .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter: {e}"))
 }
 
-/// Renders all passes of `scene` on `engine` and returns the accumulation.
-pub fn render(mut engine: Engine, scene: &FlatScene) -> Accumulation {
-    render_progressive(&mut engine, scene, |_, _| {
-        Ok::<(), wgtrace::gpu::GpuError>(())
-    })
-    .expect("render");
-    let acc = engine.accumulation().expect("readback");
+/// Renders all passes of `scene` on `engine` in a session and returns the sums.
+pub fn render(engine: Engine, scene: &FlatScene) -> Accumulation {
+    let mut session =
+        Session::with_engine(scene.clone(), engine, SessionOptions::default()).expect("session");
+    let acc = session
+        .run(&StopRule::default(), |_| {})
+        .expect("render")
+        .accumulation;
     // the renderer drops and counts samples that are not finite: every test render has none
     assert_eq!(
         acc.non_finite(),
@@ -44,6 +44,14 @@ pub fn render_gpu(scene: &FlatScene) -> Accumulation {
     render(gpu_engine(scene), scene)
 }
 
+/// Renders `scene` on the GPU under the tuning knobs `knobs` (`--tune`'s list).
+pub fn render_gpu_tuned(scene: &FlatScene, knobs: &str) -> Accumulation {
+    let tuning = wgtrace::Tuning::parse(knobs).unwrap();
+    let engine = Engine::gpu_tuned(scene, 0, &tuning)
+        .unwrap_or_else(|e| panic!("GPU tests need a Vulkan adapter: {e}"));
+    render(engine, scene)
+}
+
 pub fn render_cpu(scene: &FlatScene) -> Accumulation {
     render(Engine::cpu(scene), scene)
 }
@@ -56,11 +64,20 @@ pub fn scene_from_str(src: &str) -> FlatScene {
 
 /// Parses scene text with every primitive tested on every ray (no BVH).
 pub fn scene_without_bvh(src: &str) -> FlatScene {
-    let o = Overrides {
-        no_bvh: true,
-        ..Default::default()
-    };
-    wgtrace::load_scene_str(src, Path::new("test.toml"), &o).unwrap_or_else(|e| panic!("{e}"))
+    let tuning = wgtrace::Tuning::parse("no-bvh").unwrap();
+    wgtrace::scene::load_scene_str(
+        src,
+        Path::new("test.toml"),
+        &Overrides::default(),
+        tuning.build(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Loads a scene file under the tuning knobs `knobs` (`--tune`'s list).
+pub fn load_tuned(path: &Path, overrides: &Overrides, knobs: &str) -> FlatScene {
+    let tuning = wgtrace::Tuning::parse(knobs).unwrap();
+    wgtrace::scene::load_scene(path, overrides, tuning.build()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Parses scene text as if it were the file `rel` of the repository (mesh paths resolve

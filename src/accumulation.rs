@@ -1,0 +1,87 @@
+//! The per-pixel sums a render accumulates, and what they tell: means, variances, dropped
+//! samples and the estimated error.
+
+/// Per-pixel sums of samples: `data[2 i]` = (sum r, sum g, sum b, count),
+/// `data[2 i + 1]` = (sum r^2, sum g^2, sum b^2, samples dropped as not finite), pixel i
+/// row-major from the top-left.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Accumulation {
+    pub width: u32,
+    pub height: u32,
+    pub data: Vec<[f32; 4]>,
+}
+
+impl Accumulation {
+    pub fn pixel_count(&self) -> usize {
+        self.width as usize * self.height as usize
+    }
+
+    /// Samples accumulated in pixel `i`.
+    pub fn samples(&self, i: usize) -> f32 {
+        self.data[2 * i][3]
+    }
+
+    /// Mean radiance of pixel `i`.
+    pub fn mean(&self, i: usize) -> [f32; 3] {
+        let s = self.data[2 * i];
+        let n = s[3].max(1.0);
+        [s[0] / n, s[1] / n, s[2] / n]
+    }
+
+    /// Unbiased sample variance of one sample of pixel `i`, per channel.
+    pub fn variance(&self, i: usize) -> [f32; 3] {
+        let s = self.data[2 * i];
+        let q = self.data[2 * i + 1];
+        let n = s[3];
+        if n < 2.0 {
+            return [0.0; 3];
+        }
+        std::array::from_fn(|c| ((q[c] - s[c] * s[c] / n) / (n - 1.0)).max(0.0))
+    }
+
+    /// Samples dropped because they were not finite (NaN or infinite), over all pixels.
+    pub fn non_finite(&self) -> u64 {
+        (0..self.pixel_count())
+            .map(|i| self.data[2 * i + 1][3] as u64)
+            .sum()
+    }
+
+    /// Mean radiance of every pixel, as `width * height * 3` linear floats.
+    pub fn to_rgb(&self) -> Vec<f32> {
+        (0..self.pixel_count()).flat_map(|i| self.mean(i)).collect()
+    }
+
+    /// Estimated relative squared error of pixel `i`'s mean, averaged over its channels:
+    /// (variance / n) / (mean^2 + 0.01), the relative MSE of the convergence reports with
+    /// the unknown true value replaced by the mean. Unbiased for independent samples;
+    /// the low-discrepancy samplers converge faster than the variance says, so for them
+    /// it is an overestimate.
+    pub fn pixel_rel_mse(&self, i: usize) -> f64 {
+        let (m, v, n) = (
+            self.mean(i),
+            self.variance(i),
+            self.samples(i).max(1.0) as f64,
+        );
+        (0..3)
+            .map(|c| v[c] as f64 / n / ((m[c] as f64).powi(2) + REL_MSE_EPSILON))
+            .sum::<f64>()
+            / 3.0
+    }
+
+    /// Estimated relative MSE of the whole image (`pixel_rel_mse` averaged over pixels).
+    pub fn estimated_rel_mse(&self) -> f64 {
+        (0..self.pixel_count())
+            .map(|i| self.pixel_rel_mse(i))
+            .sum::<f64>()
+            / self.pixel_count().max(1) as f64
+    }
+
+    /// Estimated relative error: the square root of `estimated_rel_mse`.
+    pub fn estimated_rel_error(&self) -> f64 {
+        self.estimated_rel_mse().sqrt()
+    }
+}
+
+/// The 0.01 in relative MSE, mean((x - r)^2 / (r^2 + 0.01)): keeps black pixels from
+/// dominating.
+pub const REL_MSE_EPSILON: f64 = 0.01;

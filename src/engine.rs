@@ -1,0 +1,152 @@
+//! The backend that renders: a Vulkan adapter or the CPU reference, behind one type.
+
+use std::ops::Range;
+use std::time::Duration;
+
+use crate::accumulation::Accumulation;
+use crate::cpu::trace::CpuRenderer;
+use crate::gpu::context::GpuContext;
+use crate::gpu::error::GpuError;
+use crate::gpu::render::GpuRenderer;
+use crate::scene::flat::FlatScene;
+use crate::tuning::Tuning;
+
+/// Which backend renders.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BackendChoice {
+    /// Vulkan adapter by index of [`crate::gpu::list_adapters`] (0: the preferred one).
+    Gpu { adapter: usize },
+    /// The CPU reference.
+    Cpu,
+}
+
+/// An open backend holding one scene and its sums.
+pub enum Engine {
+    Gpu(Box<GpuRenderer>),
+    Cpu(Box<CpuRenderer>),
+}
+
+impl Engine {
+    /// Opens the GPU backend under the default tuning; fails when no Vulkan adapter exists.
+    pub fn gpu(scene: &FlatScene, adapter: usize) -> Result<Self, GpuError> {
+        Self::gpu_tuned(scene, adapter, &Tuning::default())
+    }
+
+    /// Opens the GPU backend under `tuning`.
+    pub fn gpu_tuned(scene: &FlatScene, adapter: usize, tuning: &Tuning) -> Result<Self, GpuError> {
+        let ctx = GpuContext::shared(adapter)?;
+        Ok(Engine::Gpu(Box::new(GpuRenderer::new(ctx, scene, tuning)?)))
+    }
+
+    /// Opens the CPU reference.
+    pub fn cpu(scene: &FlatScene) -> Self {
+        Engine::Cpu(Box::new(CpuRenderer::new(scene)))
+    }
+
+    /// Opens the chosen backend; with the GPU chosen and no Vulkan adapter,
+    /// [`GpuError::NoAdapter`].
+    pub fn with(
+        scene: &FlatScene,
+        choice: BackendChoice,
+        tuning: &Tuning,
+    ) -> Result<Self, GpuError> {
+        match choice {
+            BackendChoice::Cpu => Ok(Self::cpu(scene)),
+            BackendChoice::Gpu { adapter } => Self::gpu_tuned(scene, adapter, tuning),
+        }
+    }
+
+    /// Opens the chosen backend. When the GPU is chosen but no Vulkan adapter exists, falls
+    /// back to the CPU and returns a one-line note saying so.
+    pub fn open(
+        scene: &FlatScene,
+        choice: BackendChoice,
+        tuning: &Tuning,
+    ) -> Result<(Self, Option<String>), GpuError> {
+        match Self::with(scene, choice, tuning) {
+            Err(GpuError::NoAdapter) => Ok((
+                Self::cpu(scene),
+                Some(format!(
+                    "{}; rendering on the CPU instead",
+                    GpuError::NoAdapter
+                )),
+            )),
+            opened => opened.map(|e| (e, None)),
+        }
+    }
+
+    /// The device that renders, for the user.
+    pub fn name(&self) -> String {
+        match self {
+            Engine::Gpu(g) => g.name(),
+            Engine::Cpu(c) => c.name(),
+        }
+    }
+
+    /// Adds one sample per pixel.
+    pub fn render_pass(&mut self, sample_index: u32) -> Result<(), GpuError> {
+        self.render_samples(sample_index..sample_index + 1)
+    }
+
+    /// Adds the samples with indices `samples` to every pixel.
+    pub fn render_samples(&mut self, samples: Range<u32>) -> Result<(), GpuError> {
+        match self {
+            Engine::Gpu(g) => g.render_samples(samples),
+            Engine::Cpu(c) => {
+                samples.for_each(|i| c.render_pass(i));
+                Ok(())
+            }
+        }
+    }
+
+    /// How many samples per pixel one [`Engine::render_samples`] call should ask for: the
+    /// GPU's submissions grow to several samples when one takes much less than its target
+    /// time; the CPU renders one at a time.
+    pub fn samples_per_call(&self) -> u32 {
+        match self {
+            Engine::Gpu(g) => g.samples_per_call(),
+            Engine::Cpu(_) => 1,
+        }
+    }
+
+    /// Ends the GPU device as a driver reset would, for tests of a render's recovery; the
+    /// CPU has nothing to lose.
+    pub fn lose_device(&mut self) {
+        if let Engine::Gpu(g) = self {
+            g.lose_device();
+        }
+    }
+
+    /// The time one GPU submission should take (see
+    /// [`crate::gpu::render::DEFAULT_SUBMISSION_TARGET`]); the CPU ignores it.
+    pub fn set_submission_target(&mut self, target: Duration) {
+        if let Engine::Gpu(g) = self {
+            g.set_submission_target(target);
+        }
+    }
+
+    /// Replaces the accumulated sums with `acc` (of this engine's size): a resumed render
+    /// continues from them.
+    pub fn set_accumulation(&mut self, acc: &Accumulation) -> Result<(), GpuError> {
+        match self {
+            Engine::Gpu(g) => g.set_accumulation(&acc.data),
+            Engine::Cpu(c) => {
+                c.set_accumulation(&acc.data);
+                Ok(())
+            }
+        }
+    }
+
+    /// The accumulated samples so far.
+    pub fn accumulation(&mut self) -> Result<Accumulation, GpuError> {
+        let ((width, height), data) = match self {
+            Engine::Gpu(g) => (g.size(), g.accumulation()?),
+            Engine::Cpu(c) => (c.size(), c.accumulation()),
+        };
+        Ok(Accumulation {
+            width,
+            height,
+            data,
+        })
+    }
+}

@@ -1,0 +1,115 @@
+//! WGSL written from Rust: the constants both languages read (from
+//! `scene::records::SHARED_CONSTANTS`), and, for a small scene, its records as constants
+//! with the searches over them. Each is a file the preprocessor's `#import generated/...`
+//! pulls in (`gpu::plan::ShaderSpec::wgsl`).
+
+use crate::scene::flat::FlatScene;
+use crate::scene::records::{FieldValue, SharedRecord, SharedValue, SHARED_CONSTANTS};
+
+/// `const` declarations of every shared constant (`#import generated/constants`).
+pub fn constants() -> String {
+    SHARED_CONSTANTS
+        .iter()
+        .map(|(name, value)| match value {
+            SharedValue::U32(v) => format!("const {name}: u32 = {v}u;\n"),
+            SharedValue::F32(v) => format!("const {name}: f32 = {};\n", wgsl_f32(*v)),
+        })
+        .collect()
+}
+
+/// A WGSL f32 literal that parses back to exactly `x` (naga reads a literal with the `f`
+/// suffix as an f32; Rust's shortest round-trip form is exact).
+pub fn wgsl_f32(x: f32) -> String {
+    format!("{x:?}f")
+}
+
+fn wgsl_vec(v: &[f32]) -> String {
+    let c: Vec<String> = v.iter().map(|&x| wgsl_f32(x)).collect();
+    format!("vec{}<f32>({})", v.len(), c.join(", "))
+}
+
+/// A record as a WGSL constructor, its fields in the order [`SharedRecord`] lists them.
+pub fn wgsl_record<R: SharedRecord>(r: &R) -> String {
+    let values: Vec<String> = r
+        .fields()
+        .into_iter()
+        .map(|(_, v)| match v {
+            FieldValue::U32(x) => format!("{x}u"),
+            FieldValue::F32(x) => wgsl_f32(x),
+            FieldValue::Vec3(x) => wgsl_vec(&x),
+            FieldValue::Vec4(x) => wgsl_vec(&x),
+        })
+        .collect();
+    format!("{}({})", R::NAME, values.join(", "))
+}
+
+/// The code for a scene whose primitives are written into its shader (`BAKED_PRIMITIVES`):
+/// `intersect_baked`, the closest-hit search with every primitive's record a constant,
+/// tested in index order as the CPU's loop does. llvmpipe loads a record from a uniform
+/// buffer with a gather per component even at a constant index; a constant costs nothing
+/// (1.9x on the Cornell box in alternating runs; docs/performance.md has all the records
+/// written in as one row). Also `occluded_baked`, the any-hit search of shadow rays (no
+/// closest hit to keep: 2% fewer instructions in the Cornell box's bounce loop), and
+/// `primitive_record`, for `surface_at`. The plan decides when (`gpu::plan`).
+pub fn baked_primitives(scene: &FlatScene) -> String {
+    let prims = &scene.primitives;
+    let mut code = format!(
+        "// The scene's {} primitives as constants (gpu::codegen::baked_primitives).\n\
+         fn intersect_baked(ray: Ray, t_max: f32) -> Candidate {{\n    \
+         var best = Candidate(t_max, NO_HIT, 0.0, 0.0);\n",
+        prims.len()
+    );
+    let records: Vec<String> = prims.iter().map(wgsl_record).collect();
+    for (i, (p, record)) in prims.iter().zip(&records).enumerate() {
+        code += &format!(
+            "    best = closer_hit(best, {i}u, intersect_local({record}, {}u, ray, best.t));\n",
+            p.tag
+        );
+    }
+    code += "    return best;\n}\n\
+             // Whether any primitive lies along the ray before t_max (a shadow ray).\n\
+             fn occluded_baked(ray: Ray, t_max: f32) -> bool {\n    var t = FAR;\n";
+    for (p, record) in prims.iter().zip(&records) {
+        code += &format!(
+            "    t = min(t, intersect_local({record}, {}u, ray, t_max).x);\n",
+            p.tag
+        );
+    }
+    code += "    return t < FAR;\n}\n";
+    code + &record_lookup("primitive_record", "Primitive", &records)
+}
+
+/// A record look-up as generated WGSL: `fn name(i: u32) -> ty` that starts from the first
+/// record and replaces it with record k where i == k (llvmpipe turns each into selects).
+fn record_lookup(name: &str, ty: &str, records: &[String]) -> String {
+    let mut code = format!(
+        "fn {name}(i: u32) -> {ty} {{\n    var r = {};\n",
+        records[0]
+    );
+    for (k, rec) in records.iter().enumerate().skip(1) {
+        code += &format!("    if (i == {k}u) {{\n        r = {rec};\n    }}\n");
+    }
+    code + "    return r;\n}\n"
+}
+
+/// `material_record` picking a record among constants (`BAKED_MATERIALS`) instead of
+/// gathering it from a uniform buffer lane by lane: 1.35x on the Cornell box with the
+/// emitters', and the primitive records 1.1x more.
+pub fn baked_materials(scene: &FlatScene) -> String {
+    let records: Vec<String> = scene.materials.iter().map(wgsl_record).collect();
+    record_lookup("material_record", "Material", &records)
+}
+
+/// `emitter_record` among constants (`BAKED_EMITTERS`), and `choose_light_baked`:
+/// choose_light's binary search as a count of the running sums at or below u, the same
+/// index as the sums never decrease (1.7% fewer instructions in the Cornell box's bounce
+/// loop).
+pub fn baked_emitters(scene: &FlatScene) -> String {
+    let records: Vec<String> = scene.emitters.iter().map(wgsl_record).collect();
+    let mut code = record_lookup("emitter_record", "Emitter", &records);
+    code += "fn choose_light_baked(u: f32) -> u32 {\n    var i = 0u;\n";
+    for e in &scene.emitters[..scene.emitters.len() - 1] {
+        code += &format!("    i += select(0u, 1u, u >= {});\n", wgsl_f32(e.cdf));
+    }
+    code + "    return i;\n}\n"
+}

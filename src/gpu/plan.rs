@@ -1,0 +1,449 @@
+//! The GPU plan of a render, built once from the flattened scene, the device's facts
+//! ([`DeviceFit`]) and the tuning ([`Tuning`], defaults = fastest): which features the
+//! shader holds code for ([`FeatureSet`]), where each record array lives ([`Placements`]:
+//! storage buffer, uniform buffer, or written into the shader), how many samples one
+//! invocation traces, and whether the loops fit the device. The defines, the generated
+//! WGSL, the bind group layout and the buffers all derive from it.
+
+use std::collections::BTreeSet;
+
+use super::bindings::{wgsl_declarations, Placement, Placements, Slot, UNIFORM_BYTES};
+use super::codegen;
+use super::error::GpuError;
+use super::limits::{DeviceFit, LLVMPIPE_LOOP_LIMIT};
+use super::shader::{self, ShaderError};
+use crate::scene::flat::FlatScene;
+use crate::scene::format::{LightSampling, SamplerKind};
+use crate::scene::records as r;
+use crate::tuning::Tuning;
+
+/// A piece of shader code that a scene may leave out: llvmpipe runs untaken branches and
+/// switch cases under a mask, so absent code still costs time there. The thin lens is
+/// always there: a pinhole without it measured slower on llvmpipe (ARCHITECTURE.md, Known
+/// costs). Random sampling and bsdf light sampling are always there too.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Feature {
+    Sphere,
+    Triangle,
+    Plane,
+    Box,
+    Cylinder,
+    Disk,
+    /// Object-space intersection of transformed analytic shapes.
+    Transforms,
+    /// The BVH walk.
+    Bvh,
+    /// The plain loop over a list of primitives grouped by type.
+    PrimitiveLoop,
+    Lambertian,
+    Metal,
+    Dielectric,
+    Microfacet,
+    /// Textured material colours at all.
+    Textures,
+    ImageTexture,
+    NoiseTexture,
+    CheckerTexture,
+    Jittered,
+    Hammersley,
+    Sobol,
+    /// Next-event estimation with MIS.
+    Mis,
+    /// The 50/50 mixture of light and material sampling.
+    Mixture,
+    /// The image background.
+    EnvMap,
+    /// Anything emits: without it no path is traced.
+    Emission,
+}
+
+impl Feature {
+    /// Every feature, in define order.
+    pub const ALL: [Feature; 24] = [
+        Feature::Sphere,
+        Feature::Triangle,
+        Feature::Plane,
+        Feature::Box,
+        Feature::Cylinder,
+        Feature::Disk,
+        Feature::Transforms,
+        Feature::Bvh,
+        Feature::PrimitiveLoop,
+        Feature::Lambertian,
+        Feature::Metal,
+        Feature::Dielectric,
+        Feature::Microfacet,
+        Feature::Textures,
+        Feature::ImageTexture,
+        Feature::NoiseTexture,
+        Feature::CheckerTexture,
+        Feature::Jittered,
+        Feature::Hammersley,
+        Feature::Sobol,
+        Feature::Mis,
+        Feature::Mixture,
+        Feature::EnvMap,
+        Feature::Emission,
+    ];
+
+    /// The preprocessor define that keeps its code (`#ifdef HAS_SPHERE`).
+    pub fn define(self) -> &'static str {
+        match self {
+            Feature::Sphere => "HAS_SPHERE",
+            Feature::Triangle => "HAS_TRIANGLE",
+            Feature::Plane => "HAS_PLANE",
+            Feature::Box => "HAS_BOX",
+            Feature::Cylinder => "HAS_CYLINDER",
+            Feature::Disk => "HAS_DISK",
+            Feature::Transforms => "HAS_TRANSFORMS",
+            Feature::Bvh => "HAS_BVH",
+            Feature::PrimitiveLoop => "HAS_PRIMITIVE_LOOP",
+            Feature::Lambertian => "HAS_LAMBERTIAN",
+            Feature::Metal => "HAS_METAL",
+            Feature::Dielectric => "HAS_DIELECTRIC",
+            Feature::Microfacet => "HAS_MICROFACET",
+            Feature::Textures => "HAS_TEXTURES",
+            Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
+            Feature::NoiseTexture => "HAS_NOISE_TEXTURE",
+            Feature::CheckerTexture => "HAS_CHECKER_TEXTURE",
+            Feature::Jittered => "HAS_JITTERED",
+            Feature::Hammersley => "HAS_HAMMERSLEY",
+            Feature::Sobol => "HAS_SOBOL",
+            Feature::Mis => "HAS_MIS",
+            Feature::Mixture => "HAS_MIXTURE",
+            Feature::EnvMap => "HAS_ENV_MAP",
+            Feature::Emission => "HAS_EMISSION",
+        }
+    }
+
+    /// Its name for people (`wgtrace features`): the define, lower case, without `HAS_`.
+    pub fn name(self) -> String {
+        self.define()
+            .trim_start_matches("HAS_")
+            .to_ascii_lowercase()
+    }
+}
+
+/// A set of [`Feature`]s.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct FeatureSet(u32);
+
+impl FeatureSet {
+    /// Every feature: the full shader, which picks the sampler, the light-sampling
+    /// strategy and BVH or not at run time from `Params`.
+    pub fn all() -> Self {
+        Feature::ALL.into_iter().collect()
+    }
+
+    pub fn contains(self, f: Feature) -> bool {
+        self.0 & (1 << f as u32) != 0
+    }
+
+    pub fn insert(&mut self, f: Feature) {
+        self.0 |= 1 << f as u32;
+    }
+
+    /// `f` added when `on`.
+    pub fn with(mut self, f: Feature, on: bool) -> Self {
+        if on {
+            self.insert(f);
+        }
+        self
+    }
+
+    pub fn iter(self) -> impl Iterator<Item = Feature> {
+        Feature::ALL.into_iter().filter(move |&f| self.contains(f))
+    }
+
+    pub fn len(self) -> usize {
+        self.0.count_ones() as usize
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+}
+
+impl FromIterator<Feature> for FeatureSet {
+    fn from_iter<I: IntoIterator<Item = Feature>>(iter: I) -> Self {
+        let mut s = FeatureSet::default();
+        for f in iter {
+            s.insert(f);
+        }
+        s
+    }
+}
+
+/// The features a scene uses: code for the others is left out.
+pub fn scene_features(scene: &FlatScene) -> FeatureSet {
+    let prim = |tag: u32| scene.primitives.iter().any(|p| p.tag == tag);
+    let mat = |tag: u32| scene.materials.iter().any(|m| m.tag == tag);
+    let texture = |tag: u32| scene.textures.iter().any(|t| t.tag == tag);
+    let bounded = scene.primitives.len() > scene.num_unbounded as usize;
+    // lights are sampled only toward surfaces with a lobe that is not a delta
+    // (`nee_applies`: Lambertian or microfacet), and only when there are lights
+    let lit = !scene.emitters.is_empty() && (mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET));
+    FeatureSet::default()
+        .with(Feature::Sphere, prim(r::PRIM_SPHERE))
+        .with(Feature::Triangle, prim(r::PRIM_TRIANGLE))
+        .with(Feature::Plane, prim(r::PRIM_PLANE))
+        .with(Feature::Box, prim(r::PRIM_BOX))
+        .with(Feature::Cylinder, prim(r::PRIM_CYLINDER))
+        .with(Feature::Disk, prim(r::PRIM_DISK))
+        .with(
+            Feature::Transforms,
+            scene
+                .primitives
+                .iter()
+                .any(|p| p.flags & r::PRIM_FLAG_TRANSFORM != 0),
+        )
+        .with(Feature::Bvh, bounded && scene.use_bvh)
+        .with(Feature::PrimitiveLoop, bounded && !scene.use_bvh)
+        .with(Feature::Lambertian, mat(r::MAT_LAMBERTIAN))
+        .with(Feature::Metal, mat(r::MAT_METAL))
+        .with(Feature::Dielectric, mat(r::MAT_DIELECTRIC))
+        .with(Feature::Microfacet, mat(r::MAT_MICROFACET))
+        .with(Feature::Textures, !scene.textures.is_empty())
+        .with(Feature::ImageTexture, texture(r::TEX_IMAGE))
+        .with(Feature::NoiseTexture, texture(r::TEX_NOISE))
+        .with(Feature::CheckerTexture, texture(r::TEX_CHECKER))
+        .with(Feature::Jittered, scene.sampler == SamplerKind::Jittered)
+        .with(
+            Feature::Hammersley,
+            scene.sampler == SamplerKind::Hammersley,
+        )
+        .with(Feature::Sobol, scene.sampler == SamplerKind::Sobol)
+        .with(
+            Feature::Mis,
+            lit && scene.light_sampling == LightSampling::Mis,
+        )
+        .with(
+            Feature::Mixture,
+            lit && scene.light_sampling == LightSampling::Mixture,
+        )
+        .with(Feature::EnvMap, scene.env.is_some())
+        .with(Feature::Emission, scene.emits())
+}
+
+/// What a shader is assembled from: its features, where its record arrays live, and the
+/// code generated for one scene (records written in as constants; empty for a shader that
+/// serves every scene of its feature set). Trace pipelines are compiled once per spec and
+/// process.
+#[derive(Clone, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct ShaderSpec {
+    pub features: FeatureSet,
+    pub placements: Placements,
+    pub scene_code: String,
+}
+
+impl ShaderSpec {
+    /// A spec with `features`, every record array in a storage buffer, no scene code.
+    pub fn of(features: FeatureSet) -> Self {
+        ShaderSpec {
+            features,
+            ..Default::default()
+        }
+    }
+
+    /// The full shader (`--tune no-specialize`): every feature, storage buffers only.
+    pub fn full() -> Self {
+        Self::of(FeatureSet::all())
+    }
+
+    /// The preprocessor's defines: a `HAS_*` per feature, and a `BAKED_*` per record array
+    /// written into the shader.
+    pub fn defines(&self) -> BTreeSet<&'static str> {
+        let mut d: BTreeSet<&'static str> = self.features.iter().map(Feature::define).collect();
+        for (slot, define) in BAKED_DEFINES {
+            if self.placements.get(slot) == Placement::Shader {
+                d.insert(define);
+            }
+        }
+        d
+    }
+
+    /// The assembled WGSL of entry point file `entry` (`trace` or `kernel`).
+    pub fn wgsl(&self, entry: &str) -> Result<String, ShaderError> {
+        let constants = codegen::constants();
+        let bindings = wgsl_declarations(&self.placements);
+        shader::assemble(
+            entry,
+            &self.defines(),
+            &[
+                ("generated/constants", &constants),
+                ("generated/bindings", &bindings),
+                ("generated/scene", &self.scene_code),
+            ],
+        )
+    }
+
+    /// The slots the trace entry point reads: its layout and bind groups hold these only.
+    /// (`tests/shaders.rs` holds this to naga's analysis of the assembled shader for every
+    /// feature set the scenes reach.)
+    pub fn trace_slots(&self) -> Vec<Slot> {
+        let f = |x: Feature| self.features.contains(x);
+        let buffer = |s: Slot| self.placements.get(s) != Placement::Shader;
+        // without emission no path is traced: only the sums are touched
+        let traced = f(Feature::Emission);
+        Slot::ALL
+            .into_iter()
+            .filter(|&slot| match slot {
+                Slot::Params | Slot::Accum => true,
+                _ if !traced => false,
+                Slot::Primitives | Slot::Materials => buffer(slot),
+                Slot::Emitters => buffer(slot) && (f(Feature::Mis) || f(Feature::Mixture)),
+                Slot::Bvh => f(Feature::Bvh),
+                Slot::ShapeData => f(Feature::Transforms) || f(Feature::Triangle),
+                Slot::Textures => f(Feature::Textures) || f(Feature::EnvMap),
+                // texels are read by image and noise look-ups (of textured materials, and
+                // of the image background, which goes through the same texture_value),
+                // and by the background's distribution when lights are sampled
+                Slot::Texels => {
+                    let lookups = f(Feature::ImageTexture) || f(Feature::NoiseTexture);
+                    let env = f(Feature::EnvMap);
+                    (f(Feature::Textures) || env) && lookups
+                        || env && (f(Feature::Mis) || f(Feature::Mixture))
+                }
+            })
+            .collect()
+    }
+}
+
+/// The define of each record array that may be written into the shader.
+const BAKED_DEFINES: [(Slot, &str); 3] = [
+    (Slot::Primitives, "BAKED_PRIMITIVES"),
+    (Slot::Materials, "BAKED_MATERIALS"),
+    (Slot::Emitters, "BAKED_EMITTERS"),
+];
+
+/// The most primitives a scene's shader holds as constants: a scene without the BVH and
+/// without transformed primitives (`codegen::baked_primitives`).
+pub const BAKED_PRIMITIVES_MAX: usize = 32;
+
+/// The most materials, and the most lights, a scene's shader holds as constants: each
+/// look-up is a chain of selects over all of them.
+pub const BAKED_RECORDS_MAX: usize = 8;
+
+/// Most samples one invocation traces in a row (`shaders/trace.wgsl`, `main`): a lane
+/// whose path ends starts its next sample at once, so the 8 lanes of a SIMD batch stay
+/// busy (llvmpipe runs a loop until its last lane is done), and the pixel's sums are read
+/// and written once per group. Each sample is still added in index order, so the sums do
+/// not depend on how the samples were grouped.
+pub const SAMPLE_GROUP: u32 = 16;
+
+/// The GPU plan of one render.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct GpuPlan {
+    pub shader: ShaderSpec,
+    /// Samples one invocation traces in a row: [`SAMPLE_GROUP`], fewer when that many
+    /// paths would pass llvmpipe's loop limit, 1 with `--tune no-sample-groups`.
+    pub sample_group: u32,
+    /// Loop iterations that grow with the scene, of one invocation's group of paths (the
+    /// trace pipeline) and of one ray (the test kernel).
+    pub path_loops: u64,
+    pub ray_loops: u64,
+    /// The device's facts the plan was made for.
+    pub fit: DeviceFit,
+}
+
+impl GpuPlan {
+    /// The plan for `scene` on a device with `fit`, under `tuning`.
+    pub fn new(scene: &FlatScene, fit: &DeviceFit, tuning: &Tuning) -> Self {
+        let mut shader = if tuning.specialize {
+            ShaderSpec::of(scene_features(scene))
+        } else {
+            ShaderSpec::full()
+        };
+        if tuning.specialize {
+            for slot in Slot::RECORDS {
+                let placement = placement(slot, scene, fit, tuning);
+                shader.placements.set(slot, placement);
+            }
+        }
+        let shader_slot = |s| shader.placements.get(s) == Placement::Shader;
+        if shader_slot(Slot::Primitives) {
+            shader.scene_code += &codegen::baked_primitives(scene);
+        }
+        if shader_slot(Slot::Materials) {
+            shader.scene_code += &codegen::baked_materials(scene);
+        }
+        if shader_slot(Slot::Emitters) {
+            shader.scene_code += &codegen::baked_emitters(scene);
+        }
+        let ray_loops = ray_loop_iterations(scene, shader_slot(Slot::Primitives));
+        let per_path = path_loop_iterations(scene, ray_loops);
+        let sample_group = if tuning.sample_groups {
+            (LLVMPIPE_LOOP_LIMIT / per_path.max(1)).clamp(1, SAMPLE_GROUP as u64) as u32
+        } else {
+            1
+        };
+        GpuPlan {
+            shader,
+            sample_group,
+            path_loops: sample_group as u64 * per_path,
+            ray_loops,
+            fit: *fit,
+        }
+    }
+
+    /// Refuses a render the device cannot hold (a record array past one storage binding)
+    /// or would cut short (llvmpipe's loop limit).
+    pub fn check(&self, scene: &FlatScene) -> Result<(), GpuError> {
+        self.fit.check_scene(scene)?;
+        self.fit.check_loops(self.path_loops)
+    }
+}
+
+/// Where `slot`'s records live in a specialized shader: written in when the scene is
+/// small enough and the tuning allows; else a uniform buffer when they fit in
+/// [`UNIFORM_BYTES`] and the device binds that many; else a storage buffer.
+fn placement(slot: Slot, scene: &FlatScene, fit: &DeviceFit, tuning: &Tuning) -> Placement {
+    let few = |n: usize| (1..=BAKED_RECORDS_MAX).contains(&n);
+    let written_in = tuning.baked_records
+        && match slot {
+            Slot::Primitives => {
+                let prims = &scene.primitives;
+                !scene.use_bvh
+                    && !prims.is_empty()
+                    && prims.len() <= BAKED_PRIMITIVES_MAX
+                    && prims.iter().all(|p| p.flags & r::PRIM_FLAG_TRANSFORM == 0)
+            }
+            Slot::Materials => few(scene.materials.len()),
+            Slot::Emitters => few(scene.emitters.len()),
+            _ => false,
+        };
+    if written_in {
+        Placement::Shader
+    } else if tuning.uniform_records
+        && fit.uniform_records
+        && slot.bytes(scene).len() as u64 <= UNIFORM_BYTES
+    {
+        Placement::Uniform
+    } else {
+        Placement::Storage
+    }
+}
+
+/// Loop iterations of one ray's closest-hit search that grow with the scene: none with the
+/// BVH or the primitives written into the shader, else one per primitive.
+fn ray_loop_iterations(scene: &FlatScene, primitives_in_shader: bool) -> u64 {
+    if scene.use_bvh || primitives_in_shader {
+        0
+    } else {
+        scene.primitives.len() as u64 + 1
+    }
+}
+
+/// Loop iterations of one path: a turn of the bounce loop per ray, plus the loops of its
+/// rays (camera or bounce, and the MIS shadow ray) and, for the mixture, the loop over
+/// lights.
+fn path_loop_iterations(scene: &FlatScene, ray_loops: u64) -> u64 {
+    let lit = scene.light_sampling != LightSampling::Bsdf && !scene.emitters.is_empty();
+    let shadow = (lit && scene.light_sampling == LightSampling::Mis) as u64;
+    let mixture = if lit && scene.light_sampling == LightSampling::Mixture {
+        scene.emitters.len() as u64
+    } else {
+        0
+    };
+    scene.max_depth as u64 * (1 + (1 + shadow) * ray_loops + mixture)
+}

@@ -1,0 +1,184 @@
+//! The flattened scene: the records both backends read, the camera and the render
+//! settings, and the per-dispatch parameter block built from them. Nothing here knows
+//! which backend renders.
+
+use glam::Vec3;
+
+use super::format::{LightSampling, SamplerKind};
+use super::records::{self, BvhNode, Emitter, Material, Params, Primitive, Texture};
+
+/// The first ray Russian roulette may stop: the fourth (after the camera ray and two
+/// bounces), as pbrt-v4 starts it after depth 1. A path then goes on with probability
+/// min(1, max(throughput)) and its throughput is divided by that: unbiased.
+pub const RR_DEPTH: u32 = 3;
+
+/// The camera reduced to what the shader needs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraFrame {
+    pub origin: Vec3,
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+    pub half_width: f32,
+    pub half_height: f32,
+    pub focus_distance: f32,
+    pub lens_radius: f32,
+}
+
+/// A validated scene flattened into shader records.
+#[derive(Debug, Clone)]
+pub struct FlatScene {
+    pub width: u32,
+    pub height: u32,
+    pub spp: u32,
+    pub max_depth: u32,
+    pub seed: u32,
+    pub sampler: SamplerKind,
+    pub camera: CameraFrame,
+    /// Background radiance: the constant colour, or the bottom of the gradient.
+    pub background: [f32; 3],
+    /// The top of the gradient, when the background is one.
+    pub background_top: Option<[f32; 3]>,
+    /// The image background, when it is one.
+    pub env: Option<EnvironmentMap>,
+    pub light_sampling: LightSampling,
+    /// The first ray Russian roulette may stop ([`RR_DEPTH`]; 0: none).
+    pub rr_depth: u32,
+    pub primitives: Vec<Primitive>,
+    pub materials: Vec<Material>,
+    /// The light list: emissive primitives that can be sampled, then the image background.
+    pub emitters: Vec<Emitter>,
+    /// Material names, in record order.
+    pub material_names: Vec<String>,
+    /// BVH over primitives `num_unbounded..`, depth-first; empty when `use_bvh` is false.
+    pub bvh: Vec<BvhNode>,
+    /// Depth of the deepest BVH leaf (the root is 0).
+    pub bvh_depth: u32,
+    /// Transforms and triangle vertex attributes, indexed by `Primitive::data`.
+    pub shape_data: Vec<[f32; 4]>,
+    /// Primitives `0..num_unbounded` are planes, outside the BVH.
+    pub num_unbounded: u32,
+    /// Closest-hit searches walk the BVH; else they test the bounded primitives as a list,
+    /// grouped by type (`flatten::Acceleration`).
+    pub use_bvh: bool,
+    /// Texture records, in `[textures]` name order.
+    pub textures: Vec<Texture>,
+    /// Image texels (linear RGB) and Perlin tables, indexed by `Texture::offset`.
+    pub texels: Vec<[f32; 4]>,
+}
+
+/// An equirectangular image background.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct EnvironmentMap {
+    /// Its texture record.
+    pub texture: u32,
+    /// First `texels` entry of its sampling distribution.
+    pub cdf: u32,
+    /// Its index in the light list (`records::NO_LIGHT` when it is black).
+    pub light: u32,
+    /// cos and sin of its rotation about +y.
+    pub rotation: [f32; 2],
+    pub strength: f32,
+}
+
+/// A rectangle of pixels rendered by one dispatch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tile {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl FlatScene {
+    /// The uniform block for one dispatch: pass `sample_index` over `tile`.
+    pub fn params(&self, sample_index: u32, tile: Tile) -> Params {
+        let c = &self.camera;
+        Params {
+            cam_origin: c.origin.extend(c.lens_radius).to_array(),
+            cam_right: c.right.extend(c.half_width).to_array(),
+            cam_up: c.up.extend(c.half_height).to_array(),
+            cam_forward: c.forward.extend(c.focus_distance).to_array(),
+            background: [
+                self.background[0],
+                self.background[1],
+                self.background[2],
+                0.0,
+            ],
+            background_top: match self.background_top {
+                Some(t) => [t[0], t[1], t[2], 0.0],
+                None => [0.0; 4],
+            },
+            env: match self.env {
+                Some(e) => [e.rotation[0], e.rotation[1], e.strength, 0.0],
+                None => [0.0; 4],
+            },
+            width: self.width,
+            height: self.height,
+            max_depth: self.max_depth,
+            seed: self.seed,
+            sample_index,
+            num_primitives: self.primitives.len() as u32,
+            num_emitters: self.emitters.len() as u32,
+            tile_x: tile.x,
+            tile_y: tile.y,
+            tile_width: tile.width,
+            tile_height: tile.height,
+            num_unbounded: self.num_unbounded,
+            use_bvh: self.use_bvh as u32,
+            sampler: self.sampler.record(),
+            strata_log2: strata_log2(self.spp),
+            spp: self.spp,
+            light_sampling: self.light_sampling.record(),
+            background_kind: if self.env.is_some() {
+                records::BACKGROUND_IMAGE
+            } else if self.background_top.is_some() {
+                records::BACKGROUND_GRADIENT
+            } else {
+                records::BACKGROUND_CONSTANT
+            },
+            env_texture: self.env.map_or(0, |e| e.texture),
+            env_cdf: self.env.map_or(0, |e| e.cdf),
+            env_light: self.env.map_or(records::NO_LIGHT, |e| e.light),
+            rr_depth: self.rr_depth,
+            ..Default::default()
+        }
+    }
+
+    /// The whole image as one tile.
+    pub fn full_tile(&self) -> Tile {
+        Tile {
+            x: 0,
+            y: 0,
+            width: self.width,
+            height: self.height,
+        }
+    }
+
+    /// Pixels of the image.
+    pub fn pixels(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    /// Whether anything in the scene gives off light: an emitting material (a colour or an
+    /// emission texture) or a background that is not black. Without it no path can carry
+    /// light, and the image is black.
+    pub fn emits(&self) -> bool {
+        let bright = |c: &[f32]| c.iter().any(|&x| x > 0.0);
+        self.materials
+            .iter()
+            .any(|m| bright(&m.emission[..3]) || m.tex_emission != records::NO_TEXTURE)
+            || bright(&self.background)
+            || self.background_top.is_some_and(|t| bright(&t))
+            || self.env.is_some()
+    }
+}
+
+/// The smallest k with 4^k >= spp: jittered sampling's grid is 2^k x 2^k.
+pub fn strata_log2(spp: u32) -> u32 {
+    let mut k = 0;
+    while k < 15 && (1u64 << (2 * k)) < spp as u64 {
+        k += 1;
+    }
+    k
+}

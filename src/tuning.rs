@@ -1,0 +1,118 @@
+//! Tuning: how a render runs, not what it computes. Every knob is at its fastest by
+//! default; the benchmarks turn them off one at a time to measure what each gives
+//! (`wgtrace render --tune no-uniform-records,...`; docs/performance.md). The scene layer
+//! gets the two knobs that shape the flattened scene ([`Tuning::build`]); the GPU plan
+//! reads the rest.
+
+use crate::scene::flatten::{Acceleration, Build};
+
+/// Scenes of at most this many bounded primitives, none of them transformed, are tested
+/// as a plain list rather than through a BVH. On lavapipe the loop was 1.3x to 2.1x faster
+/// on every such scene in `scenes/` (all SIMD lanes walk it together, where the BVH walk
+/// diverges); transformed primitives cost enough per test that the BVH won there
+/// (transforms.toml, 10 primitives: 0.78 against 0.67 Msamples/s).
+pub const LIST_MAX_PRIMITIVES: usize = 16;
+
+/// The knobs, each on (fastest) unless turned off.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Tuning {
+    /// Which structure closest-hit searches walk (both backends).
+    pub acceleration: Acceleration,
+    /// Russian roulette from the fourth ray on (both backends; unbiased).
+    pub russian_roulette: bool,
+    /// A shader holding only the code of the scene's features (else the full shader).
+    pub specialize: bool,
+    /// Record arrays that fit in 64 KiB bound as uniform buffers.
+    pub uniform_records: bool,
+    /// A small scene's primitives, materials and lights written into its shader.
+    pub baked_records: bool,
+    /// One GPU invocation traces a group of samples.
+    pub sample_groups: bool,
+}
+
+impl Default for Tuning {
+    fn default() -> Self {
+        Tuning {
+            acceleration: Acceleration::Auto {
+                list_max: LIST_MAX_PRIMITIVES,
+            },
+            russian_roulette: true,
+            specialize: true,
+            uniform_records: true,
+            baked_records: true,
+            sample_groups: true,
+        }
+    }
+}
+
+/// Every knob a `--tune` list may name, with what it does.
+pub const KNOBS: &[(&str, &str)] = &[
+    (
+        "no-bvh",
+        "test every primitive on every ray instead of walking the BVH",
+    ),
+    (
+        "bvh",
+        "walk the BVH even in a scene small enough for the plain list",
+    ),
+    (
+        "no-specialize",
+        "the full shader instead of one holding only the scene's features",
+    ),
+    (
+        "no-uniform-records",
+        "every record array in a storage buffer, none in a uniform buffer",
+    ),
+    (
+        "no-baked-records",
+        "read a small scene's records from buffers, not as constants in its shader",
+    ),
+    (
+        "no-sample-groups",
+        "one sample per GPU invocation instead of a group of up to 16",
+    ),
+    (
+        "no-russian-roulette",
+        "trace every path to max_depth (or until it escapes or goes black)",
+    ),
+];
+
+impl Tuning {
+    /// The settings the scene is flattened with.
+    pub fn build(&self) -> Build {
+        Build {
+            acceleration: self.acceleration,
+            russian_roulette: self.russian_roulette,
+        }
+    }
+
+    /// The default tuning with the comma-separated knobs of [`KNOBS`] turned off (or, for
+    /// `bvh`, on), e.g. `no-bvh,no-specialize`.
+    pub fn parse(list: &str) -> Result<Tuning, String> {
+        let mut t = Tuning::default();
+        for knob in list.split(',').map(str::trim).filter(|k| !k.is_empty()) {
+            match knob {
+                "no-bvh" => t.acceleration = Acceleration::List,
+                "bvh" => t.acceleration = Acceleration::Bvh,
+                "no-specialize" => t.specialize = false,
+                "no-uniform-records" => t.uniform_records = false,
+                "no-baked-records" => t.baked_records = false,
+                "no-sample-groups" => t.sample_groups = false,
+                "no-russian-roulette" => t.russian_roulette = false,
+                _ => {
+                    let names: Vec<&str> = KNOBS.iter().map(|(n, _)| *n).collect();
+                    return Err(format!(
+                        "unknown tuning knob \"{knob}\" (knobs: {})",
+                        names.join(", ")
+                    ));
+                }
+            }
+        }
+        if list.split(',').any(|k| k.trim() == "bvh")
+            && list.split(',').any(|k| k.trim() == "no-bvh")
+        {
+            return Err("\"bvh\" and \"no-bvh\" contradict each other".into());
+        }
+        Ok(t)
+    }
+}

@@ -1,0 +1,406 @@
+//! The shape of the code: no source file in src/ imports, directly or through others, a
+//! file that imports it back; and every test in the repository is in a target that
+//! `cargo test` builds and runs. No GPU needed.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// `src` with comments, string and character literals blanked (newlines kept), so that
+/// paths named in docs or messages are not taken for imports.
+fn code_only(src: &str) -> String {
+    let b = src.as_bytes();
+    let mut out = String::with_capacity(src.len());
+    let mut i = 0;
+    let blank = |out: &mut String, s: &[u8]| {
+        for &c in s {
+            out.push(if c == b'\n' { '\n' } else { ' ' });
+        }
+    };
+    let ident = |c: u8| c.is_ascii_alphanumeric() || c == b'_';
+    while i < b.len() {
+        let rest = &b[i..];
+        let prev_ident = i > 0 && ident(b[i - 1]);
+        let end = if rest.starts_with(b"//") {
+            i + rest.iter().position(|&c| c == b'\n').unwrap_or(rest.len())
+        } else if rest.starts_with(b"/*") {
+            // block comments nest in Rust
+            let (mut depth, mut j) = (0, i);
+            while j < b.len() {
+                if b[j..].starts_with(b"/*") {
+                    depth += 1;
+                    j += 2;
+                } else if b[j..].starts_with(b"*/") {
+                    depth -= 1;
+                    j += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    j += 1;
+                }
+            }
+            j
+        } else if !prev_ident && (rest.starts_with(b"r#") || rest.starts_with(b"r\"")) {
+            let hashes = rest[1..].iter().take_while(|&&c| c == b'#').count();
+            let close: Vec<u8> = std::iter::once(b'"')
+                .chain(std::iter::repeat_n(b'#', hashes))
+                .collect();
+            let body = i + 2 + hashes;
+            body + b[body..]
+                .windows(close.len())
+                .position(|w| w == close.as_slice())
+                .map_or(b.len() - body, |p| p + close.len())
+        } else if rest[0] == b'"' {
+            let mut j = i + 1;
+            while j < b.len() && b[j] != b'"' {
+                j += if b[j] == b'\\' { 2 } else { 1 };
+            }
+            (j + 1).min(b.len())
+        } else if rest[0] == b'\'' {
+            // a character literal ('a', '\n', '\u{..}'), not a lifetime ('a)
+            let lit = if rest.get(1) == Some(&b'\\') {
+                rest[2..].iter().position(|&c| c == b'\'').map(|p| p + 3)
+            } else if rest.len() > 2 && rest[2] == b'\'' {
+                Some(3)
+            } else {
+                None
+            };
+            match lit {
+                Some(n) => i + n,
+                None => {
+                    out.push('\'');
+                    i += 1;
+                    continue;
+                }
+            }
+        } else {
+            out.push(rest[0] as char);
+            i += 1;
+            continue;
+        };
+        blank(&mut out, &b[i..end]);
+        i = end;
+    }
+    out
+}
+
+/// Every Rust file of `src/`, by its module path (`scene::flatten`; the crate root is "").
+fn modules() -> BTreeMap<String, PathBuf> {
+    fn walk(dir: &Path, prefix: &[String], out: &mut BTreeMap<String, PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            let stem = p.file_stem().unwrap().to_string_lossy().into_owned();
+            if p.is_dir() {
+                let mut sub = prefix.to_vec();
+                sub.push(stem);
+                walk(&p, &sub, out);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let mut path = prefix.to_vec();
+                if stem != "mod" && stem != "lib" {
+                    path.push(stem);
+                }
+                out.insert(path.join("::"), p);
+            }
+        }
+    }
+    let mut out = BTreeMap::new();
+    walk(&root().join("src"), &[], &mut out);
+    out
+}
+
+/// The paths a file's code names: every `use` tree expanded (`use a::{b, c::d}` gives
+/// `a::b` and `a::c::d`), every `mod` it declares, and every path written in the code
+/// that starts at `crate`, `super`, `self` or (in main.rs) `wgtrace`.
+fn named_paths(code: &str) -> Vec<(Vec<String>, bool)> {
+    fn expand(tree: &str, prefix: &[String], out: &mut Vec<Vec<String>>) {
+        let tree = tree.trim();
+        if let Some(open) = tree.find('{') {
+            let head: Vec<String> = tree[..open]
+                .split("::")
+                .map(str::trim)
+                .filter(|s| !s.is_empty())
+                .map(String::from)
+                .collect();
+            let inner = &tree[open + 1..tree.rfind('}').unwrap()];
+            let mut depth = 0;
+            let mut start = 0;
+            let mut parts = Vec::new();
+            for (k, c) in inner.char_indices() {
+                match c {
+                    '{' => depth += 1,
+                    '}' => depth -= 1,
+                    ',' if depth == 0 => {
+                        parts.push(&inner[start..k]);
+                        start = k + 1;
+                    }
+                    _ => {}
+                }
+            }
+            parts.push(&inner[start..]);
+            let full: Vec<String> = prefix.iter().cloned().chain(head).collect();
+            for part in parts.into_iter().filter(|p| !p.trim().is_empty()) {
+                expand(part, &full, out);
+            }
+        } else {
+            let path = tree.split(" as ").next().unwrap();
+            let mut full = prefix.to_vec();
+            full.extend(
+                path.split("::")
+                    .map(str::trim)
+                    .filter(|s| !s.is_empty() && (*s != "self" || prefix.is_empty()))
+                    .map(String::from),
+            );
+            out.push(full);
+        }
+    }
+    let mut out = Vec::new();
+    let words: Vec<&str> = code.split_whitespace().collect();
+    // `use` statements (also `pub use`, `pub(crate) use`)
+    let mut rest = code;
+    while let Some(k) = rest.find("use ") {
+        let before = rest[..k].chars().last();
+        let after = &rest[k + 4..];
+        if before.is_none_or(|c| !(c.is_alphanumeric() || c == '_')) {
+            let end = after.find(';').unwrap_or(after.len());
+            let mut trees = Vec::new();
+            expand(&after[..end], &[], &mut trees);
+            out.extend(trees.into_iter().map(|t| (t, true)));
+            rest = &after[end..];
+        } else {
+            rest = after;
+        }
+    }
+    // `mod name;` declarations
+    for w in words.windows(2) {
+        if w[0] == "mod" && w[1].ends_with(';') {
+            out.push((vec!["self".into(), w[1].trim_end_matches(';').into()], true));
+        }
+    }
+    // paths in expressions and types
+    let bytes = code.as_bytes();
+    for start in ["crate::", "super::", "wgtrace::"] {
+        let mut from = 0;
+        while let Some(k) = code[from..].find(start) {
+            let at = from + k;
+            from = at + start.len();
+            if at > 0
+                && (bytes[at - 1].is_ascii_alphanumeric()
+                    || bytes[at - 1] == b'_'
+                    || bytes[at - 1] == b':')
+            {
+                continue;
+            }
+            let end = code[at..]
+                .find(|c: char| !(c.is_alphanumeric() || c == '_' || c == ':'))
+                .map_or(code.len(), |e| at + e);
+            // the head of a `use` group (`use super::{a, b}`): its paths are the group's
+            if code[end..].starts_with('{') {
+                continue;
+            }
+            let segs: Vec<String> = code[at..end]
+                .split("::")
+                .filter(|s| !s.is_empty())
+                .map(String::from)
+                .collect();
+            out.push((segs, false));
+        }
+    }
+    out
+}
+
+/// Resolves a path named in the file of module `here` to the file of the deepest module
+/// along it, or None for another crate (std, glam, ...).
+fn resolve(
+    here: &str,
+    here_is_dir: bool,
+    path: &[String],
+    children: &BTreeSet<String>,
+    mods: &BTreeMap<String, PathBuf>,
+    bin: bool,
+) -> Option<String> {
+    let here_segs: Vec<String> = here
+        .split("::")
+        .filter(|s| !s.is_empty())
+        .map(String::from)
+        .collect();
+    // the module a `self` path is relative to: a mod.rs or lib.rs is its own module; for
+    // `super` in a leaf file (scene/flatten.rs), the parent is `scene`
+    let mut base: Vec<String>;
+    let mut segs = path.iter().peekable();
+    match segs.peek().map(|s| s.as_str()) {
+        Some("crate") if !bin => {
+            base = Vec::new();
+            segs.next();
+        }
+        Some("wgtrace") if bin => {
+            base = Vec::new();
+            segs.next();
+        }
+        Some("self") => {
+            base = here_segs.clone();
+            segs.next();
+        }
+        Some("super") => {
+            base = here_segs.clone();
+            while segs.peek().map(|s| s.as_str()) == Some("super") {
+                segs.next();
+                base.pop();
+            }
+            let _ = here_is_dir;
+        }
+        Some(first) if children.contains(first) => base = here_segs.clone(),
+        _ => return None,
+    }
+    // the deepest module along the path; a path that names an item (`super::FlatScene`)
+    // or nothing more (`super::{..}`) names the module it has reached
+    let mut found = base.join("::");
+    for s in segs {
+        base.push(s.clone());
+        let key = base.join("::");
+        if !mods.contains_key(&key) {
+            break;
+        }
+        found = key;
+    }
+    mods.contains_key(&found).then_some(found)
+}
+
+#[test]
+fn no_source_file_imports_a_file_that_imports_it_back() {
+    let mods = modules();
+    let mut graph: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+    for (module, file) in &mods {
+        let code = code_only(&std::fs::read_to_string(file).unwrap());
+        let is_dir = file
+            .file_name()
+            .is_some_and(|n| n == "mod.rs" || n == "lib.rs");
+        let bin = file.ends_with("src/main.rs");
+        let children: BTreeSet<String> = code
+            .split_whitespace()
+            .collect::<Vec<_>>()
+            .windows(2)
+            .filter(|w| w[0] == "mod")
+            .map(|w| w[1].trim_end_matches(';').to_string())
+            .collect();
+        let node = if bin {
+            "main".to_string()
+        } else {
+            module.clone()
+        };
+        let edges = graph.entry(node.clone()).or_default();
+        for (path, _) in named_paths(&code) {
+            if let Some(target) = resolve(module, is_dir, &path, &children, &mods, bin) {
+                if target != node {
+                    edges.insert(target);
+                }
+            }
+        }
+    }
+    // every file imports something (a parser that found nothing would pass vacuously)
+    assert!(
+        graph["scene::flatten"].contains("scene::records"),
+        "{graph:?}"
+    );
+    assert!(graph[""].contains("scene"), "{:?}", graph[""]);
+    // a cycle is a path from a file back to itself
+    let mut cycles = Vec::new();
+    for start in graph.keys() {
+        let mut stack = vec![(start.clone(), vec![start.clone()])];
+        let mut seen = BTreeSet::new();
+        while let Some((node, trail)) = stack.pop() {
+            for next in graph.get(&node).into_iter().flatten() {
+                if next == start {
+                    let mut cycle = trail.clone();
+                    cycle.push(start.clone());
+                    cycles.push(cycle);
+                } else if seen.insert(next.clone()) {
+                    let mut t = trail.clone();
+                    t.push(next.clone());
+                    stack.push((next.clone(), t));
+                }
+            }
+        }
+    }
+    let shown: BTreeSet<String> = cycles
+        .iter()
+        .map(|c| {
+            c.iter()
+                .map(|m| if m.is_empty() { "lib" } else { m.as_str() })
+                .collect::<Vec<_>>()
+                .join(" -> ")
+        })
+        .collect();
+    assert!(
+        shown.is_empty(),
+        "import circles in src/ (module -> module it imports):\n{}",
+        shown.into_iter().collect::<Vec<_>>().join("\n")
+    );
+}
+
+/// Every `#[test]` of the repository is in a target `cargo test` builds and runs: tests/
+/// (always), src/main.rs (the binary's tests are on), an example whose `[[example]]` entry
+/// sets `test = true`; the library's own harness is off, so src/ holds no other tests.
+#[test]
+fn every_test_in_the_repository_runs_under_cargo_test() {
+    let manifest: toml::Table =
+        toml::from_str(&std::fs::read_to_string(root().join("Cargo.toml")).unwrap()).unwrap();
+    let targets = |kind: &str| -> Vec<toml::Table> {
+        manifest
+            .get(kind)
+            .and_then(|v| v.as_array())
+            .map(|a| a.iter().filter_map(|t| t.as_table().cloned()).collect())
+            .unwrap_or_default()
+    };
+    let tested = |t: &toml::Table| t.get("test").and_then(|v| v.as_bool());
+    let lib_tests = manifest
+        .get("lib")
+        .and_then(|l| l.as_table())
+        .and_then(tested)
+        .unwrap_or(true);
+    let bin_tests = targets("bin")
+        .iter()
+        .find(|b| b.get("name").and_then(|n| n.as_str()) == Some("wgtrace"))
+        .and_then(tested)
+        .unwrap_or(true);
+    let has_tests = |p: &Path| {
+        let code = code_only(&std::fs::read_to_string(p).unwrap());
+        code.contains("#[test]") || code.contains("#[cfg(test)]")
+    };
+    let mut missed = Vec::new();
+    for file in modules().values() {
+        let runs = if file.ends_with("src/main.rs") {
+            bin_tests
+        } else {
+            lib_tests
+        };
+        if !runs && has_tests(file) {
+            missed.push(file.display().to_string());
+        }
+    }
+    for (dir, kind) in [("examples", "example"), ("benches", "bench")] {
+        for e in std::fs::read_dir(root().join(dir)).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_none_or(|x| x != "rs") || !has_tests(&p) {
+                continue;
+            }
+            let name = p.file_stem().unwrap().to_string_lossy().into_owned();
+            let on = targets(kind)
+                .iter()
+                .find(|t| t.get("name").and_then(|n| n.as_str()) == Some(name.as_str()))
+                .and_then(tested)
+                // examples' tests are off by default; benches never run under cargo test
+                .unwrap_or(false);
+            if !on || kind == "bench" {
+                missed.push(p.display().to_string());
+            }
+        }
+    }
+    assert!(
+        missed.is_empty(),
+        "tests that `cargo test` never runs: {missed:?}"
+    );
+}

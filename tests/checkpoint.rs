@@ -1,0 +1,103 @@
+//! The checkpoint format's stable parts: the scene hash is FNV-1a, the same on every build,
+//! and files of the older format, whose hash was not, are refused with the reason. No GPU
+//! needed.
+
+mod common;
+
+use wgtrace::checkpoint::{fnv1a64, scene_hash, Checkpoint, FNV1A64_BASIS, FORMAT};
+
+/// The published FNV-1a 64 test vectors (Fowler, Noll, Vo).
+#[test]
+fn fnv1a64_gives_the_published_values() {
+    assert_eq!(fnv1a64(FNV1A64_BASIS, b""), 0xcbf2_9ce4_8422_2325);
+    assert_eq!(fnv1a64(FNV1A64_BASIS, b"a"), 0xaf63_dc4c_8601_ec8c);
+    assert_eq!(fnv1a64(FNV1A64_BASIS, b"foobar"), 0x8594_4171_f739_67e8);
+    // continuing a hash is hashing the concatenation
+    assert_eq!(
+        fnv1a64(fnv1a64(FNV1A64_BASIS, b"foo"), b"bar"),
+        fnv1a64(FNV1A64_BASIS, b"foobar")
+    );
+}
+
+const SPHERE: &str = r#"
+[render]
+width = 4
+height = 3
+spp = 8
+[camera]
+look_from = [0, 0, 3]
+look_at = [0, 0, 0]
+[background]
+color = [1, 1, 1]
+[materials.grey]
+type = "lambertian"
+albedo = [0.5, 0.5, 0.5]
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "grey"
+"#;
+
+/// A scene's hash is a value pinned here, whatever build computes it (a `DefaultHasher`
+/// may change between Rust releases), and it follows what decides the samples: the seed
+/// and the records, not the sample count (except for samplers whose points depend on it).
+#[test]
+fn the_scene_hash_is_the_same_on_every_build() {
+    let scene = common::scene_from_str(SPHERE);
+    assert_eq!(
+        scene_hash(&scene),
+        0xc21e_be42_95d9_81d4,
+        "the scene hash changed: checkpoints written before are refused as another scene's"
+    );
+    let with =
+        |from: &str, to: &str| scene_hash(&common::scene_from_str(&SPHERE.replace(from, to)));
+    assert_eq!(with("spp = 8", "spp = 64"), scene_hash(&scene));
+    assert_ne!(with("spp = 8", "spp = 8\nseed = 1"), scene_hash(&scene));
+    assert_ne!(with("radius = 1", "radius = 1.5"), scene_hash(&scene));
+    let hammersley = |spp: &str| with("spp = 8", &format!("spp = {spp}\nsampler = \"hammersley\""));
+    assert_ne!(hammersley("8"), hammersley("64"));
+}
+
+/// A checkpoint of the older format (no `format` line: its scene hash came from Rust's
+/// `DefaultHasher`) is refused, saying why; the current format round-trips.
+#[test]
+fn an_older_checkpoint_format_is_refused_with_the_reason() {
+    let dir = common::tmp_dir("checkpoint-format");
+    let scene = common::scene_from_str(SPHERE);
+    let acc = wgtrace::Accumulation {
+        width: 4,
+        height: 3,
+        data: vec![[0.5; 4]; 24],
+    };
+    let path = dir.join("new.ckpt");
+    let ckpt = Checkpoint::new(&scene, 0..2, acc);
+    ckpt.write(&path).unwrap();
+    let read = Checkpoint::read(&path).unwrap();
+    assert_eq!(read, ckpt);
+    read.check(&scene, 8, &path).unwrap();
+    let text = std::fs::read(&path).unwrap();
+    assert!(String::from_utf8_lossy(&text).contains(&format!("format = {FORMAT}\n")));
+
+    // (the sums, 0.5 = bytes 00 00 00 3f, are ASCII: the file survives a round trip as text)
+    let old = dir.join("old.ckpt");
+    let v1 = String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "");
+    std::fs::write(&old, v1.as_bytes()).unwrap();
+    let err = Checkpoint::read(&old).unwrap_err().to_string();
+    assert!(
+        err.contains("old.ckpt")
+            && err.contains("format 1")
+            && err.contains("DefaultHasher")
+            && err.contains("render again"),
+        "{err}"
+    );
+    let newer = dir.join("newer.ckpt");
+    let v3 =
+        String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "format = 99\n");
+    std::fs::write(&newer, v3.as_bytes()).unwrap();
+    let err = Checkpoint::read(&newer).unwrap_err().to_string();
+    assert!(
+        err.contains("format 99") && err.contains("newer wgtrace"),
+        "{err}"
+    );
+}
