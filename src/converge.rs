@@ -506,7 +506,13 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
         .iter()
         .map(|c| passes_per_run(c) * u64::from(opts.runs))
         .sum();
-    let mut done = 0u64;
+    let mut log = Log {
+        csv,
+        path: csv_path,
+        done: 0,
+        total,
+        pixels,
+    };
     let mut study = Study {
         scene: opts.scene.display().to_string(),
         device: String::new(),
@@ -541,37 +547,81 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
                         ..overrides
                     },
                 )?;
-                let mut session = session(scene, opts.backend)?;
-                study.device = session.device();
-                let mut busy = Duration::ZERO;
-                for &spp in &points {
-                    // one run of the session up to each point, its sums read back there
-                    let from = done;
-                    let finished = session.run(
-                        &StopRule {
-                            until: Some(spp),
-                            ..Default::default()
-                        },
-                        |p| {
-                            event(Event::Passes {
-                                done: from + p.samples / pixels,
-                                total,
-                            })
-                        },
-                    )?;
-                    busy += finished.progress.elapsed;
-                    done = from + finished.progress.samples / pixels;
-                    let m = measurement(config, run, spp, busy, &finished, &reference);
-                    writeln!(csv, "{}", csv_row(&m)).map_err(|e| file_err(&csv_path, e))?;
-                    csv.flush().map_err(|e| file_err(&csv_path, e))?;
-                    event(Event::Measured(&m));
-                    study.measurements.push(m);
-                }
+                let render = Render {
+                    config,
+                    run,
+                    points: &points,
+                };
+                log.measure(
+                    scene,
+                    opts.backend,
+                    render,
+                    &reference,
+                    &mut study,
+                    &mut event,
+                )?;
             }
         }
         write_report(&study, &opts.out)?;
     }
     Ok(study)
+}
+
+/// One render of a study: a run of a configuration, measured at each of its points.
+struct Render<'a> {
+    config: &'a Config,
+    run: u32,
+    points: &'a [u32],
+}
+
+/// Where a study's measurements go as they are taken, and how far it has come.
+struct Log {
+    csv: std::fs::File,
+    path: PathBuf,
+    /// Passes rendered so far, of the study's `total`.
+    done: u64,
+    total: u64,
+    pixels: u64,
+}
+
+impl Log {
+    /// Renders `scene` (spp = the last point) in one session, reading the sums back at
+    /// each point; each measurement is appended to the CSV and flushed at once.
+    fn measure(
+        &mut self,
+        scene: FlatScene,
+        backend: BackendChoice,
+        render: Render,
+        reference: &[f32],
+        study: &mut Study,
+        event: &mut impl FnMut(Event),
+    ) -> Result<(), ConvergeError> {
+        let mut session = session(scene, backend)?;
+        study.device = session.device();
+        let mut busy = Duration::ZERO;
+        for &spp in render.points {
+            let from = self.done;
+            let (pixels, total) = (self.pixels, self.total);
+            let until = StopRule {
+                until: Some(spp),
+                ..Default::default()
+            };
+            let finished = session.run(&until, |p| {
+                event(Event::Passes {
+                    done: from + p.samples / pixels,
+                    total,
+                })
+            })?;
+            busy += finished.progress.elapsed;
+            self.done = from + finished.progress.samples / pixels;
+            let m = measurement(render.config, render.run, spp, busy, &finished, reference);
+            writeln!(self.csv, "{}", csv_row(&m)).map_err(|e| file_err(&self.path, e))?;
+            self.csv.flush().map_err(|e| file_err(&self.path, e))?;
+            event(Event::Measured(&m));
+            study.measurements.push(m);
+        }
+        Ok(())
+    }
 }
 
 /// The measurement of a render of `config` holding `spp` samples after `busy` seconds.
@@ -745,6 +795,23 @@ pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
          Time and spp to reach each relMSE are interpolated between measured points; `~` marks an extrapolation along the fitted slope \
          (at most {MAX_EXTRAPOLATION}x the largest spp, `>` beyond), `never` a curve that has levelled off over its last three points (bias).\n"
     );
+    md += &results_table(study);
+    let _ = writeln!(
+        md,
+        "\n![RMSE against samples per pixel](rmse_vs_spp.svg)\n![RMSE against seconds](rmse_vs_seconds.svg)\n"
+    );
+    md += &estimate_table(study);
+    let path = out.join("report.md");
+    std::fs::write(&path, md).map_err(|e| file_err(&path, e))?;
+    plot(study, out, false)?;
+    plot(study, out, true)?;
+    Ok(())
+}
+
+/// The report's table of results: a row per configuration at its largest spp, with the
+/// samples and seconds it needs for each relMSE of [`TARGETS`].
+fn results_table(study: &Study) -> String {
+    let mut md = String::new();
     let mut header =
         "| configuration | slope | relMSE | seconds | Msamples/s | efficiency | est/true |"
             .to_string();
@@ -787,11 +854,13 @@ pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
         }
         let _ = writeln!(md, "{row}");
     }
-    let _ = writeln!(
-        md,
-        "\n![RMSE against samples per pixel](rmse_vs_spp.svg)\n![RMSE against seconds](rmse_vs_seconds.svg)\n"
-    );
-    // the estimate --target-error stops on, against the truth, along the ladder
+    md
+}
+
+/// The report's table of the error estimate `--target-error` stops on, against the truth,
+/// along the ladder.
+fn estimate_table(study: &Study) -> String {
+    let mut md = String::new();
     let spps: Vec<u32> = ladder(study.measurements.iter().map(|m| m.spp).max().unwrap_or(1))
         .into_iter()
         .filter(|s| s.is_power_of_two() && *s >= 4 && s.trailing_zeros() % 2 == 0)
@@ -825,11 +894,7 @@ pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
         }
         let _ = writeln!(md, "{row}");
     }
-    let path = out.join("report.md");
-    std::fs::write(&path, md).map_err(|e| file_err(&path, e))?;
-    plot(study, out, false)?;
-    plot(study, out, true)?;
-    Ok(())
+    md
 }
 
 /// RMSE against spp (or seconds), log-log, a line per configuration and the ideal

@@ -14,7 +14,7 @@ use crate::tuning::Tuning;
 /// Which backend renders.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum BackendChoice {
-    /// Vulkan adapter by index of [`crate::gpu::list_adapters`] (0: the preferred one).
+    /// Vulkan adapter by index of [`crate::gpu::context::list_adapters`] (0: the preferred one).
     Gpu { adapter: usize },
     /// The CPU reference.
     Cpu,

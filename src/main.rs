@@ -658,10 +658,19 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             anyhow::bail!("{e}{}", resume.unwrap_or_default());
         }
     };
-    println!(
-        "{}",
-        summary(&output, &done, first, limited && args.spp.is_some())
-    );
+    let mut line = summary(&output, &done, first, limited && args.spp.is_some());
+    if limited && args.spp.is_none() && done.stopped == Stopped::AllPasses {
+        let sampler = session.scene().sampler;
+        if sampler.depends_on_spp() {
+            line += &format!(
+                " (all passes: the {} sampler places its points for the scene's {} spp; \
+                 --spp asks for more)",
+                sampler.name(),
+                session.scene().spp
+            );
+        }
+    }
+    println!("{line}");
     Ok(())
 }
 

@@ -1,7 +1,7 @@
 //! Mirrors `shaders/shared/bindings.wgsl`: what one dispatch reads.
 
+use crate::scene::flat::FlatScene;
 use crate::scene::records::{BvhNode, Emitter, Material, Params, Primitive, Texture};
-use crate::scene::FlatScene;
 
 /// The resources of one dispatch, borrowed from the flattened scene.
 #[derive(Clone, Copy)]

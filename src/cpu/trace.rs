@@ -14,11 +14,11 @@ use super::samplers::{bounce_2d, sample_2d, DIM_RR};
 use super::sampling::{offset_ray, sample_disk};
 use super::textures::material_at;
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
+use crate::scene::flat::FlatScene;
 use crate::scene::records::{
     Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE, NO_LIGHT,
     PRIM_LIGHT_SHIFT,
 };
-use crate::scene::FlatScene;
 
 pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
 

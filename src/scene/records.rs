@@ -340,7 +340,7 @@ pub struct Params {
     /// traced; 0: no Russian roulette.
     pub rr_depth: u32,
     /// The dispatch traces samples `sample_index .. sample_index + sample_count` of each
-    /// pixel (set per dispatch by the GPU backend; 0 in [`crate::scene::FlatScene::params`],
+    /// pixel (set per dispatch by the GPU backend; 0 in [`crate::scene::flat::FlatScene::params`],
     /// so it is not part of a checkpoint's scene hash).
     pub sample_count: u32,
 }
