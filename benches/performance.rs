@@ -282,7 +282,7 @@ fn variants() -> Vec<(&'static str, Vec<&'static str>)> {
     vec![
         (
             "before: storage buffers, BVH, no Russian roulette",
-            tuned("no-uniform-records,bvh,no-russian-roulette,no-baked-records,no-sample-groups"),
+            tuned("no-uniform-records,no-texture-records,bvh,no-russian-roulette,no-baked-records,no-sample-groups"),
         ),
         (
             "+ uniform-buffer records",

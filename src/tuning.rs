@@ -28,6 +28,8 @@ pub struct Tuning {
     pub baked_records: bool,
     /// One GPU invocation traces a group of samples.
     pub sample_groups: bool,
+    /// Primitives and BVH nodes too large for a uniform buffer read from textures.
+    pub texture_records: bool,
 }
 
 impl Default for Tuning {
@@ -41,6 +43,7 @@ impl Default for Tuning {
             uniform_records: true,
             baked_records: true,
             sample_groups: true,
+            texture_records: true,
         }
     }
 }
@@ -72,6 +75,10 @@ pub const KNOBS: &[(&str, &str)] = &[
         "one sample per GPU invocation instead of a group of up to 16",
     ),
     (
+        "no-texture-records",
+        "primitives and BVH nodes in storage buffers, never in textures",
+    ),
+    (
         "no-russian-roulette",
         "trace every path to max_depth (or until it escapes or goes black)",
     ),
@@ -98,6 +105,7 @@ impl Tuning {
                 "no-uniform-records" => t.uniform_records = false,
                 "no-baked-records" => t.baked_records = false,
                 "no-sample-groups" => t.sample_groups = false,
+                "no-texture-records" => t.texture_records = false,
                 "no-russian-roulette" => t.russian_roulette = false,
                 _ => {
                     let names: Vec<&str> = KNOBS.iter().map(|(n, _)| *n).collect();

@@ -55,11 +55,19 @@ fn every_entry_shader_validates_and_binds_what_it_reads() {
             .with(f, true)
             .with(Feature::Emission, true)
     }));
+    // the primitives and the BVH may also be textures
+    let mut textured = Placements::default();
+    textured.set(Slot::Primitives, Placement::Texture);
+    textured.set(Slot::Bvh, Placement::Texture);
     for features in sets {
-        for placement in [Placement::Storage, Placement::Uniform] {
+        for placements in [
+            all_placed(Placement::Storage),
+            all_placed(Placement::Uniform),
+            textured,
+        ] {
             let spec = ShaderSpec {
                 features,
-                placements: all_placed(placement),
+                placements,
                 scene_code: String::new(),
             };
             for entry in ENTRY_SHADERS {
@@ -546,13 +554,16 @@ fn the_plan_follows_the_tuning() {
     assert_eq!(plan("").sample_group, wgtrace::gpu::plan::SAMPLE_GROUP);
     assert_eq!(plan("no-sample-groups").sample_group, 1);
     assert!(plan("no-baked-records").shader.scene_code.is_empty());
+    let storage = plan("no-uniform-records,no-baked-records,no-texture-records");
     assert!(Slot::RECORDS
         .iter()
-        .all(|&s| plan("no-uniform-records,no-baked-records")
-            .shader
-            .placements
-            .get(s)
-            == Placement::Storage));
+        .all(|&s| storage.shader.placements.get(s) == Placement::Storage));
+    // the primitives and the BVH too large for a uniform buffer go to textures
+    let textured = plan("no-uniform-records,no-baked-records")
+        .shader
+        .placements;
+    assert_eq!(textured.get(Slot::Primitives), Placement::Texture);
+    assert_eq!(textured.get(Slot::Materials), Placement::Storage);
     assert!(Tuning::parse("no-such-knob")
         .unwrap_err()
         .contains("no-russian-roulette"));

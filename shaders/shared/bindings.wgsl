@@ -15,22 +15,9 @@
 #import generated/scene
 #import generated/bindings
 
-// Primitive, material and light i: from their buffers, or, for a scene of few of them,
-// from constants written into its shader (BAKED_PRIMITIVES, BAKED_MATERIALS,
-// BAKED_EMITTERS): llvmpipe gathers a record from a buffer one lane and one component at
-// a time.
-#ifndef BAKED_PRIMITIVES
-fn primitive_record(i: u32) -> Primitive {
-    return primitives[i];
-}
-#endif
-#ifndef BAKED_MATERIALS
-fn material_record(i: u32) -> Material {
-    return materials[i];
-}
-#endif
-#ifndef BAKED_EMITTERS
-fn emitter_record(i: u32) -> Emitter {
-    return emitters[i];
-}
-#endif
+// Primitive, material, light and BVH node i are read through primitive_record(i),
+// material_record(i), emitter_record(i) and bvh_node(i), written with the declarations
+// for where the plan keeps them: a buffer, a texture (read with textureLoad), or, for a
+// scene of few of them, constants of its shader (BAKED_PRIMITIVES, BAKED_MATERIALS,
+// BAKED_EMITTERS; the scene code defines those functions then): llvmpipe gathers a record
+// from a storage buffer one lane and one component at a time.

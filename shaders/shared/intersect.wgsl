@@ -270,13 +270,13 @@ fn intersect_local(prim: Primitive, tag: u32, ray: Ray, t_max: f32) -> vec3<f32>
 // the direction normalized (the sphere test needs unit length); t is mapped back by the
 // direction's length.
 fn intersect_primitive(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
-    return intersect_primitive_as(i, primitives[i].tag, ray, t_max);
+    return intersect_primitive_as(i, primitive_record(i).tag, ray, t_max);
 }
 
 // intersect_primitive for a primitive whose type the caller knows: a literal `tag` lets
 // the compiler drop the other types' cases (the per-type loops of intersect_scene).
 fn intersect_primitive_as(i: u32, tag: u32, ray: Ray, t_max: f32) -> vec3<f32> {
-    let prim = primitives[i];
+    let prim = primitive_record(i);
 #ifndef HAS_TRANSFORMS
     return intersect_local(prim, tag, ray, t_max);
 #else
@@ -354,27 +354,27 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
         // the CPU's single loop does.
         var i = params.num_unbounded;
 #ifdef HAS_SPHERE
-        for (; i < params.num_primitives && primitives[i].tag == PRIM_SPHERE; i++) {
+        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_SPHERE; i++) {
             best = closer_as(best, i, PRIM_SPHERE, ray);
         }
 #endif
 #ifdef HAS_TRIANGLE
-        for (; i < params.num_primitives && primitives[i].tag == PRIM_TRIANGLE; i++) {
+        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_TRIANGLE; i++) {
             best = closer_as(best, i, PRIM_TRIANGLE, ray);
         }
 #endif
 #ifdef HAS_BOX
-        for (; i < params.num_primitives && primitives[i].tag == PRIM_BOX; i++) {
+        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_BOX; i++) {
             best = closer_as(best, i, PRIM_BOX, ray);
         }
 #endif
 #ifdef HAS_CYLINDER
-        for (; i < params.num_primitives && primitives[i].tag == PRIM_CYLINDER; i++) {
+        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_CYLINDER; i++) {
             best = closer_as(best, i, PRIM_CYLINDER, ray);
         }
 #endif
 #ifdef HAS_DISK
-        for (; i < params.num_primitives && primitives[i].tag == PRIM_DISK; i++) {
+        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_DISK; i++) {
             best = closer_as(best, i, PRIM_DISK, ray);
         }
 #endif
@@ -389,17 +389,18 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     var stack_node: array<u32, BVH_STACK_SIZE>;
     var stack_t: array<f32, BVH_STACK_SIZE>;
     var sp = 0u;
-    var node = 0u;
-    var t_node = intersect_aabb(bvh[0].lo, bvh[0].hi, ray.origin, inv_dir, best.t);
+    var n = bvh_node(0u);
+    var t_node = intersect_aabb(n.lo, n.hi, ray.origin, inv_dir, best.t);
     loop {
         if (t_node < best.t) {
-            let n = bvh[node];
             if (n.count == 0u) {
-                let t0 = intersect_aabb(bvh[node + 1u].lo, bvh[node + 1u].hi, ray.origin, inv_dir, best.t);
-                let t1 = intersect_aabb(bvh[n.offset].lo, bvh[n.offset].hi, ray.origin, inv_dir, best.t);
+                // the two children side by side (scene::bvh::pair_layout): one cache line
+                let c0 = bvh_node(n.offset);
+                let c1 = bvh_node(n.offset + 1u);
+                let t0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, best.t);
+                let t1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, best.t);
                 let first_near = t0 <= t1;
-                let near = select(n.offset, node + 1u, first_near);
-                let far = select(node + 1u, n.offset, first_near);
+                let far = select(n.offset, n.offset + 1u, first_near);
                 let t_near = min(t0, t1);
                 let t_far = max(t0, t1);
                 if (t_far < FAR) {
@@ -408,7 +409,11 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
                     sp++;
                 }
                 if (t_near < FAR) {
-                    node = near;
+                    if (first_near) {
+                        n = c0;
+                    } else {
+                        n = c1;
+                    }
                     t_node = t_near;
                     continue;
                 }
@@ -422,7 +427,7 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
             break;
         }
         sp--;
-        node = stack_node[sp];
+        n = bvh_node(stack_node[sp]);
         t_node = stack_t[sp];
     }
 #endif
@@ -431,14 +436,74 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
 }
 
 // Whether anything lies along the ray before t_max (a shadow ray): the same answer as
-// intersect_scene(ray, t_max).prim != NO_HIT.
+// intersect_scene(ray, t_max).prim != NO_HIT. With the BVH it is an any-hit search: a
+// lane stops at the first primitive in range, and boxes are culled against t_max only.
 fn occluded(ray: Ray, t_max: f32) -> bool {
 #ifdef BAKED_PRIMITIVES
     return occluded_baked(ray, t_max);
 #else
+#ifdef HAS_BVH
+    if (params.use_bvh != 0u) {
+        return occluded_bvh(ray, t_max);
+    }
+#endif
     return intersect_scene(ray, t_max).prim != NO_HIT;
 #endif
 }
+
+#ifdef HAS_BVH
+// The any-hit search of occluded over the planes and the BVH.
+fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
+    for (var i = 0u; i < params.num_unbounded; i++) {
+        if (intersect_primitive(i, ray, t_max).x < t_max) {
+            return true;
+        }
+    }
+    if (params.num_primitives == params.num_unbounded) {
+        return false;
+    }
+    let inv_dir = safe_inverse(ray.dir);
+    var stack_node: array<u32, BVH_STACK_SIZE>;
+    var sp = 0u;
+    var n = bvh_node(0u);
+    var hit = intersect_aabb(n.lo, n.hi, ray.origin, inv_dir, t_max) < FAR;
+    loop {
+        if (hit) {
+            if (n.count == 0u) {
+                let c0 = bvh_node(n.offset);
+                let c1 = bvh_node(n.offset + 1u);
+                let h0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, t_max) < FAR;
+                let h1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, t_max) < FAR;
+                if (h0 && h1) {
+                    stack_node[sp] = n.offset + 1u;
+                    sp++;
+                }
+                if (h0 || h1) {
+                    if (h0) {
+                        n = c0;
+                    } else {
+                        n = c1;
+                    }
+                    continue;
+                }
+            } else {
+                for (var k = 0u; k < n.count; k++) {
+                    if (intersect_primitive(n.offset + k, ray, t_max).x < t_max) {
+                        return true;
+                    }
+                }
+            }
+        }
+        if (sp == 0u) {
+            break;
+        }
+        sp--;
+        n = bvh_node(stack_node[sp]);
+        hit = true;
+    }
+    return false;
+}
+#endif
 
 // A hit in a primitive's own space.
 struct Surface {

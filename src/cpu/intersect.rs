@@ -363,24 +363,17 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
     let mut stack_node = [0u32; BVH_STACK_SIZE as usize];
     let mut stack_t = [0f32; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut node = 0u32;
-    let mut t_node = intersect_aabb(
-        Vec3::from(nodes[0].lo),
-        Vec3::from(nodes[0].hi),
-        ray.origin,
-        inv_dir,
-        best.t,
-    );
+    let mut n = nodes[0];
+    let mut t_node = intersect_aabb(n.lo.into(), n.hi.into(), ray.origin, inv_dir, best.t);
     loop {
         if t_node < best.t {
-            let n = nodes[node as usize];
             if n.count == 0 {
-                let (c0, c1) = (&nodes[node as usize + 1], &nodes[n.offset as usize]);
+                // the two children side by side (scene::bvh::pair_layout)
+                let (c0, c1) = (nodes[n.offset as usize], nodes[n.offset as usize + 1]);
                 let t0 = intersect_aabb(c0.lo.into(), c0.hi.into(), ray.origin, inv_dir, best.t);
                 let t1 = intersect_aabb(c1.lo.into(), c1.hi.into(), ray.origin, inv_dir, best.t);
                 let first_near = t0 <= t1;
-                let near = if first_near { node + 1 } else { n.offset };
-                let far = if first_near { n.offset } else { node + 1 };
+                let far = if first_near { n.offset + 1 } else { n.offset };
                 let t_near = t0.min(t1);
                 let t_far = t0.max(t1);
                 if t_far < FAR {
@@ -389,7 +382,7 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
                     sp += 1;
                 }
                 if t_near < FAR {
-                    node = near;
+                    n = if first_near { c0 } else { c1 };
                     t_node = t_near;
                     continue;
                 }
@@ -403,7 +396,7 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
             break;
         }
         sp -= 1;
-        node = stack_node[sp];
+        n = nodes[stack_node[sp] as usize];
         t_node = stack_t[sp];
     }
     best

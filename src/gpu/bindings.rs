@@ -6,6 +6,7 @@
 
 use wgpu::util::DeviceExt;
 
+use super::codegen::texture_accessor;
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{BvhNode, Emitter, Material, Params, Primitive, Texture};
 
@@ -123,6 +124,19 @@ pub enum Placement {
     Uniform,
     /// Written into the shader as constants (`gpu::codegen`); no buffer is bound.
     Shader,
+    /// A texture of 32-bit unsigned texels, [`TEXTURE_WIDTH`] wide, one record every few
+    /// texels, read with `textureLoad`: llvmpipe fetches a texel for all 8 lanes with
+    /// gathers, where a storage-buffer load is a loop over the lanes and the components.
+    Texture,
+}
+
+/// Texels per row of a record texture (a power of two: the index splits by mask and
+/// shift).
+pub const TEXTURE_WIDTH: u32 = 2048;
+
+/// Rows of a record texture holding `bytes` (at least one: WebGPU forbids empty ones).
+pub fn texture_rows(bytes: usize) -> u32 {
+    (bytes.div_ceil(16 * TEXTURE_WIDTH as usize) as u32).max(1)
 }
 
 /// The placement of each of [`Slot::RECORDS`].
@@ -150,6 +164,37 @@ impl Placements {
     }
 }
 
+/// The record accessors the shaders read through (`primitive_record(i)`, ...), for the
+/// arrays not written into the shader (whose code brings its own).
+pub fn wgsl_accessors(placements: &Placements) -> String {
+    let mut out = String::new();
+    for (slot, name) in ACCESSORS {
+        let (ty, _) = slot.element();
+        out += &match placements.get(slot) {
+            Placement::Shader => continue,
+            Placement::Texture => match slot {
+                Slot::Primitives => texture_accessor::<Primitive>(name, slot.name(), TEXTURE_WIDTH),
+                Slot::Materials => texture_accessor::<Material>(name, slot.name(), TEXTURE_WIDTH),
+                Slot::Emitters => texture_accessor::<Emitter>(name, slot.name(), TEXTURE_WIDTH),
+                _ => texture_accessor::<BvhNode>(name, slot.name(), TEXTURE_WIDTH),
+            },
+            _ => format!(
+                "fn {name}(i: u32) -> {ty} {{\n    return {}[i];\n}}\n",
+                slot.name()
+            ),
+        };
+    }
+    out
+}
+
+/// The record arrays read through an accessor function, and its name.
+const ACCESSORS: [(Slot, &str); 4] = [
+    (Slot::Primitives, "primitive_record"),
+    (Slot::Materials, "material_record"),
+    (Slot::Emitters, "emitter_record"),
+    (Slot::Bvh, "bvh_node"),
+];
+
 /// The WGSL declarations of every slot of group 0 under `placements`. Arrays written into
 /// the shader are still declared (as storage) so that the code reading them from a buffer,
 /// left unused, validates; they are not bound.
@@ -157,6 +202,14 @@ pub fn wgsl_declarations(placements: &Placements) -> String {
     let mut out = String::new();
     for slot in Slot::ALL {
         let (ty, _) = slot.element();
+        if placements.get(slot) == Placement::Texture {
+            out += &format!(
+                "@group(0) @binding({}) var {}: texture_storage_2d<rgba32uint, read>;\n",
+                slot.binding(),
+                slot.name()
+            );
+            continue;
+        }
         let (space, ty) = match (slot, placements.get(slot)) {
             (Slot::Params, _) => ("uniform".to_string(), ty.to_string()),
             (Slot::Accum, _) => ("storage, read_write".into(), format!("array<{ty}>")),
@@ -175,12 +228,23 @@ pub fn wgsl_declarations(placements: &Placements) -> String {
     out
 }
 
-/// The buffer type of a bound slot.
-fn buffer_type(slot: Slot, placements: &Placements) -> wgpu::BufferBindingType {
+/// The binding type of a bound slot.
+fn binding_type(slot: Slot, placements: &Placements) -> wgpu::BindingType {
+    let buffer = |ty| wgpu::BindingType::Buffer {
+        ty,
+        // the parameters of each dispatch of a submission lie at their own offset
+        has_dynamic_offset: slot == Slot::Params,
+        min_binding_size: None,
+    };
     match (slot, placements.get(slot)) {
-        (Slot::Accum, _) => wgpu::BufferBindingType::Storage { read_only: false },
-        (_, Placement::Uniform) => wgpu::BufferBindingType::Uniform,
-        _ => wgpu::BufferBindingType::Storage { read_only: true },
+        (Slot::Accum, _) => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
+        (_, Placement::Uniform) => buffer(wgpu::BufferBindingType::Uniform),
+        (_, Placement::Texture) => wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::ReadOnly,
+            format: wgpu::TextureFormat::Rgba32Uint,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+        _ => buffer(wgpu::BufferBindingType::Storage { read_only: true }),
     }
 }
 
@@ -195,12 +259,7 @@ pub fn layout(
         .map(|&slot| wgpu::BindGroupLayoutEntry {
             binding: slot.binding(),
             visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: buffer_type(slot, placements),
-                // the parameters of each dispatch of a submission lie at their own offset
-                has_dynamic_offset: slot == Slot::Params,
-                min_binding_size: None,
-            },
+            ty: binding_type(slot, placements),
             count: None,
         })
         .collect();
@@ -215,7 +274,13 @@ pub fn layout(
 /// and the record buffers, all but the sums.
 pub struct SceneBuffers {
     pub params: wgpu::Buffer,
-    records: Vec<(Slot, wgpu::Buffer)>,
+    records: Vec<(Slot, Records)>,
+}
+
+/// One slot's records on the device.
+enum Records {
+    Buffer(wgpu::Buffer),
+    Texture(wgpu::TextureView),
 }
 
 /// Uploads the records of `slots`: a uniform buffer of [`UNIFORM_BYTES`] starting with
@@ -224,6 +289,7 @@ pub struct SceneBuffers {
 /// smaller). The parameter buffer has `params_bytes` (at least one [`Params`]).
 pub fn scene_buffers(
     device: &wgpu::Device,
+    queue: &wgpu::Queue,
     slots: &[Slot],
     placements: &Placements,
     scene: &FlatScene,
@@ -240,6 +306,12 @@ pub fn scene_buffers(
         .filter(|s| !matches!(s, Slot::Params | Slot::Accum))
         .map(|&slot| {
             let bytes = slot.bytes(scene);
+            if placements.get(slot) == Placement::Texture {
+                return (
+                    slot,
+                    Records::Texture(record_texture(device, queue, slot, bytes)),
+                );
+            }
             let (contents, usage) = match placements.get(slot) {
                 Placement::Uniform => {
                     let mut padded = bytes.to_vec();
@@ -254,10 +326,42 @@ pub fn scene_buffers(
                 contents: &contents,
                 usage,
             });
-            (slot, buffer)
+            (slot, Records::Buffer(buffer))
         })
         .collect();
     SceneBuffers { params, records }
+}
+
+/// A texture of `bytes` as 16-byte texels, [`TEXTURE_WIDTH`] to a row, zero-padded.
+fn record_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    slot: Slot,
+    bytes: &[u8],
+) -> wgpu::TextureView {
+    let rows = texture_rows(bytes.len());
+    let mut padded = bytes.to_vec();
+    padded.resize(rows as usize * TEXTURE_WIDTH as usize * 16, 0);
+    let texture = device.create_texture_with_data(
+        queue,
+        &wgpu::TextureDescriptor {
+            label: Some(slot.name()),
+            size: wgpu::Extent3d {
+                width: TEXTURE_WIDTH,
+                height: rows,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Uint,
+            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        &padded,
+    );
+    texture.create_view(&Default::default())
 }
 
 /// Group 0: the scene's buffers for `slots`, with `accum` as the sums.
@@ -279,13 +383,16 @@ pub fn bind_scene(
                     size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
                 }),
                 Slot::Accum => accum.as_entire_binding(),
-                _ => buffers
+                _ => match &buffers
                     .records
                     .iter()
                     .find(|(s, _)| *s == slot)
                     .expect("uploaded with scene_buffers")
                     .1
-                    .as_entire_binding(),
+                {
+                    Records::Buffer(b) => b.as_entire_binding(),
+                    Records::Texture(view) => wgpu::BindingResource::TextureView(view),
+                },
             };
             wgpu::BindGroupEntry {
                 binding: slot.binding(),

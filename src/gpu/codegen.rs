@@ -28,6 +28,47 @@ fn wgsl_vec(v: &[f32]) -> String {
     format!("vec{}<f32>({})", v.len(), c.join(", "))
 }
 
+/// `fn name(i: u32) -> R` reading record i of the texture `var` (`Placement::Texture`):
+/// its texels, at `i * texels` from the start, `width` (a power of two) to a row, decoded
+/// field by field from the layout [`SharedRecord`] gives (u32 components as they are,
+/// floats by bitcast).
+pub fn texture_accessor<R: SharedRecord + bytemuck::Zeroable>(
+    name: &str,
+    var: &str,
+    width: u32,
+) -> String {
+    let layout = R::layout();
+    let texels = layout.size.div_ceil(16);
+    let shift = width.trailing_zeros();
+    let mut code = format!(
+        "fn {name}(i: u32) -> {} {{\n    let base = i * {texels}u;\n",
+        R::NAME
+    );
+    for t in 0..texels {
+        code += &format!(
+            "    let t{t} = textureLoad({var}, vec2<u32>((base + {t}u) & {}u, (base + {t}u) >> {shift}u));\n",
+            width - 1
+        );
+    }
+    let zero: R = bytemuck::Zeroable::zeroed();
+    let fields: Vec<String> = layout
+        .fields
+        .iter()
+        .zip(zero.fields())
+        .map(|(&(_, offset), (_, kind))| {
+            let (t, c) = (offset / 16, offset % 16 / 4);
+            let lanes = |n: usize| &"xyzw"[c..c + n];
+            match kind {
+                FieldValue::U32(_) => format!("t{t}.{}", lanes(1)),
+                FieldValue::F32(_) => format!("bitcast<f32>(t{t}.{})", lanes(1)),
+                FieldValue::Vec3(_) => format!("bitcast<vec3<f32>>(t{t}.{})", lanes(3)),
+                FieldValue::Vec4(_) => format!("bitcast<vec4<f32>>(t{t})"),
+            }
+        })
+        .collect();
+    code + &format!("    return {}({});\n}}\n", R::NAME, fields.join(", "))
+}
+
 /// A record as a WGSL constructor, its fields in the order [`SharedRecord`] lists them.
 pub fn wgsl_record<R: SharedRecord>(r: &R) -> String {
     let values: Vec<String> = r

@@ -112,7 +112,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let buffers = scene_buffers(device, &slots, &spec.placements, scene, 0);
+    let buffers = scene_buffers(device, &ctx.queue, &slots, &spec.placements, scene, 0);
     let scene_group = bind_scene(device, &scene_bgl, &slots, &buffers, &accum);
     let params = scene.params(0, scene.full_tile());
     ctx.queue

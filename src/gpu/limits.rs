@@ -21,6 +21,8 @@ pub struct DeviceFit {
     /// Loop iterations one invocation may run before the driver cuts it short (llvmpipe),
     /// if it does.
     pub loop_limit: Option<u64>,
+    /// Rows a 2D texture may have (`max_texture_dimension_2d`).
+    pub texture_rows: u32,
 }
 
 impl DeviceFit {
@@ -35,6 +37,7 @@ impl DeviceFit {
             loop_limit: adapter_name
                 .contains("llvmpipe")
                 .then_some(LLVMPIPE_LOOP_LIMIT),
+            texture_rows: limits.max_texture_dimension_2d,
         }
     }
 

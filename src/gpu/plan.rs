@@ -7,7 +7,9 @@
 
 use std::collections::BTreeSet;
 
-use super::bindings::{wgsl_declarations, Placement, Placements, Slot, UNIFORM_BYTES};
+use super::bindings::{
+    texture_rows, wgsl_accessors, wgsl_declarations, Placement, Placements, Slot, UNIFORM_BYTES,
+};
 use super::codegen;
 use super::error::GpuError;
 use super::limits::{DeviceFit, LLVMPIPE_LOOP_LIMIT};
@@ -265,7 +267,7 @@ impl ShaderSpec {
     /// The assembled WGSL of entry point file `entry` (`trace` or `kernel`).
     pub fn wgsl(&self, entry: &str) -> Result<String, ShaderError> {
         let constants = codegen::constants();
-        let bindings = wgsl_declarations(&self.placements);
+        let bindings = wgsl_declarations(&self.placements) + &wgsl_accessors(&self.placements);
         shader::assemble(
             entry,
             &self.defines(),
@@ -396,7 +398,9 @@ impl GpuPlan {
 
 /// Where `slot`'s records live in a specialized shader: written in when the scene is
 /// small enough and the tuning allows; else a uniform buffer when they fit in
-/// [`UNIFORM_BYTES`] and the device binds that many; else a storage buffer.
+/// [`UNIFORM_BYTES`] and the device binds that many; else, for the primitives and the BVH
+/// that the traversal reads most, a texture when it fits the device's; else a storage
+/// buffer.
 fn placement(slot: Slot, scene: &FlatScene, fit: &DeviceFit, tuning: &Tuning) -> Placement {
     let few = |n: usize| (1..=BAKED_RECORDS_MAX).contains(&n);
     let written_in = tuning.baked_records
@@ -412,13 +416,16 @@ fn placement(slot: Slot, scene: &FlatScene, fit: &DeviceFit, tuning: &Tuning) ->
             Slot::Emitters => few(scene.emitters.len()),
             _ => false,
         };
+    let bytes = slot.bytes(scene).len();
     if written_in {
         Placement::Shader
-    } else if tuning.uniform_records
-        && fit.uniform_records
-        && slot.bytes(scene).len() as u64 <= UNIFORM_BYTES
-    {
+    } else if tuning.uniform_records && fit.uniform_records && bytes as u64 <= UNIFORM_BYTES {
         Placement::Uniform
+    } else if tuning.texture_records
+        && matches!(slot, Slot::Primitives | Slot::Bvh)
+        && texture_rows(bytes) <= fit.texture_rows
+    {
+        Placement::Texture
     } else {
         Placement::Storage
     }

@@ -174,6 +174,7 @@ impl GpuRenderer {
         let stride = params_stride(device);
         let buffers = scene_buffers(
             device,
+            &ctx.queue,
             &pipeline.slots,
             &plan.shader.placements,
             scene,

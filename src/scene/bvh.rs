@@ -13,6 +13,9 @@
 //!   so that the GPU indexes primitives directly with `offset + i`.
 //! * A box of a node is the exact union of the boxes of the primitives below it.
 //!
+//! Renderers traverse the same tree in [`pair_layout`], which puts the two children of
+//! each node side by side.
+//!
 //! # Depth limit
 //!
 //! The root has depth 0 and every leaf has depth `<= BVH_MAX_LEAF_DEPTH`
@@ -55,6 +58,41 @@ pub const SAH_BINS: usize = 16;
 /// Subtrees with at least this many primitives build their two children in
 /// parallel (`rayon::join`); smaller ones are built sequentially.
 const PARALLEL_MIN_PRIMS: usize = 16 * 1024;
+
+/// The nodes of a depth-first BVH laid out for traversal: the root at entry 0 (entry 1
+/// unused), and the two children of every interior node side by side at its `offset`
+/// (even) and `offset + 1`, so that one 64-byte fetch gives both child boxes (a cache
+/// line, where the depth-first layout touches up to three per step). Leaves keep their
+/// primitive range. Pairs are placed in depth-first order of their parents, the first
+/// child's subtree before the second's, so a subtree's pairs lie together. The children
+/// keep their order: a traversal that takes the first child first where the depth-first
+/// layout takes `index + 1` visits the same nodes in the same order.
+pub fn pair_layout(dfs: &[BvhNode]) -> Vec<BvhNode> {
+    if dfs.is_empty() {
+        return Vec::new();
+    }
+    let mut out = vec![BvhNode::default(); dfs.len() + 1];
+    let mut next = 2;
+    // (depth-first index, entry)
+    let mut stack = vec![(0usize, 0usize)];
+    while let Some((d, entry)) = stack.pop() {
+        let n = dfs[d];
+        if n.count > 0 {
+            out[entry] = n;
+            continue;
+        }
+        let pair = next;
+        next += 2;
+        out[entry] = BvhNode {
+            offset: pair as u32,
+            ..n
+        };
+        stack.push((n.offset as usize, pair + 1));
+        stack.push((d + 1, pair));
+    }
+    debug_assert_eq!(next, out.len());
+    out
+}
 
 /// Axis-aligned bounding box. An empty box has `lo = +inf`, `hi = -inf`.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -569,9 +569,9 @@ fn build_primitives(
     }
 }
 
-/// The primitives in their final order, with the BVH over the bounded ones and its depth:
-/// planes first, then the bounded primitives in the BVH's leaf order, or, without it,
-/// grouped by type (a stable sort), with no nodes.
+/// The primitives in their final order, with the BVH over the bounded ones (in
+/// `bvh::pair_layout`) and its depth: planes first, then the bounded primitives in the
+/// BVH's leaf order, or, without it, grouped by type (a stable sort), with no nodes.
 fn order(
     unbounded: Vec<Primitive>,
     bounded: Vec<Primitive>,
@@ -600,7 +600,7 @@ fn order(
             ..*n
         })
         .collect();
-    (primitives, nodes, tree.depth)
+    (primitives, bvh::pair_layout(&nodes), tree.depth)
 }
 
 fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
