@@ -1,12 +1,16 @@
 //! Performance benchmark: wgtrace on the first Vulkan adapter (lavapipe here) against
-//! Mitsuba 3 (`llvm_ad_rgb`) on the Cornell box of `bench/` (the same scene in both
-//! formats), then how wgtrace's time scales with resolution, samples, path length and
-//! triangle count, its memory at 1080p and 4K, and what each optimization kept gave.
-//! Writes `docs/performance.md` and `docs/performance-scaling.svg`.
+//! Mitsuba 3 (`llvm_ad_rgb`) on the suite of `bench/` (each scene in both formats: the
+//! Cornell box, the Cornell box of triangles, spot.obj in mirror and glass, the Nefertiti
+//! scan, a 1M-triangle heightfield under an HDR sky; the meshes from `../shared/meshes/`
+//! and gen_mesh), then render time against triangle count, the memory of the 1M-triangle
+//! scene, what each optimization kept gave, how time scales with resolution, samples and
+//! path length, and memory at 1080p and 4K. Writes `docs/performance.md` and
+//! `docs/performance-scaling.svg`.
 //!
-//! Run: `cargo bench --bench performance` (about 15 minutes on 2 cores). The Mitsuba part
-//! needs `pip install mitsuba` and an LLVM of 15 or newer named by `DRJIT_LIBLLVM_PATH`
-//! (Debian 12: `apt-get install libllvm19`); without them it is reported as not run. Every
+//! Run: `cargo bench --bench performance` (about 30 minutes on 2 cores). The Mitsuba part
+//! needs `pip install mitsuba` (in the Python `$MITSUBA_PYTHON` names, else `python3`) and
+//! an LLVM of 15 or newer named by `DRJIT_LIBLLVM_PATH` (Debian 12: `apt-get install
+//! libllvm19`); without them it is reported as not run. Every
 //! figure comes from child processes run in alternating order over ROUNDS rounds, as
 //! medians with their range; compare ratios within one report, not across machines.
 
@@ -123,12 +127,10 @@ fn wgtrace(scene: &Path, args: &[&str], out: &Path) -> Run {
     }
 }
 
-/// One Mitsuba process (bench/mitsuba_render.py): load, first render (kernel compile or
-/// cache load), steady render, whole process.
+/// One Mitsuba process (bench/mitsuba_render.py): the steady render (the last of its
+/// renders; the first compiles or loads Dr.Jit's kernels) and the whole process.
 #[derive(Clone, Copy, Debug)]
 struct MiRun {
-    load: f64,
-    first: f64,
     steady: f64,
     wall: f64,
 }
@@ -145,12 +147,25 @@ fn llvm_path() -> Option<String> {
     })
 }
 
-fn mitsuba(res: u32, spp: u32, seed: u32, out: &Path, renders: u32) -> Result<MiRun, String> {
+/// The Python that has Mitsuba 3: `$MITSUBA_PYTHON`, else `python3`.
+fn python() -> String {
+    std::env::var("MITSUBA_PYTHON").unwrap_or_else(|_| "python3".into())
+}
+
+/// Renders Mitsuba twin `xml` (relative to the repository root) at width `res`.
+fn mitsuba(
+    xml: &str,
+    res: u32,
+    spp: u32,
+    seed: u32,
+    out: &Path,
+    renders: u32,
+) -> Result<MiRun, String> {
     let llvm = llvm_path().ok_or("no LLVM >= 15 found (DRJIT_LIBLLVM_PATH)")?;
     let start = Instant::now();
-    let o = Command::new("python3")
+    let o = Command::new(python())
         .arg(root().join("bench/mitsuba_render.py"))
-        .arg(root().join("bench/cornell.xml"))
+        .arg(root().join(xml))
         .args([res.to_string(), spp.to_string(), seed.to_string()])
         .arg(out)
         .arg(renders.to_string())
@@ -164,13 +179,6 @@ fn mitsuba(res: u32, spp: u32, seed: u32, out: &Path, renders: u32) -> Result<Mi
     }
     let text = String::from_utf8_lossy(&o.stdout);
     let line = text.lines().last().unwrap_or("");
-    let num = |key: &str| -> f64 {
-        line.split(&format!("\"{key}\": "))
-            .nth(1)
-            .and_then(|s| s.split([',', '}']).next())
-            .and_then(|s| s.trim_start_matches('[').parse().ok())
-            .unwrap_or(f64::NAN)
-    };
     let renders: Vec<f64> = line
         .split("\"renders\": [")
         .nth(1)
@@ -178,8 +186,6 @@ fn mitsuba(res: u32, spp: u32, seed: u32, out: &Path, renders: u32) -> Result<Mi
         .map(|s| s.split(',').filter_map(|x| x.trim().parse().ok()).collect())
         .unwrap_or_default();
     Ok(MiRun {
-        load: num("load"),
-        first: renders.first().copied().unwrap_or(f64::NAN),
         steady: renders.last().copied().unwrap_or(f64::NAN),
         wall,
     })
@@ -241,7 +247,10 @@ fn main() {
         wgtrace(&scene, &a, &dir.join("warm.png"));
     }
 
-    comparison(&mut md, &dir, &scene);
+    comparison(&mut md, &dir);
+    cornell_large(&mut md, &dir);
+    triangle_scaling(&mut md, &dir);
+    mesh_memory(&mut md, &dir);
     optimizations(&mut md, &dir, &scene);
     scaling(&mut md, &dir, &scene);
     memory(&mut md, &dir, &scene);
@@ -304,134 +313,361 @@ fn variants() -> Vec<(&'static str, Vec<&'static str>)> {
     ]
 }
 
-fn comparison(md: &mut String, dir: &Path, scene: &Path) {
+/// One scene of the suite: its wgtrace file and Mitsuba twin (relative to the repository
+/// root), its image size, the spp of the measured renders and of the shared reference.
+struct Case {
+    name: &'static str,
+    toml: &'static str,
+    xml: &'static str,
+    width: u32,
+    height: u32,
+    spp: u32,
+    ref_spp: u32,
+    what: &'static str,
+}
+
+/// The benchmark suite: scenes that look like real work, each in both formats with the
+/// same settings (path tracing with emitter sampling and MIS, max depth 8, Russian
+/// roulette from the fourth ray, independent random samples, box pixel filter).
+const SUITE: [Case; 5] = [
+    Case {
+        name: "cornell",
+        toml: "bench/cornell.toml",
+        xml: "bench/cornell.xml",
+        width: 256,
+        height: 256,
+        spp: 64,
+        ref_spp: 512,
+        what: "14 primitives: quads and two spheres",
+    },
+    Case {
+        name: "cornell-triangles",
+        toml: "bench/cornell-triangles.toml",
+        xml: "bench/cornell-triangles.xml",
+        width: 256,
+        height: 256,
+        spp: 64,
+        ref_spp: 512,
+        what: "36 triangles: walls, lamp, two boxes",
+    },
+    Case {
+        name: "spot",
+        toml: "bench/spot.toml",
+        xml: "bench/spot.xml",
+        width: 256,
+        height: 256,
+        spp: 16,
+        ref_spp: 256,
+        what: "spot.obj twice, mirror and glass: 11,724 triangles",
+    },
+    Case {
+        name: "nefertiti",
+        toml: "bench/nefertiti.toml",
+        xml: "bench/nefertiti.xml",
+        width: 256,
+        height: 256,
+        spp: 16,
+        ref_spp: 256,
+        what: "nefertiti.obj, a scan: 99,950 triangles",
+    },
+    Case {
+        name: "heightfield",
+        toml: "bench/heightfield.toml",
+        xml: "bench/heightfield.xml",
+        width: 256,
+        height: 144,
+        spp: 16,
+        ref_spp: 256,
+        what: "999,698 triangles under the HDR sky",
+    },
+];
+
+/// The heightfield of `triangles` (about) written by gen_mesh into bench/generated/, if
+/// it is not there yet; its path.
+fn heightfield_obj(triangles: u64) -> PathBuf {
+    let name = if triangles == 1_000_000 {
+        "terrain-1m.obj".to_string()
+    } else {
+        format!("terrain-{triangles}.obj")
+    };
+    let obj = root().join("bench/generated").join(name);
+    if !obj.exists() {
+        std::fs::create_dir_all(obj.parent().unwrap()).unwrap();
+        let status = Command::new(std::env::var("CARGO").unwrap_or_else(|_| "cargo".into()))
+            .current_dir(root())
+            .args(["run", "--release", "--quiet", "--example", "gen_mesh", "--"])
+            .args(["heightfield", "--triangles", &triangles.to_string()])
+            .args(["--size", "10", "--height", "1.2", "-o"])
+            .arg(&obj)
+            .stdout(std::process::Stdio::null())
+            .status()
+            .expect("run gen_mesh");
+        assert!(status.success(), "gen_mesh failed");
+    }
+    obj
+}
+
+/// A scene's figures from one run of the suite.
+struct Measured {
+    w_rate: Vec<f64>,
+    m_rate: Vec<f64>,
+    w_wall: Vec<f64>,
+    m_wall: Vec<f64>,
+    /// relMSE x seconds of each renderer (constant while the error is noise): their
+    /// ratio is the ratio of times to equal error.
+    w_cost: Vec<f64>,
+    m_cost: Vec<f64>,
+    /// relMSE between the two references (what they disagree on).
+    floor: f64,
+}
+
+/// Renders `case` with both renderers: a shared reference (the mean of each renderer's
+/// `ref_spp` render), then ROUNDS rounds of one render each, in alternating order.
+fn measure(case: &Case, dir: &Path) -> Result<Measured, String> {
+    let scene = root().join(case.toml);
+    let (w, h) = (case.width, case.height);
+    let wref = dir.join(format!("{}-ref-w.exr", case.name));
+    let mref = dir.join(format!("{}-ref-m.exr", case.name));
+    mitsuba(case.xml, w, case.ref_spp, 1000, &mref, 1)?;
+    let spp = |n: u32| n.to_string();
+    wgtrace(
+        &scene,
+        &["--spp", &spp(case.ref_spp), "--seed", "1000"],
+        &wref,
+    );
+    let (wr, mr) = (rgb(&wref), rgb(&mref));
+    let reference: Vec<f32> = wr.iter().zip(&mr).map(|(a, b)| 0.5 * (a + b)).collect();
+    let mut m = Measured {
+        w_rate: Vec::new(),
+        m_rate: Vec::new(),
+        w_wall: Vec::new(),
+        m_wall: Vec::new(),
+        w_cost: Vec::new(),
+        m_cost: Vec::new(),
+        floor: rel_mse(&wr, &mr),
+    };
+    let samples = (w * h * case.spp) as f64 / 1e6;
+    for round in 0..ROUNDS {
+        let seed = round as u32;
+        let wout = dir.join(format!("{}-w.exr", case.name));
+        let mout = dir.join(format!("{}-m.exr", case.name));
+        let run_w = |m: &mut Measured| {
+            let r = wgtrace(
+                &scene,
+                &["--spp", &spp(case.spp), "--seed", &seed.to_string()],
+                &wout,
+            );
+            m.w_rate.push(r.msps);
+            m.w_wall.push(r.wall);
+            m.w_cost.push(rel_mse(&rgb(&wout), &reference) * r.render);
+        };
+        let run_m = |m: &mut Measured| -> Result<(), String> {
+            let r = mitsuba(case.xml, w, case.spp, seed, &mout, 2)?;
+            m.m_rate.push(samples / r.steady);
+            m.m_wall.push(r.wall);
+            m.m_cost.push(rel_mse(&rgb(&mout), &reference) * r.steady);
+            Ok(())
+        };
+        if round % 2 == 0 {
+            run_w(&mut m);
+            run_m(&mut m)?;
+        } else {
+            run_m(&mut m)?;
+            run_w(&mut m);
+        }
+    }
+    Ok(m)
+}
+
+fn geomean(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp()
+}
+
+fn comparison(md: &mut String, dir: &Path) {
     let _ = writeln!(md, "## Against Mitsuba 3\n");
     let _ = writeln!(
         md,
-        "The Cornell box of `bench/cornell.toml` and its Mitsuba twin `bench/cornell.xml`: \
-         path tracing with emitter sampling and MIS, max depth 8, Russian roulette from the \
-         fourth ray (survival min(1, max throughput) in wgtrace, min(0.95, max throughput) \
-         in Mitsuba), independent random samples, box pixel filter, the same spp for both. \
-         Mitsuba 3 runs its `llvm_ad_rgb` variant (Dr.Jit's LLVM backend, all cores). \
-         *Samples/s* is the steady rate: wgtrace's render time as it reports it, \
-         Mitsuba's second render in its process (the first compiles or loads its kernels). \
-         *Process* is the whole command, start-up, scene loading and shader compilation \
-         included (wgtrace with Mesa's shader cache warm, Mitsuba with Dr.Jit's kernel \
-         cache warm after the first round).\n"
+        "Every scene of `bench/` in wgtrace's format and in Mitsuba 3's (`bench/NAME.toml` \
+         and `bench/NAME.xml`, rendered by `bench/mitsuba_render.py`): path tracing with \
+         emitter sampling and MIS, max depth 8, Russian roulette from the fourth ray \
+         (survival min(1, max throughput) in wgtrace, min(0.95, max throughput) in \
+         Mitsuba), independent random samples, box pixel filter, the same spp for both. \
+         Mitsuba 3 runs its `llvm_ad_rgb` variant (Dr.Jit's LLVM backend, all cores, \
+         Embree for rays). *Msamples/s* is the steady rate: wgtrace's render time as it \
+         reports it, Mitsuba's second render in its process (the first compiles or loads \
+         its kernels). *Equal error* is the time wgtrace needs for the error Mitsuba \
+         reaches in a second, as a fraction of Mitsuba's: relMSE x seconds against a \
+         shared reference (the mean of both renderers' high-spp renders; *disagree* is \
+         the relMSE between those two), which is constant while the error is noise; lower \
+         is better. *Process* is the whole command (start-up, loading, shader or kernel \
+         compilation from warm caches).\n"
     );
-    // the shared reference: both renderers at high spp, averaged
-    let ref_spp = 512;
-    let wref = dir.join("ref-wgtrace.exr");
-    let mref = dir.join("ref-mitsuba.exr");
-    let probe = mitsuba(256, ref_spp, 1000, &mref, 1);
-    if let Err(e) = &probe {
-        let _ = writeln!(md, "Not run: Mitsuba 3 could not render ({e}).\n");
-        return;
-    }
-    wgtrace(
-        scene,
-        &["--spp", &ref_spp.to_string(), "--seed", "1000"],
-        &wref,
-    );
-    let (w, m) = (rgb(&wref), rgb(&mref));
-    let reference: Vec<f32> = w.iter().zip(&m).map(|(a, b)| 0.5 * (a + b)).collect();
-    let floor = rel_mse(&w, &m);
     let mut rows = Vec::new();
-    for (res, spp) in [(256u32, 64u32), (1024, 16)] {
-        let (mut wr, mut mr) = (Vec::new(), Vec::new());
-        let (mut werr, mut merr) = (Vec::new(), Vec::new());
-        for round in 0..ROUNDS {
-            let seed = round as u32;
-            let wout = dir.join(format!("w{res}.exr"));
-            let mout = dir.join(format!("m{res}.exr"));
-            let args = [
-                "--width".to_string(),
-                res.to_string(),
-                "--height".to_string(),
-                res.to_string(),
-                "--spp".to_string(),
-                spp.to_string(),
-                "--seed".to_string(),
-                seed.to_string(),
-            ];
-            let args: Vec<&str> = args.iter().map(String::as_str).collect();
-            let mut run_w = || {
-                let r = wgtrace(scene, &args, &wout);
-                if res == 256 {
-                    werr.push(rel_mse(&rgb(&wout), &reference));
-                }
-                wr.push(r);
-            };
-            let mut run_m = || {
-                let r = mitsuba(res, spp, seed, &mout, 2).expect("mitsuba ran before");
-                if res == 256 {
-                    merr.push(rel_mse(&rgb(&mout), &reference));
-                }
-                mr.push(r);
-            };
-            if round % 2 == 0 {
-                run_w();
-                run_m();
-            } else {
-                run_m();
-                run_w();
-            }
+    for case in &SUITE {
+        if case.name == "heightfield" {
+            heightfield_obj(1_000_000);
         }
-        let samples = (res * res * spp) as f64 / 1e6;
-        let w_rate: Vec<f64> = wr.iter().map(|r| r.msps).collect();
-        let m_rate: Vec<f64> = mr.iter().map(|r| samples / r.steady).collect();
-        let w_wall: Vec<f64> = wr.iter().map(|r| r.wall).collect();
-        let m_wall: Vec<f64> = mr.iter().map(|r| r.wall).collect();
-        let m_first: Vec<f64> = mr.iter().map(|r| r.load + r.first).collect();
-        let w_render: Vec<f64> = wr.iter().map(|r| r.render).collect();
-        let m_steady: Vec<f64> = mr.iter().map(|r| r.steady).collect();
-        rows.push((
-            res,
-            spp,
-            w_rate.clone(),
-            m_rate.clone(),
-            w_wall,
-            m_wall,
-            m_first,
-        ));
-        if res == 256 {
-            // time to equal error: relMSE falls as 1/time for both, so the time to reach
-            // any error e is relMSE x seconds / e; the ratio of those products is the
-            // ratio of times to equal error
-            let we = median(&werr) * median(&w_render);
-            let me = median(&merr) * median(&m_steady);
-            let _ = writeln!(
-                md,
-                "Error at 256 x 256 and 64 spp against a shared reference (the mean of \
-                 wgtrace's and Mitsuba's {ref_spp}-spp renders; they differ from each other \
-                 by a relMSE of {floor:.2e}): wgtrace {} in {} s, Mitsuba {} in {} s. \
-                 **Time to equal error, wgtrace / Mitsuba: {:.2}** (relMSE x seconds, which \
-                 is constant while the error is noise).\n",
-                spread_e(&werr),
-                spread(&w_render, 2),
-                spread_e(&merr),
-                spread(&m_steady, 2),
-                we / me
-            );
+        eprintln!("suite: {}", case.name);
+        match measure(case, dir) {
+            Ok(m) => rows.push((case, m)),
+            Err(e) => {
+                let _ = writeln!(
+                    md,
+                    "Not run: Mitsuba 3 could not render {} ({e}).\n",
+                    case.xml
+                );
+                return;
+            }
         }
     }
     let _ = writeln!(
         md,
-        "| size | spp | wgtrace Msamples/s | Mitsuba Msamples/s | ratio | wgtrace process s | Mitsuba process s | Mitsuba load + first render s |\n|---|---|---|---|---|---|---|---|"
+        "| scene | what | size, spp | wgtrace Msamples/s | Mitsuba Msamples/s | ratio | equal error, wgtrace / Mitsuba | disagree | wgtrace process s | Mitsuba process s |\n|---|---|---|---|---|---|---|---|---|---|"
     );
-    for (res, spp, w, m, ww, mw, mf) in rows {
+    let (mut ratios, mut errors) = (Vec::new(), Vec::new());
+    for (case, m) in &rows {
+        let ratio = median(&m.w_rate) / median(&m.m_rate);
+        let equal = median(&m.w_cost) / median(&m.m_cost);
+        ratios.push((ratio, case.name));
+        errors.push((equal, case.name));
         let _ = writeln!(
             md,
-            "| {res} x {res} | {spp} | {} | {} | **{:.2}** | {} | {} | {} |",
-            spread(&w, 3),
-            spread(&m, 3),
-            median(&w) / median(&m),
-            spread(&ww, 2),
-            spread(&mw, 2),
-            spread(&mf, 2)
+            "| `{}` | {} | {} x {}, {} | {} | {} | **{ratio:.2}** | {equal:.2} | {:.1e} | {} | {} |",
+            case.name,
+            case.what,
+            case.width,
+            case.height,
+            case.spp,
+            spread(&m.w_rate, 3),
+            spread(&m.m_rate, 3),
+            m.floor,
+            spread(&m.w_wall, 2),
+            spread(&m.m_wall, 2)
         );
     }
-    let _ = writeln!(md);
+    let worst = |v: &[(f64, &str)], high_is_good: bool| {
+        let w = v
+            .iter()
+            .copied()
+            .min_by(|a, b| {
+                if high_is_good {
+                    a.0.total_cmp(&b.0)
+                } else {
+                    b.0.total_cmp(&a.0)
+                }
+            })
+            .unwrap();
+        format!("{:.2} (`{}`)", w.0, w.1)
+    };
+    let g = geomean(&ratios.iter().map(|r| r.0).collect::<Vec<_>>());
+    let ge = geomean(&errors.iter().map(|r| r.0).collect::<Vec<_>>());
+    let _ = writeln!(
+        md,
+        "\n**wgtrace / Mitsuba in samples per second: geometric mean {g:.2}, worst {}. Time \
+         to equal error, wgtrace / Mitsuba: geometric mean {ge:.2}, worst {}.**\n",
+        worst(&ratios, true),
+        worst(&errors, false)
+    );
+}
+
+/// The Cornell box at 1024 x 1024 on both renderers (the figure a real GPU is compared
+/// by).
+fn cornell_large(md: &mut String, dir: &Path) {
+    let scene = root().join("bench/cornell.toml");
+    let (mut w, mut m) = (Vec::new(), Vec::new());
+    for round in 0..ROUNDS {
+        let seed = round.to_string();
+        let r = wgtrace(
+            &scene,
+            &[
+                "--width", "1024", "--height", "1024", "--spp", "16", "--seed", &seed,
+            ],
+            &dir.join("large-w.exr"),
+        );
+        w.push(r.msps);
+        match mitsuba(
+            "bench/cornell.xml",
+            1024,
+            16,
+            round as u32,
+            &dir.join("large-m.exr"),
+            2,
+        ) {
+            Ok(r) => m.push(1024.0 * 1024.0 * 16.0 / 1e6 / r.steady),
+            Err(_) => return,
+        }
+    }
+    let _ = writeln!(
+        md,
+        "`bench/cornell.toml` at 1024 x 1024 and 16 spp: wgtrace {} Msamples/s, Mitsuba {} \
+         (**{:.2}**).\n",
+        spread(&w, 3),
+        spread(&m, 3),
+        median(&w) / median(&m)
+    );
+}
+
+/// Render time against triangle count: the heightfield of the suite at 1,000 to 1,000,000
+/// triangles, the same camera and sky.
+fn triangle_scaling(md: &mut String, dir: &Path) {
+    let src = std::fs::read_to_string(root().join("bench/heightfield.toml")).unwrap();
+    let mut pts = Vec::new();
+    for n in [1_000u64, 10_000, 100_000, 1_000_000] {
+        let obj = heightfield_obj(n);
+        let text = src.replace(
+            "path = \"generated/terrain-1m.obj\"",
+            &format!("path = \"{}\"", obj.display()),
+        );
+        let scene = dir.join(format!("terrain-{n}.toml"));
+        std::fs::write(&scene, text).unwrap();
+        wgtrace(&scene, &["--spp", "1"], &dir.join("tri.exr"));
+        let t: Vec<f64> = (0..ROUNDS)
+            .map(|_| wgtrace(&scene, &["--spp", "16"], &dir.join("tri.exr")).render)
+            .collect();
+        pts.push((n, median(&t)));
+    }
+    let cells: Vec<String> = pts.iter().map(|(n, t)| format!("{n}: {t:.2} s")).collect();
+    let _ = writeln!(
+        md,
+        "## Render time against triangles\n\nThe heightfield of `bench/heightfield.toml` \
+         (256 x 144, 16 spp, under its sky) at four sizes, median of {ROUNDS}: {}. \
+         **1,000,000 triangles take {:.2}x the time of 1,000.**\n",
+        cells.join(", "),
+        pts[3].1 / pts[0].1
+    );
+}
+
+/// GPU bytes per triangle and peak host memory of the 1,000,000-triangle heightfield.
+fn mesh_memory(md: &mut String, dir: &Path) {
+    heightfield_obj(1_000_000);
+    let path = root().join("bench/heightfield.toml");
+    let scene = wgtrace::load_scene(&path, &Default::default()).expect("bench scene");
+    let tris = scene
+        .primitives
+        .iter()
+        .filter(|p| p.tag == wgtrace::scene::records::PRIM_TRIANGLE)
+        .count();
+    let bytes = [Slot::Primitives, Slot::Bvh, Slot::ShapeData]
+        .iter()
+        .map(|s| s.bytes(&scene).len())
+        .sum::<usize>();
+    let peak: Vec<f64> = (0..ROUNDS)
+        .filter_map(|_| wgtrace(&path, &["--spp", "1"], &dir.join("mem1m.exr")).peak_mib)
+        .collect();
+    let _ = writeln!(
+        md,
+        "## Memory of a large mesh\n\n`bench/heightfield.toml` ({tris} triangles): the \
+         primitives, BVH nodes and vertex attributes the GPU holds take **{:.1} bytes per \
+         triangle** ({:.1} MiB); the whole process peaks at {} MiB of host memory (GNU \
+         time; lavapipe's GPU memory is host memory too).\n",
+        bytes as f64 / tris as f64,
+        bytes as f64 / (1u64 << 20) as f64,
+        if peak.is_empty() {
+            "(not measured: no /usr/bin/time)".to_string()
+        } else {
+            spread(&peak, 0)
+        }
+    );
 }
 
 fn spread_e(v: &[f64]) -> String {
@@ -499,6 +735,38 @@ fn optimizations(md: &mut String, dir: &Path, scene: &Path) {
             spread_e(&cost[i])
         );
     }
+    // the optimizations for meshes, on the scan
+    let neft = root().join("bench/nefertiti.toml");
+    let (mut tex, mut sto) = (Vec::new(), Vec::new());
+    for round in 0..ROUNDS {
+        let mut a = || tex.push(wgtrace(&neft, &["--spp", "16"], &dir.join("n.exr")).msps);
+        let mut b = || {
+            sto.push(
+                wgtrace(
+                    &neft,
+                    &["--spp", "16", "--tune", "no-texture-records"],
+                    &dir.join("n.exr"),
+                )
+                .msps,
+            )
+        };
+        if round % 2 == 0 {
+            a();
+            b();
+        } else {
+            b();
+            a();
+        }
+    }
+    let _ = writeln!(
+        md,
+        "\nOn `bench/nefertiti.toml` (16 spp), the primitives and BVH nodes in read-only \
+         storage textures against storage buffers (`--tune no-texture-records`): {} against \
+         {} Msamples/s (**{:.2}x**).\n",
+        spread(&tex, 3),
+        spread(&sto, 3),
+        median(&tex) / median(&sto)
+    );
     let _ = writeln!(
         md,
         "\nMeasured by hand, not by this command: the 8 x 8 workgroup against 4 x 4 and \
@@ -514,7 +782,28 @@ fn optimizations(md: &mut String, dir: &Path, scene: &Path) {
          sums instead of a binary search. `bench/jit-loop-size.sh` counts the instructions of \
          the bounce loop in lavapipe's JIT code, a measure that does not drift with the \
          machine's load: 5325 before, 4540 after; alternating renders of the Cornell box at \
-         48 spp took 0.82 s before and 0.67 s after (median of 5).\n"
+         48 spp took 0.82 s before and 0.67 s after (median of 5).\n\n\
+         For meshes (issue 21), measured by hand on `bench/nefertiti.toml` at 16 spp unless \
+         said otherwise, single runs on a shared machine (about 15% noise): a perf profile \
+         (cpu-clock samples mapped onto lavapipe's JIT code) put 68% of the time in record \
+         fetches, most of it waiting on memory. Kept: records in read-only storage textures \
+         (0.083 to 0.199 Msamples/s; sampled textures, whose fetch also computes mip \
+         offsets per lane, gave only 0.095); the two children of a node side by side \
+         (`scene::bvh::pair_layout`: one cache line per step, the same visits; no change \
+         within noise alone, kept for the fewer lines); an any-hit search for shadow rays \
+         (0.199 to 0.225); a scene of up to 64 untransformed primitives tested as a list \
+         written into the shader (`bench/cornell-triangles.toml`, 36 triangles: 0.35 to \
+         1.89; an 80-triangle icosphere in the box 0.37 to 0.92; 320 triangles 0.37 to \
+         0.14, so 64 is the limit). Tried and not kept: the subgroup walking the BVH \
+         together (a node entered when any lane's ray enters it, so every fetch is the \
+         same for all lanes: 0.18 to 0.14, and camera rays alone 1.94 to 1.63 \
+         Msamples/s); leaves of up to 8 primitives and a traversal cost of 2 in the SAH \
+         (no change within noise). A traversal stack of 8 entries instead of 32 was 25% \
+         faster (wrong for deep trees, but it shows what the per-lane stack arrays cost: a \
+         stackless walk would win that). Per ray the BVH visits about 16 nodes and tests \
+         2.4 triangles (camera and diffuse rays alike), so the rest of the gap is the cost \
+         of each visit on llvmpipe: a fetch is a load per lane, and the 8 lanes wait for \
+         the slowest.\n"
     );
 }
 
@@ -524,7 +813,7 @@ fn scaling(md: &mut String, dir: &Path, scene: &Path) {
         "## How time scales\n\nwgtrace on lavapipe, `bench/cornell.toml` with one setting \
          changed at a time from 256 x 256, 4 spp, max depth 8; render seconds as wgtrace \
          reports them (median of {ROUNDS}). For triangles, the first sphere is replaced by \
-         an icosphere mesh (20 x 4^k triangles; past 16 primitives the BVH is walked).\n"
+         an icosphere mesh (20 x 4^k triangles; past 64 primitives the BVH is walked).\n"
     );
     let base = ["--width", "256", "--height", "256", "--spp", "4"];
     let time = |args: &[String], scene: &Path| -> f64 {

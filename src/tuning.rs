@@ -11,7 +11,7 @@ use crate::scene::flatten::{Acceleration, Build};
 /// on every such scene in `scenes/` (all SIMD lanes walk it together, where the BVH walk
 /// diverges); transformed primitives cost enough per test that the BVH won there
 /// (transforms.toml, 10 primitives: 0.78 against 0.67 Msamples/s).
-pub const LIST_MAX_PRIMITIVES: usize = 16;
+pub const LIST_MAX_PRIMITIVES: usize = 64;
 
 /// The knobs, each on (fastest) unless turned off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -332,7 +332,8 @@ pub fn scene_buffers(
     SceneBuffers { params, records }
 }
 
-/// A texture of `bytes` as 16-byte texels, [`TEXTURE_WIDTH`] to a row, zero-padded.
+/// A texture of `bytes` as 16-byte texels, [`TEXTURE_WIDTH`] to a row; the last row is
+/// zero-padded (the whole rows are written from `bytes` as they are, with no copy).
 fn record_texture(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
@@ -340,27 +341,56 @@ fn record_texture(
     bytes: &[u8],
 ) -> wgpu::TextureView {
     let rows = texture_rows(bytes.len());
-    let mut padded = bytes.to_vec();
-    padded.resize(rows as usize * TEXTURE_WIDTH as usize * 16, 0);
-    let texture = device.create_texture_with_data(
-        queue,
-        &wgpu::TextureDescriptor {
-            label: Some(slot.name()),
-            size: wgpu::Extent3d {
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(slot.name()),
+        size: wgpu::Extent3d {
+            width: TEXTURE_WIDTH,
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Uint,
+        usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let row_bytes = TEXTURE_WIDTH as usize * 16;
+    let whole = bytes.len() / row_bytes;
+    let write = |first_row: usize, data: &[u8], rows: usize| {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: first_row as u32,
+                    z: 0,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            data,
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(row_bytes as u32),
+                rows_per_image: Some(rows as u32),
+            },
+            wgpu::Extent3d {
                 width: TEXTURE_WIDTH,
-                height: rows,
+                height: rows as u32,
                 depth_or_array_layers: 1,
             },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Uint,
-            usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_DST,
-            view_formats: &[],
-        },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        &padded,
-    );
+        )
+    };
+    if whole > 0 {
+        write(0, &bytes[..whole * row_bytes], whole);
+    }
+    let rest = &bytes[whole * row_bytes..];
+    if !rest.is_empty() || bytes.is_empty() {
+        let mut last = rest.to_vec();
+        last.resize(row_bytes, 0);
+        write(whole, &last, 1);
+    }
     texture.create_view(&Default::default())
 }
 

@@ -320,7 +320,7 @@ const BAKED_DEFINES: [(Slot, &str); 3] = [
 
 /// The most primitives a scene's shader holds as constants: a scene without the BVH and
 /// without transformed primitives (`codegen::baked_primitives`).
-pub const BAKED_PRIMITIVES_MAX: usize = 32;
+pub const BAKED_PRIMITIVES_MAX: usize = 64;
 
 /// The most materials, and the most lights, a scene's shader holds as constants: each
 /// look-up is a chain of selects over all of them.
