@@ -247,12 +247,21 @@ fn main() {
         wgtrace(&scene, &a, &dir.join("warm.png"));
     }
 
+    // the report is written after each part, so a part that fails keeps the ones before
+    let path = root().join("docs/performance.md");
+    let save = |md: &String| std::fs::write(&path, md).expect("write docs/performance.md");
     comparison(&mut md, &dir);
+    save(&md);
     cornell_large(&mut md, &dir);
+    save(&md);
     triangle_scaling(&mut md, &dir);
+    save(&md);
     mesh_memory(&mut md, &dir);
+    save(&md);
     optimizations(&mut md, &dir, &scene);
+    save(&md);
     scaling(&mut md, &dir, &scene);
+    save(&md);
     memory(&mut md, &dir, &scene);
     let _ = writeln!(
         md,
@@ -260,8 +269,7 @@ fn main() {
          false` for this task, so no GPU was lent. `wgtrace render bench/cornell.toml` on a \
          machine with one prints its samples per second."
     );
-    let path = root().join("docs/performance.md");
-    std::fs::write(&path, md).expect("write docs/performance.md");
+    save(&md);
     println!("wrote {}", path.display());
 }
 
@@ -614,9 +622,18 @@ fn triangle_scaling(md: &mut String, dir: &Path) {
     let mut pts = Vec::new();
     for n in [1_000u64, 10_000, 100_000, 1_000_000] {
         let obj = heightfield_obj(n);
-        let text = src.replace(
-            "path = \"generated/terrain-1m.obj\"",
-            &format!("path = \"{}\"", obj.display()),
+        let sky = root().join("scenes/textures/sky.hdr");
+        let text = src
+            .replace(
+                "path = \"generated/terrain-1m.obj\"",
+                &format!("path = \"{}\"", obj.display()),
+            )
+            .replace(
+                "path = \"../scenes/textures/sky.hdr\"",
+                &format!("path = \"{}\"", sky.display()),
+            );
+        assert!(
+            text.contains(&obj.display().to_string()) && text.contains(&sky.display().to_string())
         );
         let scene = dir.join(format!("terrain-{n}.toml"));
         std::fs::write(&scene, text).unwrap();

@@ -7,10 +7,14 @@
 use crate::scene::flatten::{Acceleration, Build};
 
 /// Scenes of at most this many bounded primitives, none of them transformed, are tested
-/// as a plain list rather than through a BVH. On lavapipe the loop was 1.3x to 2.1x faster
-/// on every such scene in `scenes/` (all SIMD lanes walk it together, where the BVH walk
-/// diverges); transformed primitives cost enough per test that the BVH won there
-/// (transforms.toml, 10 primitives: 0.78 against 0.67 Msamples/s).
+/// as a plain list rather than through a BVH (and the GPU plan writes such a list into
+/// the shader, `gpu::plan::BAKED_PRIMITIVES_MAX`). On lavapipe the loop was 1.3x to 2.1x
+/// faster on every such scene in `scenes/` (all SIMD lanes walk it together, where the
+/// BVH walk diverges), and written into the shader it won up to about 100 triangles (the
+/// 36 of bench/cornell-triangles.toml: 1.89 against 0.35 Msamples/s; an 80-triangle mesh
+/// in that box 0.92 against 0.37; 320 triangles 0.14 against 0.37); transformed
+/// primitives cost enough per test that the BVH won there (transforms.toml, 10
+/// primitives: 0.78 against 0.67 Msamples/s).
 pub const LIST_MAX_PRIMITIVES: usize = 64;
 
 /// The knobs, each on (fastest) unless turned off.
