@@ -480,6 +480,7 @@ fn features(path: &Path) -> anyhow::Result<()> {
     };
     // the record arrays the shader binds as uniform buffers (not those written into it)
     println!("uniform records: {}", placed(Placement::Uniform));
+    println!("texture records: {}", placed(Placement::Texture));
     println!(
         "records written into the shader: {}",
         placed(Placement::Shader)
