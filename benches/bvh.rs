@@ -125,7 +125,7 @@ fn main() {
         let start = Instant::now();
         let tree = bvh::build(&boxes);
         let build = start.elapsed().as_secs_f64();
-        assert_eq!(tree.nodes.len(), with.bvh.len());
+        assert_eq!(tree.nodes.len(), with.bvh_node_count());
         let mut rates = [None; 4];
         for (k, scene) in [&with, &without].into_iter().enumerate() {
             match Engine::gpu(scene, 0) {
@@ -142,7 +142,7 @@ fn main() {
             triangles: with.primitives.len(),
             load: load_time,
             build,
-            nodes: with.bvh.len(),
+            nodes: with.bvh_node_count(),
             depth: with.bvh_depth,
             rates,
         };

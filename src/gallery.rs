@@ -5,10 +5,9 @@
 use std::path::Path;
 
 use crate::engine::BackendChoice;
-use crate::image_io::write_image;
 use crate::scene::format::SamplerKind;
 use crate::scene::load::Overrides;
-use crate::session::{load_scene, Session, SessionError, SessionOptions, StopRule};
+use crate::session::{load_scene, Output, Session, SessionError, SessionOptions, StopRule};
 
 /// Samples per pixel of a gallery image unless its entry says otherwise.
 pub const GALLERY_SPP: u32 = 256;
@@ -226,15 +225,18 @@ pub fn render(
     let mut warm = scene.clone();
     warm.spp = 1;
     Session::open(warm, opts.clone())?.run(&StopRule::default(), |_| {})?;
+    let output = Output {
+        image: out.join(format!("{}.png", entry.name)),
+        error_map: None,
+        preview_every: None,
+    };
+    let opts = SessionOptions {
+        output: Some(output),
+        ..opts
+    };
     let mut session = Session::open(scene.clone(), opts)?;
     let done = session.run(&StopRule::default(), |_| {})?;
     let acc = &done.accumulation;
-    write_image(
-        &out.join(format!("{}.png", entry.name)),
-        scene.width,
-        scene.height,
-        &acc.to_rgb(),
-    )?;
     Ok(Rendered {
         entry: *entry,
         width: scene.width,

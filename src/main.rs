@@ -210,9 +210,8 @@ struct RenderArgs {
     #[arg(long, value_name = "PATH")]
     error_map: Option<PathBuf>,
     /// Knobs of how the render runs, for benchmarks and comparisons: a comma-separated
-    /// list of no-bvh, bvh, no-specialize, no-uniform-records, no-baked-records,
-    /// no-sample-groups, no-russian-roulette (each described by `wgtrace render --help`).
-    /// The image is the same up to noise; the defaults are the fastest.
+    /// list, each knob named and described by `wgtrace render --help`. The image is the
+    /// same up to noise; the defaults are the fastest.
     #[arg(long, value_name = "KNOBS", value_parser = Tuning::parse, long_help = tune_help())]
     tune: Option<Tuning>,
     /// Keep the render's state in this checkpoint file (written whole: temporary file,
@@ -617,7 +616,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             "scene: {} primitives ({} unbounded), {} BVH nodes of depth {}, {:.2} s to load",
             scene.primitives.len(),
             scene.num_unbounded,
-            scene.bvh.len(),
+            scene.bvh_node_count(),
             scene.bvh_depth,
             loading.elapsed().as_secs_f64()
         );

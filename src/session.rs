@@ -442,11 +442,6 @@ impl Session {
         self.range.clone()
     }
 
-    /// The sums so far.
-    pub fn accumulation(&mut self) -> Result<Accumulation, SessionError> {
-        Ok(self.engine.accumulation()?)
-    }
-
     /// Renders from the next sample to the end of the range (or `rule.until`), calling
     /// `on_progress` after each batch, and ends as the rule says; then reads the sums back
     /// once, and writes the image, the error map and the checkpoint the options ask for.

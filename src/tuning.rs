@@ -103,8 +103,17 @@ impl Tuning {
         let mut t = Tuning::default();
         for knob in list.split(',').map(str::trim).filter(|k| !k.is_empty()) {
             match knob {
-                "no-bvh" => t.acceleration = Acceleration::List,
-                "bvh" => t.acceleration = Acceleration::Bvh,
+                "no-bvh" | "bvh" => {
+                    let a = if knob == "bvh" {
+                        Acceleration::Bvh
+                    } else {
+                        Acceleration::List
+                    };
+                    if t.acceleration != Tuning::default().acceleration && t.acceleration != a {
+                        return Err("\"bvh\" and \"no-bvh\" contradict each other".into());
+                    }
+                    t.acceleration = a;
+                }
                 "no-specialize" => t.specialize = false,
                 "no-uniform-records" => t.uniform_records = false,
                 "no-baked-records" => t.baked_records = false,
@@ -119,11 +128,6 @@ impl Tuning {
                     ));
                 }
             }
-        }
-        if list.split(',').any(|k| k.trim() == "bvh")
-            && list.split(',').any(|k| k.trim() == "no-bvh")
-        {
-            return Err("\"bvh\" and \"no-bvh\" contradict each other".into());
         }
         Ok(t)
     }

@@ -270,13 +270,13 @@ fn intersect_local(prim: Primitive, tag: u32, ray: Ray, t_max: f32) -> vec3<f32>
 // the direction normalized (the sphere test needs unit length); t is mapped back by the
 // direction's length.
 fn intersect_primitive(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
-    return intersect_primitive_as(i, primitive_record(i).tag, ray, t_max);
+    let prim = primitive_record(i);
+    return intersect_record(prim, prim.tag, ray, t_max);
 }
 
-// intersect_primitive for a primitive whose type the caller knows: a literal `tag` lets
-// the compiler drop the other types' cases (the per-type loops of intersect_scene).
-fn intersect_primitive_as(i: u32, tag: u32, ray: Ray, t_max: f32) -> vec3<f32> {
-    let prim = primitive_record(i);
+// intersect_primitive for a record already fetched, of type `tag`: a literal lets the
+// compiler drop the other types' cases (the per-type loops of intersect_scene).
+fn intersect_record(prim: Primitive, tag: u32, ray: Ray, t_max: f32) -> vec3<f32> {
 #ifndef HAS_TRANSFORMS
     return intersect_local(prim, tag, ray, t_max);
 #else
@@ -305,11 +305,6 @@ fn closer_hit(best: Candidate, i: u32, h: vec3<f32>) -> Candidate {
 // Primitive i tested against the closest hit so far; the closer of the two.
 fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
     return closer_hit(best, i, intersect_primitive(i, ray, best.t));
-}
-
-// closer for a primitive of a known type (see intersect_primitive_as).
-fn closer_as(best: Candidate, i: u32, tag: u32, ray: Ray) -> Candidate {
-    return closer_hit(best, i, intersect_primitive_as(i, tag, ray, best.t));
 }
 
 // Entry distance of the ray into a BVH node's box (clamped to 0), or FAR when the box is
@@ -351,31 +346,51 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
         // Without the BVH the bounded primitives are sorted by type (scene::flatten), and
         // each type present gets a loop whose body holds only its own test: llvmpipe runs
         // every case of a switch under a mask. The loops visit the indices in order, as
-        // the CPU's single loop does.
+        // the CPU's single loop does. Each record is fetched once, for its tag and its test.
         var i = params.num_unbounded;
 #ifdef HAS_SPHERE
-        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_SPHERE; i++) {
-            best = closer_as(best, i, PRIM_SPHERE, ray);
+        for (; i < params.num_primitives; i++) {
+            let prim = primitive_record(i);
+            if (prim.tag != PRIM_SPHERE) {
+                break;
+            }
+            best = closer_hit(best, i, intersect_record(prim, PRIM_SPHERE, ray, best.t));
         }
 #endif
 #ifdef HAS_TRIANGLE
-        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_TRIANGLE; i++) {
-            best = closer_as(best, i, PRIM_TRIANGLE, ray);
+        for (; i < params.num_primitives; i++) {
+            let prim = primitive_record(i);
+            if (prim.tag != PRIM_TRIANGLE) {
+                break;
+            }
+            best = closer_hit(best, i, intersect_record(prim, PRIM_TRIANGLE, ray, best.t));
         }
 #endif
 #ifdef HAS_BOX
-        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_BOX; i++) {
-            best = closer_as(best, i, PRIM_BOX, ray);
+        for (; i < params.num_primitives; i++) {
+            let prim = primitive_record(i);
+            if (prim.tag != PRIM_BOX) {
+                break;
+            }
+            best = closer_hit(best, i, intersect_record(prim, PRIM_BOX, ray, best.t));
         }
 #endif
 #ifdef HAS_CYLINDER
-        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_CYLINDER; i++) {
-            best = closer_as(best, i, PRIM_CYLINDER, ray);
+        for (; i < params.num_primitives; i++) {
+            let prim = primitive_record(i);
+            if (prim.tag != PRIM_CYLINDER) {
+                break;
+            }
+            best = closer_hit(best, i, intersect_record(prim, PRIM_CYLINDER, ray, best.t));
         }
 #endif
 #ifdef HAS_DISK
-        for (; i < params.num_primitives && primitive_record(i).tag == PRIM_DISK; i++) {
-            best = closer_as(best, i, PRIM_DISK, ray);
+        for (; i < params.num_primitives; i++) {
+            let prim = primitive_record(i);
+            if (prim.tag != PRIM_DISK) {
+                break;
+            }
+            best = closer_hit(best, i, intersect_record(prim, PRIM_DISK, ray, best.t));
         }
 #endif
         return best;

@@ -24,8 +24,8 @@ struct Primitive {
     c: vec4<f32>,
 }
 
-// Flattened BVH node, depth-first. Interior (count = 0): children are the next node and
-// nodes[offset]. Leaf: primitives offset .. offset + count.
+// Flattened BVH node (scene::bvh::pair_layout). Interior (count = 0): the children are
+// nodes[offset] and nodes[offset + 1]. Leaf: primitives offset .. offset + count.
 struct BvhNode {
     lo: vec3<f32>,
     offset: u32,

@@ -7,7 +7,7 @@ use super::bindings::Bindings;
 use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
-    Primitive, BVH_STACK_SIZE, PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES,
+    BvhNode, Primitive, BVH_STACK_SIZE, PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES,
     PRIM_FLAG_CAPS, PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TRANSFORM, PRIM_PLANE, PRIM_SPHERE,
     PRIM_TRIANGLE,
 };
@@ -274,14 +274,14 @@ pub fn intersect_local(prim: &Primitive, tag: u32, ray: &Ray, t_max: f32) -> Vec
 
 /// Primitive i in world space; transformed primitives in object space with a unit direction.
 pub fn intersect_primitive(b: &Bindings, i: u32, ray: &Ray, t_max: f32) -> Vec3 {
-    intersect_primitive_as(b, i, b.primitives[i as usize].tag, ray, t_max)
+    let prim = &b.primitives[i as usize];
+    intersect_record(b, prim, prim.tag, ray, t_max)
 }
 
-/// intersect_primitive for a primitive whose type the caller knows (the shader's per-type
+/// intersect_primitive for a record already fetched, of type `tag` (the shader's per-type
 /// loops pass a literal; the CPU's single loop visits the same indices in the same order
 /// through intersect_primitive).
-pub fn intersect_primitive_as(b: &Bindings, i: u32, tag: u32, ray: &Ray, t_max: f32) -> Vec3 {
-    let prim = &b.primitives[i as usize];
+pub fn intersect_record(b: &Bindings, prim: &Primitive, tag: u32, ray: &Ray, t_max: f32) -> Vec3 {
     if prim.flags & PRIM_FLAG_TRANSFORM == 0 {
         return intersect_local(prim, tag, ray, t_max);
     }
@@ -329,11 +329,62 @@ pub fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f3
     FAR
 }
 
-/// Whether anything lies along the ray before t_max (a shadow ray). The shader's twin
-/// searches a small scene's primitives for any hit rather than the closest; the answer is
-/// the same.
+/// Whether anything lies along the ray before t_max (a shadow ray): the same answer as
+/// `intersect_scene(b, ray, t_max).prim != NO_HIT`. With the BVH it is an any-hit search
+/// (occluded_bvh); the shader's twin also searches a small scene's primitives written
+/// into it for any hit.
 pub fn occluded(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
+    if b.params.use_bvh != 0 {
+        return occluded_bvh(b, ray, t_max);
+    }
     intersect_scene(b, ray, t_max).prim != NO_HIT
+}
+
+/// The any-hit search of occluded over the planes and the BVH: stops at the first
+/// primitive in range; boxes are culled against t_max only.
+pub fn occluded_bvh(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
+    let p = &b.params;
+    if (0..p.num_unbounded).any(|i| intersect_primitive(b, i, ray, t_max).x < t_max) {
+        return true;
+    }
+    if p.num_primitives == p.num_unbounded {
+        return false;
+    }
+    let nodes = b.bvh;
+    let inv_dir = safe_inverse(ray.dir);
+    let enters =
+        |n: &BvhNode| intersect_aabb(n.lo.into(), n.hi.into(), ray.origin, inv_dir, t_max) < FAR;
+    let mut stack_node = [0u32; BVH_STACK_SIZE as usize];
+    let mut sp = 0usize;
+    let mut n = nodes[0];
+    let mut hit = enters(&n);
+    loop {
+        if hit {
+            if n.count == 0 {
+                let (c0, c1) = (nodes[n.offset as usize], nodes[n.offset as usize + 1]);
+                let (h0, h1) = (enters(&c0), enters(&c1));
+                if h0 && h1 {
+                    stack_node[sp] = n.offset + 1;
+                    sp += 1;
+                }
+                if h0 || h1 {
+                    n = if h0 { c0 } else { c1 };
+                    continue;
+                }
+            } else if (0..n.count)
+                .any(|k| intersect_primitive(b, n.offset + k, ray, t_max).x < t_max)
+            {
+                return true;
+            }
+        }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        n = nodes[stack_node[sp] as usize];
+        hit = true;
+    }
+    false
 }
 
 /// Closest hit along the ray before t_max: planes, then the BVH in order (or every

@@ -172,11 +172,11 @@ pub fn wgsl_accessors(placements: &Placements) -> String {
         let (ty, _) = slot.element();
         out += &match placements.get(slot) {
             Placement::Shader => continue,
+            // the plan places these two only in textures (gpu::plan::placement)
             Placement::Texture => match slot {
                 Slot::Primitives => texture_accessor::<Primitive>(name, slot.name(), TEXTURE_WIDTH),
-                Slot::Materials => texture_accessor::<Material>(name, slot.name(), TEXTURE_WIDTH),
-                Slot::Emitters => texture_accessor::<Emitter>(name, slot.name(), TEXTURE_WIDTH),
-                _ => texture_accessor::<BvhNode>(name, slot.name(), TEXTURE_WIDTH),
+                Slot::Bvh => texture_accessor::<BvhNode>(name, slot.name(), TEXTURE_WIDTH),
+                _ => unreachable!("{slot:?} is never placed in a texture"),
             },
             _ => format!(
                 "fn {name}(i: u32) -> {ty} {{\n    return {}[i];\n}}\n",

@@ -297,25 +297,11 @@ impl GpuContext {
             return Ok(p.clone());
         }
         // compiled outside the lock: two renders that race compile twice, and keep one
-        let p = Arc::new(self.compile_trace_pipeline(spec, true)?);
+        let cache = self.disk_cache.as_ref().map(|d| &d.cache);
+        let p = Arc::new(compile_trace_pipeline(&self.device, spec, cache)?);
         let p = lock().entry(spec.clone()).or_insert(p).clone();
         self.save_disk_cache();
         Ok(p)
-    }
-
-    /// Compiles the trace pipeline for `spec` afresh, without this process's pipelines,
-    /// and without the pipeline cache on disk unless `disk_cache` (benchmarks time this).
-    pub fn compile_trace_pipeline(
-        &self,
-        spec: &ShaderSpec,
-        disk_cache: bool,
-    ) -> Result<TracePipeline, GpuError> {
-        let cache = self
-            .disk_cache
-            .as_ref()
-            .filter(|_| disk_cache)
-            .map(|d| &d.cache);
-        compile_trace_pipeline(&self.device, spec, cache)
     }
 
     /// Maps a MAP_READ buffer whose copy has been submitted, waits, and returns its

@@ -156,14 +156,6 @@ impl FeatureSet {
     pub fn iter(self) -> impl Iterator<Item = Feature> {
         Feature::ALL.into_iter().filter(move |&f| self.contains(f))
     }
-
-    pub fn len(self) -> usize {
-        self.0.count_ones() as usize
-    }
-
-    pub fn is_empty(self) -> bool {
-        self.0 == 0
-    }
 }
 
 impl FromIterator<Feature> for FeatureSet {
@@ -356,10 +348,12 @@ impl GpuPlan {
         } else {
             ShaderSpec::full()
         };
+        // the full shader reads every array from a storage buffer
         if tuning.specialize {
             for slot in Slot::RECORDS {
-                let placement = placement(slot, scene, fit, tuning);
-                shader.placements.set(slot, placement);
+                shader
+                    .placements
+                    .set(slot, placement(slot, scene, fit, tuning));
             }
         }
         let shader_slot = |s| shader.placements.get(s) == Placement::Shader;

@@ -149,22 +149,10 @@ impl GpuRenderer {
     /// pipeline of its plan (compiled now, or already by an earlier render in this
     /// process).
     pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene, tuning: &Tuning) -> Result<Self, GpuError> {
+        ctx.check()?;
         let plan = GpuPlan::new(scene, &ctx.fit(), tuning);
         plan.check(scene)?;
         let pipeline = ctx.trace_pipeline(&plan.shader)?;
-        Self::with_pipeline(ctx, scene, plan, pipeline)
-    }
-
-    /// Uploads `scene` to render under `plan` with a given trace pipeline (the plan's, or
-    /// one of a superset of its features; benchmarks time the compilation apart).
-    pub fn with_pipeline(
-        ctx: Arc<GpuContext>,
-        scene: &FlatScene,
-        plan: GpuPlan,
-        pipeline: Arc<TracePipeline>,
-    ) -> Result<Self, GpuError> {
-        ctx.check()?;
-        plan.check(scene)?;
         let device = &ctx.device;
         let tiles = tiles_within(
             scene.width,
@@ -219,11 +207,6 @@ impl GpuRenderer {
                 count: 0,
             },
         })
-    }
-
-    /// The plan this renderer follows.
-    pub fn plan(&self) -> &GpuPlan {
-        &self.plan
     }
 
     /// Image width and height.

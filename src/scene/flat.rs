@@ -50,7 +50,8 @@ pub struct FlatScene {
     pub emitters: Vec<Emitter>,
     /// Material names, in record order.
     pub material_names: Vec<String>,
-    /// BVH over primitives `num_unbounded..`, depth-first; empty when `use_bvh` is false.
+    /// BVH over primitives `num_unbounded..` in `bvh::pair_layout` (the root at entry 0,
+    /// entry 1 unused, the children of a node side by side); empty when `use_bvh` is false.
     pub bvh: Vec<BvhNode>,
     /// Depth of the deepest BVH leaf (the root is 0).
     pub bvh_depth: u32,
@@ -91,6 +92,11 @@ pub struct Tile {
 }
 
 impl FlatScene {
+    /// The nodes of the BVH (its layout leaves one entry unused).
+    pub fn bvh_node_count(&self) -> usize {
+        self.bvh.len().saturating_sub(1)
+    }
+
     /// The uniform block for one dispatch: pass `sample_index` over `tile`.
     pub fn params(&self, sample_index: u32, tile: Tile) -> Params {
         let c = &self.camera;

@@ -345,9 +345,10 @@ pub struct Params {
     pub sample_count: u32,
 }
 
-/// One node of the flattened BVH, in depth-first order. Interior (`count` = 0): the first
-/// child is the next node, the second is `nodes[offset]`. Leaf: primitives
-/// `offset..offset + count`. The vec3/u32 pairs pack into 16 bytes on both sides.
+/// One node of a BVH. Interior (`count` = 0): as `bvh::build` makes them, depth-first, the
+/// first child is the next node and the second `nodes[offset]`; as the flat scene holds
+/// them (`bvh::pair_layout`), the children are `nodes[offset]` and `nodes[offset + 1]`.
+/// Leaf: primitives `offset..offset + count`. The vec3/u32 pairs pack into 16 bytes on both sides.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
