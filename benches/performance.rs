@@ -239,14 +239,6 @@ fn main() {
         adapter_line()
     );
 
-    // Warm Mesa's shader cache for every variant measured below, so that no row pays a
-    // first compile the others do not.
-    for args in variants() {
-        let mut a: Vec<&str> = vec!["--spp", "1", "--width", "16", "--height", "16"];
-        a.extend(args.1.iter());
-        wgtrace(&scene, &a, &dir.join("warm.png"));
-    }
-
     // the report is written after each part, so a part that fails keeps the ones before
     let path = root().join("docs/performance.md");
     let save = |md: &String| std::fs::write(&path, md).expect("write docs/performance.md");
@@ -258,7 +250,7 @@ fn main() {
     save(&md);
     mesh_memory(&mut md, &dir);
     save(&md);
-    optimizations(&mut md, &dir, &scene);
+    optimizations(&mut md, &dir);
     save(&md);
     scaling(&mut md, &dir, &scene);
     save(&md);
@@ -285,40 +277,6 @@ fn adapter_line() -> String {
                 .map(|l| l.trim_start_matches("[0] ").to_string())
         })
         .unwrap_or_else(|| "an unknown adapter".into())
-}
-
-/// The optimization toggles, cumulative: (label, `--tune` knobs turned off).
-fn variants() -> Vec<(&'static str, Vec<&'static str>)> {
-    let tuned = |knobs: &'static str| -> Vec<&'static str> {
-        if knobs.is_empty() {
-            Vec::new()
-        } else {
-            vec!["--tune", knobs]
-        }
-    };
-    vec![
-        (
-            "before: storage buffers, BVH, no Russian roulette",
-            tuned("no-uniform-records,no-texture-records,bvh,no-russian-roulette,no-baked-records,no-sample-groups"),
-        ),
-        (
-            "+ uniform-buffer records",
-            tuned("bvh,no-russian-roulette,no-baked-records,no-sample-groups"),
-        ),
-        (
-            "+ plain loop for small scenes",
-            tuned("no-russian-roulette,no-baked-records,no-sample-groups"),
-        ),
-        (
-            "+ Russian roulette",
-            tuned("no-baked-records,no-sample-groups"),
-        ),
-        (
-            "+ records written into the shader",
-            tuned("no-sample-groups"),
-        ),
-        ("+ sample groups (all kept)", tuned("")),
-    ]
 }
 
 /// One scene of the suite: its wgtrace file and Mitsuba twin (relative to the repository
@@ -429,20 +387,30 @@ struct Measured {
     floor: f64,
 }
 
+/// wgtrace's reference render of `case` (`ref_spp`, seed 1000) in `dir`, rendered the
+/// first time it is asked for.
+fn wgtrace_reference(case: &Case, dir: &Path) -> PathBuf {
+    let path = dir.join(format!("{}-ref-w.exr", case.name));
+    if !path.exists() {
+        let spp = case.ref_spp.to_string();
+        wgtrace(
+            &root().join(case.toml),
+            &["--spp", &spp, "--seed", "1000"],
+            &path,
+        );
+    }
+    path
+}
+
 /// Renders `case` with both renderers: a shared reference (the mean of each renderer's
 /// `ref_spp` render), then ROUNDS rounds of one render each, in alternating order.
 fn measure(case: &Case, dir: &Path) -> Result<Measured, String> {
     let scene = root().join(case.toml);
     let (w, h) = (case.width, case.height);
-    let wref = dir.join(format!("{}-ref-w.exr", case.name));
     let mref = dir.join(format!("{}-ref-m.exr", case.name));
     mitsuba(case.xml, w, case.ref_spp, 1000, &mref, 1)?;
     let spp = |n: u32| n.to_string();
-    wgtrace(
-        &scene,
-        &["--spp", &spp(case.ref_spp), "--seed", "1000"],
-        &wref,
-    );
+    let wref = wgtrace_reference(case, dir);
     let (wr, mr) = (rgb(&wref), rgb(&mref));
     let reference: Vec<f32> = wr.iter().zip(&mr).map(|(a, b)| 0.5 * (a + b)).collect();
     let mut m = Measured {
@@ -687,131 +655,144 @@ fn mesh_memory(md: &mut String, dir: &Path) {
     );
 }
 
-fn spread_e(v: &[f64]) -> String {
-    let (lo, hi) = range(v);
-    format!("{:.3e} ({lo:.2e} to {hi:.2e})", median(v))
-}
+/// The optimizations kept: what each is, and the `--tune` knob that turns it off.
+const KNOBS: [(&str, &str); 7] = [
+    ("shader assembled for the scene's features", "no-specialize"),
+    (
+        "records of at most 64 KiB in uniform buffers",
+        "no-uniform-records",
+    ),
+    (
+        "primitives and BVH nodes in read-only storage textures",
+        "no-texture-records",
+    ),
+    ("plain loop for at most 64 primitives", "bvh"),
+    (
+        "a small scene's records written into the shader",
+        "no-baked-records",
+    ),
+    ("sample groups", "no-sample-groups"),
+    ("Russian roulette", "no-russian-roulette"),
+];
 
-fn optimizations(md: &mut String, dir: &Path, scene: &Path) {
-    let _ = writeln!(
-        md,
-        "## What each optimization gave\n\nCornell (`bench/cornell.toml`) at 256 x 256, 16 \
-         spp, on lavapipe, each optimization added to the ones above it (the `--tune` \
-         knobs turn each back off). Russian roulette adds noise, so its row also gives relMSE x \
-         seconds against a 256-spp render without it (lower is better).\n"
-    );
-    let reference = dir.join("opt-ref.exr");
-    wgtrace(
-        scene,
-        &[
-            "--spp",
-            "256",
-            "--seed",
-            "77",
-            "--tune",
-            "no-russian-roulette",
-        ],
-        &reference,
-    );
-    let reference = rgb(&reference);
-    let vars = variants();
-    let mut rates = vec![Vec::new(); vars.len()];
-    let mut cost = vec![Vec::new(); vars.len()];
-    for round in 0..ROUNDS {
-        let order: Vec<usize> = if round % 2 == 0 {
-            (0..vars.len()).collect()
-        } else {
-            (0..vars.len()).rev().collect()
-        };
-        for i in order {
-            let out = dir.join(format!("opt{i}.exr"));
-            let seed = round.to_string();
-            let mut args = vec!["--spp", "16", "--seed", &seed];
-            args.extend(vars[i].1.iter());
-            let r = wgtrace(scene, &args, &out);
-            rates[i].push(r.msps);
-            cost[i].push(rel_mse(&rgb(&out), &reference) * r.render);
+/// The ablation of every kept optimization on the whole suite: each scene rendered with
+/// the defaults and with one knob of KNOBS turned off at a time, ROUNDS rounds in
+/// alternating order; per optimization, samples per second and time to equal error (relMSE
+/// x seconds against wgtrace's reference of the suite) with it against without it, per
+/// scene, in geometric mean and at worst.
+fn optimizations(md: &mut String, dir: &Path) {
+    let configs: Vec<Vec<&str>> = std::iter::once(Vec::new())
+        .chain(KNOBS.iter().map(|(_, knob)| vec!["--tune", *knob]))
+        .collect();
+    // per scene, per configuration: the rates and the costs of the rounds
+    let mut speed = Vec::new();
+    let mut efficiency = Vec::new();
+    for case in &SUITE {
+        eprintln!("optimizations: {}", case.name);
+        let scene = root().join(case.toml);
+        let reference = rgb(&wgtrace_reference(case, dir));
+        // the first image of a configuration compiles its shader (llvmpipe compiles at
+        // the first dispatch): warm Mesa's cache so that no row pays it
+        for args in &configs {
+            let mut a = vec!["--spp", "1", "--width", "16", "--height", "16"];
+            a.extend(args);
+            wgtrace(&scene, &a, &dir.join("warm.exr"));
         }
+        let spp = case.spp.min(16).to_string();
+        let mut rates = vec![Vec::new(); configs.len()];
+        let mut cost = vec![Vec::new(); configs.len()];
+        for round in 0..ROUNDS {
+            let mut order: Vec<usize> = (0..configs.len()).collect();
+            if round % 2 == 1 {
+                order.reverse();
+            }
+            for i in order {
+                let out = dir.join(format!("opt{i}.exr"));
+                let seed = round.to_string();
+                let mut args = vec!["--spp", &spp, "--seed", &seed];
+                args.extend(&configs[i]);
+                let r = wgtrace(&scene, &args, &out);
+                rates[i].push(r.msps);
+                cost[i].push(rel_mse(&rgb(&out), &reference) * r.render);
+            }
+        }
+        let (r, c): (Vec<f64>, Vec<f64>) = (0..configs.len())
+            .map(|i| (median(&rates[i]), median(&cost[i])))
+            .unzip();
+        // with the optimization against without it: higher is better for both
+        speed.push((1..configs.len()).map(|i| r[0] / r[i]).collect::<Vec<_>>());
+        efficiency.push((1..configs.len()).map(|i| c[i] / c[0]).collect::<Vec<_>>());
     }
     let _ = writeln!(
         md,
-        "| configuration | flags | Msamples/s | x before | relMSE x s |\n|---|---|---|---|---|"
+        "## What each optimization gave\n\nEvery scene of the suite at its size and at most \
+         16 spp, rendered with the defaults and with one optimization turned off by its \
+         `--tune` knob (median of {ROUNDS} rounds in alternating order, the Mesa shader \
+         cache warmed for each). Each cell is *with / without*, higher is better: samples \
+         per second, and time to equal error (relMSE x seconds against wgtrace's \
+         reference render of the suite, the one of the comparison above), which also \
+         counts the noise Russian roulette adds. An optimization that does not apply to a \
+         scene (the plain loop and written-in records past 64 primitives) measures noise \
+         there, about 1.00.\n"
     );
-    let base = median(&rates[0]);
-    for (i, (label, flags)) in vars.iter().enumerate() {
+    for (title, table) in [
+        ("samples per second", &speed),
+        ("time to equal error", &efficiency),
+    ] {
+        let names: Vec<&str> = SUITE.iter().map(|c| c.name).collect();
         let _ = writeln!(
             md,
-            "| {label} | `{}` | {} | {:.2} | {} |",
-            if flags.is_empty() {
-                "(default)".to_string()
-            } else {
-                flags.join(" ")
-            },
-            spread(&rates[i], 3),
-            median(&rates[i]) / base,
-            spread_e(&cost[i])
+            "| {title}, with / without | knob | `{}` | geometric mean | worst |\n|---|---|{}---|---|",
+            names.join("` | `"),
+            "---|".repeat(names.len())
         );
-    }
-    // the optimizations for meshes, on the scan
-    let neft = root().join("bench/nefertiti.toml");
-    let (mut tex, mut sto) = (Vec::new(), Vec::new());
-    for round in 0..ROUNDS {
-        let mut a = || tex.push(wgtrace(&neft, &["--spp", "16"], &dir.join("n.exr")).msps);
-        let mut b = || {
-            sto.push(
-                wgtrace(
-                    &neft,
-                    &["--spp", "16", "--tune", "no-texture-records"],
-                    &dir.join("n.exr"),
-                )
-                .msps,
-            )
-        };
-        if round % 2 == 0 {
-            a();
-            b();
-        } else {
-            b();
-            a();
+        for (k, (what, knob)) in KNOBS.iter().enumerate() {
+            let per_scene: Vec<f64> = table.iter().map(|s| s[k]).collect();
+            let (worst, at) = per_scene
+                .iter()
+                .zip(&names)
+                .min_by(|a, b| a.0.total_cmp(b.0))
+                .unwrap();
+            let cells: Vec<String> = per_scene.iter().map(|x| format!("{x:.2}")).collect();
+            let _ = writeln!(
+                md,
+                "| {what} | `{knob}` | {} | **{:.2}** | {worst:.2} (`{at}`) |",
+                cells.join(" | "),
+                geomean(&per_scene)
+            );
         }
+        let _ = writeln!(md);
     }
     let _ = writeln!(
         md,
-        "\nOn `bench/nefertiti.toml` (16 spp), the primitives and BVH nodes in read-only \
-         storage textures against storage buffers (`--tune no-texture-records`): {} against \
-         {} Msamples/s (**{:.2}x**).\n",
-        spread(&tex, 3),
-        spread(&sto, 3),
-        median(&tex) / median(&sto)
-    );
-    let _ = writeln!(
-        md,
-        "\nMeasured by hand, not by this command: the 8 x 8 workgroup against 4 x 4 and \
+        "Choices without a knob were decided by hand, each on the one scene named (single \
+         runs or medians of a few on a shared machine, about 15% noise); they are how a \
+         choice was made, not figures of the suite. The 8 x 8 workgroup against 4 x 4 and \
          16 x 16 (0.73, 0.38 and 0.68 Msamples/s on the same render), and the naga bounds \
          checks and loop bounding turned off (`create_shader_module_trusted`, no change: \
          lavapipe checks bounds itself), and lavapipe's `LP_NUM_THREADS` (1: 0.41 to 0.44, \
-         2, the default on 2 cores: 0.78 to 0.90, 4: 0.78 to 0.81 Msamples/s). The per-scene shader specialization has its own \
-         report, [specialization.md](specialization.md).\n\n\
-         Shader code without flags, so measured by hand too: the sphere and triangle tests \
+         2, the default on 2 cores: 0.78 to 0.90, 4: 0.78 to 0.81 Msamples/s), all on the \
+         Cornell box. The per-scene shader specialization has its own report over the \
+         scenes of `scenes/`, [specialization.md](specialization.md).\n\n\
+         Kept in the shader's code, on the Cornell box: the sphere and triangle tests \
          and direct lighting without early returns (llvmpipe runs both sides of every branch \
          under a mask, so a return saves nothing and costs a masked update of every live \
          value), shadow rays searching for any hit, and `choose_light` counting the running \
-         sums instead of a binary search. `bench/jit-loop-size.sh` counts the instructions of \
+         sums instead of a binary search; `bench/jit-loop-size.sh` counts the instructions of \
          the bounce loop in lavapipe's JIT code, a measure that does not drift with the \
          machine's load: 5325 before, 4540 after; alternating renders of the Cornell box at \
          48 spp took 0.82 s before and 0.67 s after (median of 5).\n\n\
-         For meshes (issue 21), measured by hand on `bench/nefertiti.toml` at 16 spp unless \
-         said otherwise, single runs on a shared machine (about 15% noise): a perf profile \
-         (cpu-clock samples mapped onto lavapipe's JIT code) put 68% of the time in record \
-         fetches, most of it waiting on memory. Kept: records in read-only storage textures \
-         (0.083 to 0.199 Msamples/s; sampled textures, whose fetch also computes mip \
-         offsets per lane, gave only 0.095); the two children of a node side by side \
+         For meshes (issue 21), on `bench/nefertiti.toml` at 16 spp unless said otherwise: \
+         a perf profile (cpu-clock samples mapped onto lavapipe's JIT code) put 68% of the \
+         time in record fetches, most of it waiting on memory, which the storage textures \
+         of the tables above address (storage buffers 0.083, storage textures 0.199 and \
+         sampled textures, whose fetch also computes mip offsets per lane, 0.095 \
+         Msamples/s). Kept: the two children of a node side by side \
          (`scene::bvh::pair_layout`: one cache line per step, the same visits; no change \
          within noise alone, kept for the fewer lines); an any-hit search for shadow rays \
-         (0.199 to 0.225); a scene of up to 64 untransformed primitives tested as a list \
-         written into the shader (`bench/cornell-triangles.toml`, 36 triangles: 0.35 to \
-         1.89; an 80-triangle icosphere in the box 0.37 to 0.92; 320 triangles 0.37 to \
-         0.14, so 64 is the limit). Tried and not kept: the subgroup walking the BVH \
+         (0.199 to 0.225 Msamples/s); 64 primitives as the limit of the plain loop (an \
+         80-triangle icosphere in the Cornell box: BVH 0.37, loop 0.92 Msamples/s; 320 \
+         triangles: 0.37 and 0.14). Tried and not kept: the subgroup walking the BVH \
          together (a node entered when any lane's ray enters it, so every fetch is the \
          same for all lanes: 0.18 to 0.14, and camera rays alone 1.94 to 1.63 \
          Msamples/s); leaves of up to 8 primitives and a traversal cost of 2 in the SAH \
