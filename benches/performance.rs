@@ -7,7 +7,7 @@
 //! path length, and memory at 1080p and 4K. Writes `docs/performance.md` and
 //! `docs/performance-scaling.svg`.
 //!
-//! Run: `cargo bench --bench performance` (about 30 minutes on 2 cores). The Mitsuba part
+//! Run: `cargo bench --bench performance` (about 40 minutes on 2 cores). The Mitsuba part
 //! needs `pip install mitsuba` (in the Python `$MITSUBA_PYTHON` names, else `python3`) and
 //! an LLVM of 15 or newer named by `DRJIT_LIBLLVM_PATH` (Debian 12: `apt-get install
 //! libllvm19`); without them it is reported as not run. Every
@@ -801,7 +801,33 @@ fn optimizations(md: &mut String, dir: &Path) {
          stackless walk would win that). Per ray the BVH visits about 16 nodes and tests \
          2.4 triangles (camera and diffuse rays alike), so the rest of the gap is the cost \
          of each visit on llvmpipe: a fetch is a load per lane, and the 8 lanes wait for \
-         the slowest.\n"
+         the slowest.\n\n\
+         Second round on meshes, by hand: Msamples/s at 16 spp, median of 3 renders \
+         alternating with the binary before, and the size of nefertiti's bounce loop in \
+         the JIT code (`bench/jit-loop-size.sh`). llvmpipe runs a loop's body at least once \
+         even when no lane enters it, so what sat behind a branch that is never taken still \
+         cost a pass of its loop. Kept, in order: (1) stack entries that hold the popped \
+         node's offset and count, so a pop fetches nothing (its box was tested by its \
+         parent): nefertiti 0.179 to 0.191; (2) leaves postponed (Aila and Laine 2009's \
+         while-while: a lane that reaches a leaf waits until every lane of its subgroup \
+         has one, then the leaves are tested together, so the leaf loop runs once per \
+         leaf instead of once per node visit): 0.190 to 0.261; (3) the slab test's min \
+         and max as selects (slab distances are never NaN; llvmpipe's min and max handle \
+         NaN with two more instructions): the walk's inner loop 642 to 594 instructions; \
+         (4) leaves of untransformed triangles tested without the tag's switch \
+         (`BOUNDED_TRIANGLES_ONLY`): 0.250 to 0.263; (5) `occluded` without a second, \
+         never-taken closest-hit walk when the shader has no plain loop, and the plane \
+         loops only in shaders with planes: bounce loop 14349 to 9342 instructions, \
+         nefertiti 0.313 to 0.342. All five against the binary before them, one run: \
+         spot 0.262 to 0.348 (1.33x), nefertiti 0.202 to 0.342 (1.69x), heightfield \
+         0.237 to 0.358 (1.51x); the visits are the same, so are the images. Tried and \
+         not kept: leaves of up to 8 and a traversal cost of 2 with the postponed leaves \
+         (0.250 against 0.255, noise). What is left per node visit: 594 instructions, of \
+         which about 170 fetch the child pair (4 texels x 8 lanes, one load each), about \
+         115 push a stack entry (llvmpipe writes a private array lane by lane, reading \
+         back what a masked lane keeps) and about 50 pop one. A wide, quantized BVH (4 \
+         children in 4 texels) would halve both the fetches per child and the visits; it \
+         is the next step.\n"
     );
 }
 

@@ -294,6 +294,17 @@ fn intersect_record(prim: Primitive, tag: u32, ray: Ray, t_max: f32) -> vec3<f32
 #endif
 }
 
+// intersect_primitive for a primitive of the BVH. When all of them are untransformed
+// triangles (BOUNDED_TRIANGLES_ONLY) the tag is not read: the test needs neither the
+// record's first texel nor a switch.
+fn intersect_bounded(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
+#ifdef BOUNDED_TRIANGLES_ONLY
+    return intersect_record(primitive_record(i), PRIM_TRIANGLE, ray, t_max);
+#else
+    return intersect_primitive(i, ray, t_max);
+#endif
+}
+
 // The closer of the closest hit so far and hit h = (t, u, v) of primitive i.
 fn closer_hit(best: Candidate, i: u32, h: vec3<f32>) -> Candidate {
     if (h.x < best.t) {
@@ -313,14 +324,32 @@ fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
 fn intersect_aabb(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
-    let t_min = min(t0, t1);
-    let t_max3 = max(t0, t1);
-    let t_near = max(max(t_min.x, max(t_min.y, t_min.z)), 0.0);
-    let t_far = min(t_max3.x, min(t_max3.y, t_max3.z)) * BOX_WIDEN;
+    // min and max as selects: the slab distances are never NaN (safe_inverse), and
+    // llvmpipe's min and max also handle NaN operands, one more instruction each
+    let near = t0 < t1;
+    let t_min = select(t1, t0, near);
+    let t_max3 = select(t0, t1, near);
+    let t_near = max2(max2(t_min.x, max2(t_min.y, t_min.z)), 0.0);
+    let t_far = min2(t_max3.x, min2(t_max3.y, t_max3.z)) * BOX_WIDEN;
     if (t_near <= t_far && t_near < t_max) {
         return t_near;
     }
     return FAR;
+}
+
+// A node's children or primitives as one word, offset above count: what the traversal
+// stack holds, so that a node popped needs no fetch (its box was tested by its parent).
+fn bvh_link(n: BvhNode) -> u32 {
+    return (n.offset << BVH_COUNT_BITS) | n.count;
+}
+
+// min and max of two numbers that are not NaN (intersect_aabb)
+fn min2(a: f32, b: f32) -> f32 {
+    return select(b, a, a < b);
+}
+
+fn max2(a: f32, b: f32) -> f32 {
+    return select(b, a, a > b);
 }
 
 // BOX_WIDEN (types.wgsl's constants) = 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps)
@@ -338,9 +367,13 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     return intersect_baked(ray, t_max);
 #else
     var best = Candidate(t_max, NO_HIT, 0.0, 0.0);
+#ifdef HAS_PLANE
+    // (the unbounded primitives are planes; without them llvmpipe would still run this
+    // loop's body once, masked off)
     for (var i = 0u; i < params.num_unbounded; i++) {
         best = closer(best, i, ray);
     }
+#endif
 #ifdef HAS_PRIMITIVE_LOOP
     if (params.use_bvh == 0u) {
         // Without the BVH the bounded primitives are sorted by type (scene::flatten), and
@@ -401,49 +434,62 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
         return best;
     }
     let inv_dir = safe_inverse(ray.dir);
-    var stack_node: array<u32, BVH_STACK_SIZE>;
-    var stack_t: array<f32, BVH_STACK_SIZE>;
+    // a stack entry: the node's offset and count (bvh_link), and its entry distance
+    var stack: array<vec2<u32>, BVH_STACK_SIZE>;
     var sp = 0u;
-    var n = bvh_node(0u);
-    var t_node = intersect_aabb(n.lo, n.hi, ray.origin, inv_dir, best.t);
+    let root = bvh_node(0u);
+    var n = bvh_link(root);
+    var t_node = intersect_aabb(root.lo, root.hi, ray.origin, inv_dir, best.t);
+    var live = true;
     loop {
-        if (t_node < best.t) {
-            if (n.count == 0u) {
-                // the two children side by side (scene::bvh::pair_layout): one cache line
-                let c0 = bvh_node(n.offset);
-                let c1 = bvh_node(n.offset + 1u);
-                let t0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, best.t);
-                let t1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, best.t);
-                let first_near = t0 <= t1;
-                let far = select(n.offset, n.offset + 1u, first_near);
-                let t_near = min(t0, t1);
-                let t_far = max(t0, t1);
-                if (t_far < FAR) {
-                    stack_node[sp] = far;
-                    stack_t[sp] = t_far;
-                    sp++;
-                }
-                if (t_near < FAR) {
-                    if (first_near) {
-                        n = c0;
-                    } else {
-                        n = c1;
+        // Interior nodes until a leaf is found (its primitives are tested after the
+        // loop, when every lane of the subgroup has one) or none is left.
+        var leaf = 0u;
+        loop {
+            if (t_node < best.t) {
+                let offset = n >> BVH_COUNT_BITS;
+                if ((n & BVH_COUNT_MASK) == 0u) {
+                    // the two children side by side (scene::bvh::pair_layout): one cache line
+                    let c0 = bvh_node(offset);
+                    let c1 = bvh_node(offset + 1u);
+                    let t0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, best.t);
+                    let t1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, best.t);
+                    let first_near = t0 <= t1;
+                    let l0 = bvh_link(c0);
+                    let l1 = bvh_link(c1);
+                    let t_near = min(t0, t1);
+                    let t_far = max(t0, t1);
+                    if (t_far < FAR) {
+                        stack[sp] = vec2<u32>(select(l0, l1, first_near), bitcast<u32>(t_far));
+                        sp++;
                     }
-                    t_node = t_near;
-                    continue;
-                }
-            } else {
-                for (var k = 0u; k < n.count; k++) {
-                    best = closer(best, n.offset + k, ray);
+                    if (t_near < FAR) {
+                        n = select(l1, l0, first_near);
+                        t_node = t_near;
+                        continue;
+                    }
+                } else {
+                    leaf = n;
                 }
             }
+            if (sp == 0u) {
+                live = false;
+            } else {
+                sp--;
+                n = stack[sp].x;
+                t_node = bitcast<f32>(stack[sp].y);
+            }
+            if (leaf != 0u || !live) {
+                break;
+            }
         }
-        if (sp == 0u) {
+        let offset = leaf >> BVH_COUNT_BITS;
+        for (var k = 0u; k < (leaf & BVH_COUNT_MASK); k++) {
+            best = closer_hit(best, offset + k, intersect_bounded(offset + k, ray, best.t));
+        }
+        if (!live) {
             break;
         }
-        sp--;
-        n = bvh_node(stack_node[sp]);
-        t_node = stack_t[sp];
     }
 #endif
     return best;
@@ -458,63 +504,89 @@ fn occluded(ray: Ray, t_max: f32) -> bool {
     return occluded_baked(ray, t_max);
 #else
 #ifdef HAS_BVH
+#ifndef HAS_PRIMITIVE_LOOP
+    // Without the plain loop the BVH is always on, and the closest-hit walk is not
+    // written in a second time: llvmpipe would run it, masked off, on every shadow ray
+    // (one pass of its loop body: 881 instructions of the 14349 of nefertiti's bounce).
+    return occluded_bvh(ray, t_max);
+#else
     if (params.use_bvh != 0u) {
         return occluded_bvh(ray, t_max);
     }
-#endif
     return intersect_scene(ray, t_max).prim != NO_HIT;
+#endif
+#else
+    return intersect_scene(ray, t_max).prim != NO_HIT;
+#endif
 #endif
 }
 
 #ifdef HAS_BVH
 // The any-hit search of occluded over the planes and the BVH.
 fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
+#ifdef HAS_PLANE
     for (var i = 0u; i < params.num_unbounded; i++) {
         if (intersect_primitive(i, ray, t_max).x < t_max) {
             return true;
         }
     }
+#endif
     if (params.num_primitives == params.num_unbounded) {
         return false;
     }
     let inv_dir = safe_inverse(ray.dir);
-    var stack_node: array<u32, BVH_STACK_SIZE>;
+    // a stack entry: the node's offset and count (bvh_link)
+    var stack: array<u32, BVH_STACK_SIZE>;
     var sp = 0u;
-    var n = bvh_node(0u);
-    var hit = intersect_aabb(n.lo, n.hi, ray.origin, inv_dir, t_max) < FAR;
+    let root = bvh_node(0u);
+    var n = bvh_link(root);
+    var hit = intersect_aabb(root.lo, root.hi, ray.origin, inv_dir, t_max) < FAR;
+    var live = true;
     loop {
-        if (hit) {
-            if (n.count == 0u) {
-                let c0 = bvh_node(n.offset);
-                let c1 = bvh_node(n.offset + 1u);
-                let h0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, t_max) < FAR;
-                let h1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, t_max) < FAR;
-                if (h0 && h1) {
-                    stack_node[sp] = n.offset + 1u;
-                    sp++;
-                }
-                if (h0 || h1) {
-                    if (h0) {
-                        n = c0;
-                    } else {
-                        n = c1;
+        // as in intersect_scene: interior nodes until a leaf is found or none is left
+        var leaf = 0u;
+        loop {
+            if (hit) {
+                let offset = n >> BVH_COUNT_BITS;
+                if ((n & BVH_COUNT_MASK) == 0u) {
+                    let c0 = bvh_node(offset);
+                    let c1 = bvh_node(offset + 1u);
+                    let h0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, t_max) < FAR;
+                    let h1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, t_max) < FAR;
+                    let l0 = bvh_link(c0);
+                    let l1 = bvh_link(c1);
+                    if (h0 && h1) {
+                        stack[sp] = l1;
+                        sp++;
                     }
-                    continue;
-                }
-            } else {
-                for (var k = 0u; k < n.count; k++) {
-                    if (intersect_primitive(n.offset + k, ray, t_max).x < t_max) {
-                        return true;
+                    if (h0 || h1) {
+                        n = select(l1, l0, h0);
+                        continue;
                     }
+                } else {
+                    leaf = n;
                 }
             }
+            if (sp == 0u) {
+                live = false;
+            } else {
+                sp--;
+                n = stack[sp];
+                hit = true;
+            }
+            if (leaf != 0u || !live) {
+                break;
+            }
         }
-        if (sp == 0u) {
+        let offset = leaf >> BVH_COUNT_BITS;
+        for (var k = 0u; k < (leaf & BVH_COUNT_MASK); k++) {
+            if (intersect_bounded(offset + k, ray, t_max).x < t_max) {
+                return true;
+            }
+        }
+        if (!live) {
             break;
         }
-        sp--;
-        n = bvh_node(stack_node[sp]);
-        hit = true;
     }
     return false;
 }

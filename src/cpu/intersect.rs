@@ -7,9 +7,9 @@ use super::bindings::Bindings;
 use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
-    BvhNode, Primitive, BVH_STACK_SIZE, PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES,
-    PRIM_FLAG_CAPS, PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TRANSFORM, PRIM_PLANE, PRIM_SPHERE,
-    PRIM_TRIANGLE,
+    BvhNode, Primitive, BVH_COUNT_BITS, BVH_COUNT_MASK, BVH_STACK_SIZE, PRIM_BOX, PRIM_CYLINDER,
+    PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_SHADING_NORMALS,
+    PRIM_FLAG_TRANSFORM, PRIM_PLANE, PRIM_SPHERE, PRIM_TRIANGLE,
 };
 
 /// Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `ray.dir` is unit length.
@@ -299,9 +299,14 @@ pub fn intersect_record(b: &Bindings, prim: &Primitive, tag: u32, ray: &Ray, t_m
     h
 }
 
-/// Primitive i tested against the closest hit so far; the closer of the two.
-pub fn closer(b: &Bindings, best: Candidate, i: u32, ray: &Ray) -> Candidate {
-    let h = intersect_primitive(b, i, ray, best.t);
+/// intersect_primitive for a primitive of the BVH (the shader skips the tag's switch
+/// when they are all untransformed triangles: the same test).
+pub fn intersect_bounded(b: &Bindings, i: u32, ray: &Ray, t_max: f32) -> Vec3 {
+    intersect_primitive(b, i, ray, t_max)
+}
+
+/// The closer of the closest hit so far and hit h = (t, u, v) of primitive i.
+pub fn closer_hit(best: Candidate, i: u32, h: Vec3) -> Candidate {
     if h.x < best.t {
         return Candidate {
             t: h.x,
@@ -313,16 +318,45 @@ pub fn closer(b: &Bindings, best: Candidate, i: u32, ray: &Ray) -> Candidate {
     best
 }
 
+/// Primitive i tested against the closest hit so far; the closer of the two.
+pub fn closer(b: &Bindings, best: Candidate, i: u32, ray: &Ray) -> Candidate {
+    closer_hit(best, i, intersect_primitive(b, i, ray, best.t))
+}
+
+/// A node's children or primitives as one word, offset above count: what the traversal
+/// stack holds, so that a node popped needs no fetch.
+pub fn bvh_link(n: &BvhNode) -> u32 {
+    (n.offset << BVH_COUNT_BITS) | n.count
+}
+
+/// min and max of two numbers that are not NaN (the shader's selects in intersect_aabb).
+pub fn min2(a: f32, b: f32) -> f32 {
+    if a < b {
+        a
+    } else {
+        b
+    }
+}
+
+pub fn max2(a: f32, b: f32) -> f32 {
+    if a > b {
+        a
+    } else {
+        b
+    }
+}
+
 pub use crate::scene::records::BOX_WIDEN;
 
 /// Entry distance into a BVH node's box (clamped to 0), or FAR.
 pub fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
     let t0 = (lo - origin) * inv_dir;
     let t1 = (hi - origin) * inv_dir;
-    let t_min = t0.min(t1);
-    let t_max3 = t0.max(t1);
-    let t_near = t_min.x.max(t_min.y.max(t_min.z)).max(0.0);
-    let t_far = t_max3.x.min(t_max3.y.min(t_max3.z)) * BOX_WIDEN;
+    let near = t0.cmplt(t1);
+    let t_min = Vec3::select(near, t0, t1);
+    let t_max3 = Vec3::select(near, t1, t0);
+    let t_near = max2(max2(t_min.x, max2(t_min.y, t_min.z)), 0.0);
+    let t_far = min2(t_max3.x, min2(t_max3.y, t_max3.z)) * BOX_WIDEN;
     if t_near <= t_far && t_near < t_max {
         return t_near;
     }
@@ -354,35 +388,53 @@ pub fn occluded_bvh(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
     let inv_dir = safe_inverse(ray.dir);
     let enters =
         |n: &BvhNode| intersect_aabb(n.lo.into(), n.hi.into(), ray.origin, inv_dir, t_max) < FAR;
-    let mut stack_node = [0u32; BVH_STACK_SIZE as usize];
+    // a stack entry: the node's offset and count (bvh_link)
+    let mut stack = [0u32; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut n = nodes[0];
-    let mut hit = enters(&n);
+    let mut n = bvh_link(&nodes[0]);
+    let mut hit = enters(&nodes[0]);
+    let mut live = true;
     loop {
-        if hit {
-            if n.count == 0 {
-                let (c0, c1) = (nodes[n.offset as usize], nodes[n.offset as usize + 1]);
-                let (h0, h1) = (enters(&c0), enters(&c1));
-                if h0 && h1 {
-                    stack_node[sp] = n.offset + 1;
-                    sp += 1;
+        // as in intersect_scene: interior nodes until a leaf is found or none is left
+        let mut leaf = 0u32;
+        loop {
+            if hit {
+                let offset = n >> BVH_COUNT_BITS;
+                if n & BVH_COUNT_MASK == 0 {
+                    let (c0, c1) = (&nodes[offset as usize], &nodes[offset as usize + 1]);
+                    let (h0, h1) = (enters(c0), enters(c1));
+                    if h0 && h1 {
+                        stack[sp] = bvh_link(c1);
+                        sp += 1;
+                    }
+                    if h0 || h1 {
+                        n = bvh_link(if h0 { c0 } else { c1 });
+                        continue;
+                    }
+                } else {
+                    leaf = n;
                 }
-                if h0 || h1 {
-                    n = if h0 { c0 } else { c1 };
-                    continue;
-                }
-            } else if (0..n.count)
-                .any(|k| intersect_primitive(b, n.offset + k, ray, t_max).x < t_max)
-            {
-                return true;
+            }
+            if sp == 0 {
+                live = false;
+            } else {
+                sp -= 1;
+                n = stack[sp];
+                hit = true;
+            }
+            if leaf != 0 || !live {
+                break;
             }
         }
-        if sp == 0 {
+        let offset = leaf >> BVH_COUNT_BITS;
+        if (0..leaf & BVH_COUNT_MASK)
+            .any(|k| intersect_bounded(b, offset + k, ray, t_max).x < t_max)
+        {
+            return true;
+        }
+        if !live {
             break;
         }
-        sp -= 1;
-        n = nodes[stack_node[sp] as usize];
-        hit = true;
     }
     false
 }
@@ -411,44 +463,66 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
     }
     let nodes = b.bvh;
     let inv_dir = safe_inverse(ray.dir);
-    let mut stack_node = [0u32; BVH_STACK_SIZE as usize];
-    let mut stack_t = [0f32; BVH_STACK_SIZE as usize];
+    // a stack entry: the node's offset and count (bvh_link), and its entry distance
+    let mut stack = [(0u32, 0f32); BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut n = nodes[0];
-    let mut t_node = intersect_aabb(n.lo.into(), n.hi.into(), ray.origin, inv_dir, best.t);
+    let root = &nodes[0];
+    let mut n = bvh_link(root);
+    let mut t_node = intersect_aabb(root.lo.into(), root.hi.into(), ray.origin, inv_dir, best.t);
+    let mut live = true;
     loop {
-        if t_node < best.t {
-            if n.count == 0 {
-                // the two children side by side (scene::bvh::pair_layout)
-                let (c0, c1) = (nodes[n.offset as usize], nodes[n.offset as usize + 1]);
-                let t0 = intersect_aabb(c0.lo.into(), c0.hi.into(), ray.origin, inv_dir, best.t);
-                let t1 = intersect_aabb(c1.lo.into(), c1.hi.into(), ray.origin, inv_dir, best.t);
-                let first_near = t0 <= t1;
-                let far = if first_near { n.offset + 1 } else { n.offset };
-                let t_near = t0.min(t1);
-                let t_far = t0.max(t1);
-                if t_far < FAR {
-                    stack_node[sp] = far;
-                    stack_t[sp] = t_far;
-                    sp += 1;
-                }
-                if t_near < FAR {
-                    n = if first_near { c0 } else { c1 };
-                    t_node = t_near;
-                    continue;
-                }
-            } else {
-                for k in 0..n.count {
-                    best = closer(b, best, n.offset + k, ray);
+        // Interior nodes until a leaf is found or none is left. The shader tests the
+        // leaf's primitives after this loop, when every lane of its subgroup has one; the
+        // nodes are visited in the same order either way.
+        let mut leaf = 0u32;
+        loop {
+            if t_node < best.t {
+                let offset = n >> BVH_COUNT_BITS;
+                if n & BVH_COUNT_MASK == 0 {
+                    // the two children side by side (scene::bvh::pair_layout)
+                    let (c0, c1) = (&nodes[offset as usize], &nodes[offset as usize + 1]);
+                    let t0 =
+                        intersect_aabb(c0.lo.into(), c0.hi.into(), ray.origin, inv_dir, best.t);
+                    let t1 =
+                        intersect_aabb(c1.lo.into(), c1.hi.into(), ray.origin, inv_dir, best.t);
+                    let first_near = t0 <= t1;
+                    let (l0, l1) = (bvh_link(c0), bvh_link(c1));
+                    let t_near = t0.min(t1);
+                    let t_far = t0.max(t1);
+                    if t_far < FAR {
+                        stack[sp] = (if first_near { l1 } else { l0 }, t_far);
+                        sp += 1;
+                    }
+                    if t_near < FAR {
+                        n = if first_near { l0 } else { l1 };
+                        t_node = t_near;
+                        continue;
+                    }
+                } else {
+                    leaf = n;
                 }
             }
+            if sp == 0 {
+                live = false;
+            } else {
+                sp -= 1;
+                (n, t_node) = stack[sp];
+            }
+            if leaf != 0 || !live {
+                break;
+            }
         }
-        if sp == 0 {
+        let offset = leaf >> BVH_COUNT_BITS;
+        for k in 0..leaf & BVH_COUNT_MASK {
+            best = closer_hit(
+                best,
+                offset + k,
+                intersect_bounded(b, offset + k, ray, best.t),
+            );
+        }
+        if !live {
             break;
         }
-        sp -= 1;
-        n = nodes[stack_node[sp] as usize];
-        t_node = stack_t[sp];
     }
     best
 }

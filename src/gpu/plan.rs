@@ -244,14 +244,26 @@ impl ShaderSpec {
         Self::of(FeatureSet::all())
     }
 
-    /// The preprocessor's defines: a `HAS_*` per feature, and a `BAKED_*` per record array
-    /// written into the shader.
+    /// The preprocessor's defines: a `HAS_*` per feature, a `BAKED_*` per record array
+    /// written into the shader, and `BOUNDED_TRIANGLES_ONLY` when every primitive the BVH
+    /// can hold is an untransformed triangle (its leaves then test without a `switch`).
     pub fn defines(&self) -> BTreeSet<&'static str> {
         let mut d: BTreeSet<&'static str> = self.features.iter().map(Feature::define).collect();
         for (slot, define) in BAKED_DEFINES {
             if self.placements.get(slot) == Placement::Shader {
                 d.insert(define);
             }
+        }
+        let f = |x: Feature| self.features.contains(x);
+        let other_bounded = [
+            Feature::Sphere,
+            Feature::Box,
+            Feature::Cylinder,
+            Feature::Disk,
+            Feature::Transforms,
+        ];
+        if f(Feature::Triangle) && !other_bounded.into_iter().any(f) {
+            d.insert("BOUNDED_TRIANGLES_ONLY");
         }
         d
     }

@@ -27,7 +27,7 @@
 //! the root pushed first, already popped by then). Both therefore fit in a
 //! `BVH_MAX_DEPTH`-entry stack. [`build`] asserts the limit.
 
-use super::records::{BvhNode, BVH_STACK_SIZE};
+use super::records::{BvhNode, BVH_COUNT_BITS, BVH_COUNT_MASK, BVH_STACK_SIZE};
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 
@@ -43,6 +43,8 @@ pub const BVH_MAX_LEAF_DEPTH: u32 = BVH_MAX_DEPTH - 1;
 /// Nodes with at most this many primitives become leaves when SAH says a leaf
 /// is not more expensive than the best split.
 pub const BVH_MAX_LEAF_SIZE: usize = 4;
+// a leaf's count fits below its offset in a traversal stack entry (`bvh_link`)
+const _: () = assert!(BVH_MAX_LEAF_SIZE <= BVH_COUNT_MASK as usize);
 
 /// SAH cost of visiting an interior node (testing the boxes of its two
 /// children), relative to [`SAH_INTERSECTION_COST`].
@@ -91,6 +93,9 @@ pub fn pair_layout(dfs: &[BvhNode]) -> Vec<BvhNode> {
         stack.push((d + 1, pair));
     }
     debug_assert_eq!(next, out.len());
+    // offsets fit above a count in a stack entry (`bvh_link`): 2^29 nodes are 16 GiB, far
+    // beyond what a device binds (gpu::plan refuses larger scenes first)
+    debug_assert!(out.len() < 1 << (32 - BVH_COUNT_BITS));
     out
 }
 

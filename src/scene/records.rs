@@ -58,6 +58,10 @@ shared_constants! {
     /// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
     /// within this depth.
     BVH_STACK_SIZE: u32 = 32;
+    /// A traversal stack entry packs a node's `offset` above its `count` (`bvh_link`):
+    /// the low `BVH_COUNT_BITS` bits, enough for `scene::bvh::BVH_MAX_LEAF_SIZE`.
+    BVH_COUNT_BITS: u32 = 3;
+    BVH_COUNT_MASK: u32 = 7;
 
     /// Material tags: the cases of the `switch` in `materials.wgsl`.
     MAT_LAMBERTIAN: u32 = 0;
