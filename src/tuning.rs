@@ -14,7 +14,9 @@ use crate::scene::flatten::{Acceleration, Build};
 /// 36 of bench/cornell-triangles.toml: 1.89 against 0.35 Msamples/s; an 80-triangle mesh
 /// in that box 0.92 against 0.37; 320 triangles 0.14 against 0.37); transformed
 /// primitives cost enough per test that the BVH won there (transforms.toml, 10
-/// primitives: 0.78 against 0.67 Msamples/s).
+/// primitives: 0.78 against 0.67 Msamples/s). These were measured before the BVH walk
+/// was made 1.3x to 1.7x faster (postponed leaves, docs/performance.md); that moves the
+/// crossover down from about 100 triangles but, by those figures, not below 64.
 pub const LIST_MAX_PRIMITIVES: usize = 64;
 
 /// The knobs, each on (fastest) unless turned off.
