@@ -337,10 +337,29 @@ fn intersect_aabb(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3
     return FAR;
 }
 
-// A node's children or primitives as one word, offset above count: what the traversal
+// Node `index` (record n) as one word, its offset above its count: what the traversal
 // stack holds, so that a node popped needs no fetch (its box was tested by its parent).
-fn bvh_link(n: BvhNode) -> u32 {
+// A leaf of BVH_COUNT_MASK or more primitives is linked by its index with that count
+// (HAS_BVH_LARGE_LEAVES: only scenes that have one); bvh_leaf reads its node.
+fn bvh_link(n: BvhNode, index: u32) -> u32 {
+#ifdef HAS_BVH_LARGE_LEAVES
+    if (n.count >= BVH_COUNT_MASK) {
+        return (index << BVH_COUNT_BITS) | BVH_COUNT_MASK;
+    }
+#endif
     return (n.offset << BVH_COUNT_BITS) | n.count;
+}
+
+// The first primitive and the count of the leaf linked as `link` (0: none).
+fn bvh_leaf(link: u32) -> vec2<u32> {
+    var leaf = vec2<u32>(link >> BVH_COUNT_BITS, link & BVH_COUNT_MASK);
+#ifdef HAS_BVH_LARGE_LEAVES
+    if (leaf.y == BVH_COUNT_MASK) {
+        let n = bvh_node(leaf.x);
+        leaf = vec2<u32>(n.offset, n.count);
+    }
+#endif
+    return leaf;
 }
 
 // min and max of two numbers that are not NaN (intersect_aabb)
@@ -438,7 +457,7 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     var stack: array<vec2<u32>, BVH_STACK_SIZE>;
     var sp = 0u;
     let root = bvh_node(0u);
-    var n = bvh_link(root);
+    var n = bvh_link(root, 0u);
     var t_node = intersect_aabb(root.lo, root.hi, ray.origin, inv_dir, best.t);
     var live = true;
     loop {
@@ -455,10 +474,10 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
                     let t0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, best.t);
                     let t1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, best.t);
                     let first_near = t0 <= t1;
-                    let l0 = bvh_link(c0);
-                    let l1 = bvh_link(c1);
-                    let t_near = min(t0, t1);
-                    let t_far = max(t0, t1);
+                    let l0 = bvh_link(c0, offset);
+                    let l1 = bvh_link(c1, offset + 1u);
+                    let t_near = select(t1, t0, first_near);
+                    let t_far = select(t0, t1, first_near);
                     if (t_far < FAR) {
                         stack[sp] = vec2<u32>(select(l0, l1, first_near), bitcast<u32>(t_far));
                         sp++;
@@ -483,9 +502,9 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
                 break;
             }
         }
-        let offset = leaf >> BVH_COUNT_BITS;
-        for (var k = 0u; k < (leaf & BVH_COUNT_MASK); k++) {
-            best = closer_hit(best, offset + k, intersect_bounded(offset + k, ray, best.t));
+        let range = bvh_leaf(leaf);
+        for (var k = range.x; k < range.x + range.y; k++) {
+            best = closer_hit(best, k, intersect_bounded(k, ray, best.t));
         }
         if (!live) {
             break;
@@ -539,7 +558,7 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
     var stack: array<u32, BVH_STACK_SIZE>;
     var sp = 0u;
     let root = bvh_node(0u);
-    var n = bvh_link(root);
+    var n = bvh_link(root, 0u);
     var hit = intersect_aabb(root.lo, root.hi, ray.origin, inv_dir, t_max) < FAR;
     var live = true;
     loop {
@@ -553,8 +572,8 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
                     let c1 = bvh_node(offset + 1u);
                     let h0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, t_max) < FAR;
                     let h1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, t_max) < FAR;
-                    let l0 = bvh_link(c0);
-                    let l1 = bvh_link(c1);
+                    let l0 = bvh_link(c0, offset);
+                    let l1 = bvh_link(c1, offset + 1u);
                     if (h0 && h1) {
                         stack[sp] = l1;
                         sp++;
@@ -578,9 +597,9 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
                 break;
             }
         }
-        let offset = leaf >> BVH_COUNT_BITS;
-        for (var k = 0u; k < (leaf & BVH_COUNT_MASK); k++) {
-            if (intersect_bounded(offset + k, ray, t_max).x < t_max) {
+        let range = bvh_leaf(leaf);
+        for (var k = range.x; k < range.x + range.y; k++) {
+            if (intersect_bounded(k, ray, t_max).x < t_max) {
                 return true;
             }
         }

@@ -323,10 +323,25 @@ pub fn closer(b: &Bindings, best: Candidate, i: u32, ray: &Ray) -> Candidate {
     closer_hit(best, i, intersect_primitive(b, i, ray, best.t))
 }
 
-/// A node's children or primitives as one word, offset above count: what the traversal
-/// stack holds, so that a node popped needs no fetch.
-pub fn bvh_link(n: &BvhNode) -> u32 {
+/// Node `index` (record n) as one word, its offset above its count: what the traversal
+/// stack holds, so that a node popped needs no fetch. A leaf of BVH_COUNT_MASK or more
+/// primitives is linked by its index with that count (the shader only in scenes that
+/// have one, HAS_BVH_LARGE_LEAVES); bvh_leaf reads its node.
+pub fn bvh_link(n: &BvhNode, index: u32) -> u32 {
+    if n.count >= BVH_COUNT_MASK {
+        return (index << BVH_COUNT_BITS) | BVH_COUNT_MASK;
+    }
     (n.offset << BVH_COUNT_BITS) | n.count
+}
+
+/// The first primitive and the count of the leaf linked as `link` (0: none).
+pub fn bvh_leaf(b: &Bindings, link: u32) -> (u32, u32) {
+    let leaf = (link >> BVH_COUNT_BITS, link & BVH_COUNT_MASK);
+    if leaf.1 == BVH_COUNT_MASK {
+        let n = &b.bvh[leaf.0 as usize];
+        return (n.offset, n.count);
+    }
+    leaf
 }
 
 /// min and max of two numbers that are not NaN (the shader's selects in intersect_aabb).
@@ -391,7 +406,7 @@ pub fn occluded_bvh(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
     // a stack entry: the node's offset and count (bvh_link)
     let mut stack = [0u32; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
-    let mut n = bvh_link(&nodes[0]);
+    let mut n = bvh_link(&nodes[0], 0);
     let mut hit = enters(&nodes[0]);
     let mut live = true;
     loop {
@@ -404,11 +419,15 @@ pub fn occluded_bvh(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
                     let (c0, c1) = (&nodes[offset as usize], &nodes[offset as usize + 1]);
                     let (h0, h1) = (enters(c0), enters(c1));
                     if h0 && h1 {
-                        stack[sp] = bvh_link(c1);
+                        stack[sp] = bvh_link(c1, offset + 1);
                         sp += 1;
                     }
                     if h0 || h1 {
-                        n = bvh_link(if h0 { c0 } else { c1 });
+                        n = if h0 {
+                            bvh_link(c0, offset)
+                        } else {
+                            bvh_link(c1, offset + 1)
+                        };
                         continue;
                     }
                 } else {
@@ -426,10 +445,8 @@ pub fn occluded_bvh(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
                 break;
             }
         }
-        let offset = leaf >> BVH_COUNT_BITS;
-        if (0..leaf & BVH_COUNT_MASK)
-            .any(|k| intersect_bounded(b, offset + k, ray, t_max).x < t_max)
-        {
+        let (first, count) = bvh_leaf(b, leaf);
+        if (first..first + count).any(|k| intersect_bounded(b, k, ray, t_max).x < t_max) {
             return true;
         }
         if !live {
@@ -467,7 +484,7 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
     let mut stack = [(0u32, 0f32); BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
     let root = &nodes[0];
-    let mut n = bvh_link(root);
+    let mut n = bvh_link(root, 0);
     let mut t_node = intersect_aabb(root.lo.into(), root.hi.into(), ray.origin, inv_dir, best.t);
     let mut live = true;
     loop {
@@ -486,9 +503,8 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
                     let t1 =
                         intersect_aabb(c1.lo.into(), c1.hi.into(), ray.origin, inv_dir, best.t);
                     let first_near = t0 <= t1;
-                    let (l0, l1) = (bvh_link(c0), bvh_link(c1));
-                    let t_near = t0.min(t1);
-                    let t_far = t0.max(t1);
+                    let (l0, l1) = (bvh_link(c0, offset), bvh_link(c1, offset + 1));
+                    let (t_near, t_far) = if first_near { (t0, t1) } else { (t1, t0) };
                     if t_far < FAR {
                         stack[sp] = (if first_near { l1 } else { l0 }, t_far);
                         sp += 1;
@@ -512,13 +528,9 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
                 break;
             }
         }
-        let offset = leaf >> BVH_COUNT_BITS;
-        for k in 0..leaf & BVH_COUNT_MASK {
-            best = closer_hit(
-                best,
-                offset + k,
-                intersect_bounded(b, offset + k, ray, best.t),
-            );
+        let (first, count) = bvh_leaf(b, leaf);
+        for k in first..first + count {
+            best = closer_hit(best, k, intersect_bounded(b, k, ray, best.t));
         }
         if !live {
             break;

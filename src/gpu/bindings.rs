@@ -48,8 +48,9 @@ impl Slot {
         Slot::Texels,
     ];
 
-    /// The read-only record arrays a plan places (a storage or a uniform buffer, or
-    /// written into the shader); the texels are always a storage buffer (too large).
+    /// The read-only record arrays a plan places (a storage or a uniform buffer, a
+    /// texture, or written into the shader); the texels are always a storage buffer (too
+    /// large).
     pub const RECORDS: [Slot; 6] = [
         Slot::Primitives,
         Slot::Materials,
@@ -124,8 +125,8 @@ pub enum Placement {
     Uniform,
     /// Written into the shader as constants (`gpu::codegen`); no buffer is bound.
     Shader,
-    /// A texture of 32-bit unsigned texels, [`TEXTURE_WIDTH`] wide, one record every few
-    /// texels, read with `textureLoad`: llvmpipe fetches a texel for all 8 lanes with
+    /// A texture of 16-byte texels (`rgba32uint`), [`TEXTURE_WIDTH`] wide, one record
+    /// every few texels, read with `textureLoad`: llvmpipe fetches a texel for all 8 lanes with
     /// gathers, where a storage-buffer load is a loop over the lanes and the components.
     Texture,
 }
@@ -196,8 +197,9 @@ const ACCESSORS: [(Slot, &str); 4] = [
 ];
 
 /// The WGSL declarations of every slot of group 0 under `placements`. Arrays written into
-/// the shader are still declared (as storage) so that the code reading them from a buffer,
-/// left unused, validates; they are not bound.
+/// the shader are still declared (as storage, read by no code: the shaders read records
+/// only through the accessors, which the scene code defines for them); they are not
+/// bound.
 pub fn wgsl_declarations(placements: &Placements) -> String {
     let mut out = String::new();
     for slot in Slot::ALL {
@@ -271,7 +273,7 @@ pub fn layout(
 
 /// The scene's records on the device, for the slots a shader reads: the parameters
 /// (written before each submission, one block per dispatch, bound at a dynamic offset)
-/// and the record buffers, all but the sums.
+/// and the record buffers and textures, all but the sums.
 pub struct SceneBuffers {
     pub params: wgpu::Buffer,
     records: Vec<(Slot, Records)>,
@@ -284,7 +286,8 @@ enum Records {
 }
 
 /// Uploads the records of `slots`: a uniform buffer of [`UNIFORM_BYTES`] starting with
-/// them (the shader declares the array at that size), or a storage buffer holding them (256
+/// them (the shader declares the array at that size), a texture (`record_texture`), or a
+/// storage buffer holding them (256
 /// zero bytes when there are none: WebGPU forbids empty bindings, and every record is
 /// smaller). The parameter buffer has `params_bytes` (at least one [`Params`]).
 pub fn scene_buffers(

@@ -1,6 +1,7 @@
 //! What a device can hold and run, read once from its limits and name: the bytes one
-//! storage binding holds, whether the record arrays may be uniform buffers, and the loop
-//! limit of llvmpipe (lavapipe), which ends a shader's loops silently.
+//! storage binding holds, whether the record arrays may be uniform buffers, the rows a
+//! record texture may have, and the loop limit of llvmpipe (lavapipe), which ends a
+//! shader's loops silently.
 
 use super::bindings::{Slot, UNIFORM_BYTES};
 use super::error::GpuError;

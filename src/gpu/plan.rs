@@ -1,7 +1,7 @@
 //! The GPU plan of a render, built once from the flattened scene, the device's facts
 //! ([`DeviceFit`]) and the tuning ([`Tuning`], defaults = fastest): which features the
 //! shader holds code for ([`FeatureSet`]), where each record array lives ([`Placements`]:
-//! storage buffer, uniform buffer, or written into the shader), how many samples one
+//! storage buffer, uniform buffer, texture, or written into the shader), how many samples one
 //! invocation traces, and whether the loops fit the device. The defines, the generated
 //! WGSL, the bind group layout and the buffers all derive from it.
 
@@ -35,6 +35,9 @@ pub enum Feature {
     Transforms,
     /// The BVH walk.
     Bvh,
+    /// Leaves of `BVH_COUNT_MASK` or more primitives (the BVH's depth limit, equal
+    /// centroids): the walk reads such a leaf's node (`bvh_leaf`).
+    BvhLargeLeaves,
     /// The plain loop over a list of primitives grouped by type.
     PrimitiveLoop,
     Lambertian,
@@ -61,7 +64,7 @@ pub enum Feature {
 
 impl Feature {
     /// Every feature, in define order.
-    pub const ALL: [Feature; 24] = [
+    pub const ALL: [Feature; 25] = [
         Feature::Sphere,
         Feature::Triangle,
         Feature::Plane,
@@ -70,6 +73,7 @@ impl Feature {
         Feature::Disk,
         Feature::Transforms,
         Feature::Bvh,
+        Feature::BvhLargeLeaves,
         Feature::PrimitiveLoop,
         Feature::Lambertian,
         Feature::Metal,
@@ -99,6 +103,7 @@ impl Feature {
             Feature::Disk => "HAS_DISK",
             Feature::Transforms => "HAS_TRANSFORMS",
             Feature::Bvh => "HAS_BVH",
+            Feature::BvhLargeLeaves => "HAS_BVH_LARGE_LEAVES",
             Feature::PrimitiveLoop => "HAS_PRIMITIVE_LOOP",
             Feature::Lambertian => "HAS_LAMBERTIAN",
             Feature::Metal => "HAS_METAL",
@@ -192,6 +197,10 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .any(|p| p.flags & r::PRIM_FLAG_TRANSFORM != 0),
         )
         .with(Feature::Bvh, bounded && scene.use_bvh)
+        .with(
+            Feature::BvhLargeLeaves,
+            bounded && scene.use_bvh && scene.bvh_has_large_leaves(),
+        )
         .with(Feature::PrimitiveLoop, bounded && !scene.use_bvh)
         .with(Feature::Lambertian, mat(r::MAT_LAMBERTIAN))
         .with(Feature::Metal, mat(r::MAT_METAL))
@@ -323,8 +332,9 @@ const BAKED_DEFINES: [(Slot, &str); 3] = [
 ];
 
 /// The most primitives a scene's shader holds as constants: a scene without the BVH and
-/// without transformed primitives (`codegen::baked_primitives`).
-pub const BAKED_PRIMITIVES_MAX: usize = 64;
+/// without transformed primitives (`codegen::baked_primitives`), which is every scene of
+/// the plain list (`tuning::LIST_MAX_PRIMITIVES`).
+pub const BAKED_PRIMITIVES_MAX: usize = crate::tuning::LIST_MAX_PRIMITIVES;
 
 /// The most materials, and the most lights, a scene's shader holds as constants: each
 /// look-up is a chain of selects over all of them.

@@ -43,8 +43,9 @@ pub const BVH_MAX_LEAF_DEPTH: u32 = BVH_MAX_DEPTH - 1;
 /// Nodes with at most this many primitives become leaves when SAH says a leaf
 /// is not more expensive than the best split.
 pub const BVH_MAX_LEAF_SIZE: usize = 4;
-// a leaf's count fits below its offset in a traversal stack entry (`bvh_link`)
-const _: () = assert!(BVH_MAX_LEAF_SIZE <= BVH_COUNT_MASK as usize);
+// a leaf the SAH makes is linked directly (`bvh_link`): only the oversized leaves of the
+// depth limit and of equal centroids take the walk's extra node read
+const _: () = assert!(BVH_MAX_LEAF_SIZE < BVH_COUNT_MASK as usize);
 
 /// SAH cost of visiting an interior node (testing the boxes of its two
 /// children), relative to [`SAH_INTERSECTION_COST`].
@@ -93,9 +94,10 @@ pub fn pair_layout(dfs: &[BvhNode]) -> Vec<BvhNode> {
         stack.push((d + 1, pair));
     }
     debug_assert_eq!(next, out.len());
-    // offsets fit above a count in a stack entry (`bvh_link`): 2^29 nodes are 16 GiB, far
-    // beyond what a device binds (gpu::plan refuses larger scenes first)
+    // offsets and node indices fit above a count in a stack entry (`bvh_link`): 2^29
+    // nodes are 16 GiB, far beyond what a device binds (gpu::plan refuses larger scenes)
     debug_assert!(out.len() < 1 << (32 - BVH_COUNT_BITS));
+    debug_assert!(out.iter().all(|n| n.offset < 1 << (32 - BVH_COUNT_BITS)));
     out
 }
 

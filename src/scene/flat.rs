@@ -97,6 +97,12 @@ impl FlatScene {
         self.bvh.len().saturating_sub(1)
     }
 
+    /// Whether a leaf holds `BVH_COUNT_MASK` or more primitives: too many for a traversal
+    /// stack entry's count (`bvh_link` then links it by its node).
+    pub fn bvh_has_large_leaves(&self) -> bool {
+        self.bvh.iter().any(|n| n.count >= records::BVH_COUNT_MASK)
+    }
+
     /// The uniform block for one dispatch: pass `sample_index` over `tile`.
     pub fn params(&self, sample_index: u32, tile: Tile) -> Params {
         let c = &self.camera;

@@ -586,21 +586,14 @@ fn order(
         primitives.extend(sorted);
         return (primitives, Vec::new(), 0);
     }
-    let tree = bvh::build(boxes);
+    let mut tree = bvh::build(boxes);
     primitives.extend(tree.order.iter().map(|&i| bounded[i as usize]));
-    let nodes: Vec<BvhNode> = tree
-        .nodes
-        .iter()
-        .map(|n| BvhNode {
-            offset: if n.count > 0 {
-                n.offset + num_unbounded
-            } else {
-                n.offset
-            },
-            ..*n
-        })
-        .collect();
-    (primitives, bvh::pair_layout(&nodes), tree.depth)
+    // leaves index the primitives after the planes (shifted in place: no second copy of
+    // the nodes before pair_layout's)
+    for n in tree.nodes.iter_mut().filter(|n| n.count > 0) {
+        n.offset += num_unbounded;
+    }
+    (primitives, bvh::pair_layout(&tree.nodes), tree.depth)
 }
 
 fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {

@@ -58,10 +58,12 @@ shared_constants! {
     /// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
     /// within this depth.
     BVH_STACK_SIZE: u32 = 32;
-    /// A traversal stack entry packs a node's `offset` above its `count` (`bvh_link`):
-    /// the low `BVH_COUNT_BITS` bits, enough for `scene::bvh::BVH_MAX_LEAF_SIZE`.
+    /// A traversal stack entry packs a node's `offset` above its `count` (`bvh_link`), in
+    /// the low `BVH_COUNT_BITS` bits. A leaf of `BVH_COUNT_MASK` or more primitives (the
+    /// builder makes them at its depth limit and of equal centroids) is linked by its
+    /// node index instead, with count `BVH_COUNT_MASK`: the walk then reads its node.
     BVH_COUNT_BITS: u32 = 3;
-    BVH_COUNT_MASK: u32 = 7;
+    BVH_COUNT_MASK: u32 = (1 << BVH_COUNT_BITS) - 1;
 
     /// Material tags: the cases of the `switch` in `materials.wgsl`.
     MAT_LAMBERTIAN: u32 = 0;
