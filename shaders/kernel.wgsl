@@ -30,8 +30,10 @@ struct KernelHit {
 @group(1) @binding(0) var<storage, read> rays: array<KernelRay>;
 @group(1) @binding(1) var<storage, read_write> hits: array<KernelHit>;
 
+// BVH_STACK_LANES invocations
 @compute @workgroup_size(64, 1, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_lane = lane;
     let i = gid.x;
     if (i >= arrayLength(&rays)) {
         return;

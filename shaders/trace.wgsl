@@ -188,8 +188,10 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     return (*path).depth < params.max_depth;
 }
 
+// 8 x 8 = BVH_STACK_LANES invocations
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_lane = lane;
     if (gid.x >= params.tile_width || gid.y >= params.tile_height) {
         return;
     }

@@ -15,7 +15,9 @@ use wgtrace::gpu::plan::{
 };
 use wgtrace::gpu::shader::{used_bindings, validate, ENTRY_SHADERS, SHADER_FILES};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
-use wgtrace::scene::records::{record_layouts, SharedValue, SHARED_CONSTANTS};
+use wgtrace::scene::records::{
+    record_layouts, SharedValue, BVH_STACK_LANES, BVH_STACK_SIZE, SHARED_CONSTANTS,
+};
 use wgtrace::{Overrides, Tuning};
 
 /// The assembled and validated module of `entry` for `spec`.
@@ -568,4 +570,36 @@ fn the_plan_follows_the_tuning() {
         .unwrap_err()
         .contains("no-russian-roulette"));
     assert!(Tuning::parse("bvh,no-bvh").is_err());
+}
+
+/// Every entry point of the entry shaders runs BVH_STACK_LANES invocations per workgroup,
+/// one per column of the workgroup-memory traversal stack, and that stack fits the
+/// workgroup memory every device has (WebGPU's default limit).
+#[test]
+fn traversal_stacks_fit_workgroup_memory_one_column_per_invocation() {
+    let (lanes, depth) = (BVH_STACK_LANES, BVH_STACK_SIZE);
+    let spec = ShaderSpec {
+        features: FeatureSet::default()
+            .with(Feature::Bvh, true)
+            .with(Feature::Emission, true),
+        placements: Placements::default(),
+        scene_code: String::new(),
+    };
+    for entry in ENTRY_SHADERS {
+        let module = module(&spec, entry);
+        assert!(!module.entry_points.is_empty());
+        for ep in &module.entry_points {
+            let [x, y, z] = ep.workgroup_size;
+            assert_eq!(x * y * z, lanes, "{entry}: {}", ep.name);
+        }
+        let (_, var) = module
+            .global_variables
+            .iter()
+            .find(|(_, v)| v.name.as_deref() == Some("bvh_stack"))
+            .unwrap_or_else(|| panic!("{entry}: no bvh_stack"));
+        assert_eq!(var.space, naga::AddressSpace::WorkGroup);
+        let bytes = module.types[var.ty].inner.size(module.to_ctx());
+        assert_eq!(bytes, depth * lanes * 8, "{entry}");
+        assert!(bytes <= wgpu::Limits::default().max_compute_workgroup_storage_size);
+    }
 }

@@ -9,11 +9,12 @@ use super::context::GpuContext;
 use super::error::GpuError;
 use super::plan::GpuPlan;
 use crate::scene::flat::FlatScene;
-use crate::scene::records::{KernelHit, KernelRay, TextureLookup};
+use crate::scene::records::{KernelHit, KernelRay, TextureLookup, BVH_STACK_LANES};
 use crate::tuning::Tuning;
 
-/// Workgroup size of `kernel.wgsl`'s entry point.
-const WORKGROUP: u32 = 64;
+/// Workgroup size of `kernel.wgsl`'s entry points: one invocation per column of the
+/// traversal stacks.
+const WORKGROUP: u32 = BVH_STACK_LANES;
 
 /// Group-1 bindings of `kernel.wgsl`: the rays and hits of `main`, the look-ups and colours
 /// of `textures_main` (`tests/shaders.rs` holds them to naga's view of the shader).

@@ -20,8 +20,10 @@ pub const MAX_TILE_PIXELS: u32 = 1 << 18;
 /// Accumulation bytes per pixel: two `vec4<f32>` (sum with count, sum of squares).
 pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
 
-/// Workgroup size of `trace.wgsl`'s entry point.
+/// Workgroup side of `trace.wgsl`'s entry point: one invocation per column of the
+/// traversal stacks.
 const WORKGROUP: u32 = 8;
+const _: () = assert!(WORKGROUP * WORKGROUP == crate::scene::records::BVH_STACK_LANES);
 
 pub struct GpuRenderer {
     ctx: Arc<GpuContext>,

@@ -58,6 +58,11 @@ shared_constants! {
     /// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
     /// within this depth.
     BVH_STACK_SIZE: u32 = 32;
+    /// Invocations in a workgroup of every entry point that traces rays (`@workgroup_size`
+    /// of `trace.wgsl` and `kernel.wgsl`): the traversal stacks are in workgroup memory,
+    /// one column per invocation, where llvmpipe writes an entry for the lanes that push
+    /// one only; a stack in private memory costs it a masked write of all 8 lanes.
+    BVH_STACK_LANES: u32 = 64;
     /// A traversal stack entry packs a node's `offset` above its `count` (`bvh_link`), in
     /// the low `BVH_COUNT_BITS` bits. A leaf of `BVH_COUNT_MASK` or more primitives (the
     /// builder makes them at its depth limit and of equal centroids) is linked by its
