@@ -25,7 +25,32 @@ fn env_local(d: vec3<f32>) -> vec3<f32> {
 // (image row 0) to straight down.
 fn env_coords(d: vec3<f32>) -> vec2<f32> {
     let l = env_local(d);
-    return vec2<f32>(0.5 + atan2(l.x, -l.z) * (0.5 / PI), acos(clamp(l.y, -1.0, 1.0)) / PI);
+    let sin_theta = sqrt(max(0.0, (1.0 - l.y) * (1.0 + l.y)));
+    return vec2<f32>(0.5 + env_atan2(l.x, -l.z) * (0.5 / PI), env_atan2(sin_theta, l.y) / PI);
+}
+
+// atan2(y, x) from only correctly rounded operations, so that both backends find the same
+// texel of the image background for a direction (a texel edge is where its density jumps):
+// atan on [0, 1] as Abramowitz and Stegun's polynomial 4.4.49 (error below 2e-8), then the
+// octant's reflection.
+fn env_atan2(y: f32, x: f32) -> f32 {
+    let ax = abs(x);
+    let ay = abs(y);
+    let hi = max(ax, ay);
+    let r = select(min(ax, ay) / hi, 0.0, hi == 0.0);
+    let r2 = r * r;
+    var a = 0.0028662257;
+    a = a * r2 - 0.0161657367;
+    a = a * r2 + 0.0429096138;
+    a = a * r2 - 0.0752896400;
+    a = a * r2 + 0.1065626393;
+    a = a * r2 - 0.1420889944;
+    a = a * r2 + 0.1999355085;
+    a = a * r2 - 0.3333314528;
+    a = (a * r2 + 1.0) * r;
+    a = select(a, 0.5 * PI - a, ay > ax);
+    a = select(a, PI - a, x < 0.0);
+    return select(a, -a, y < 0.0);
 }
 
 // The direction of equirectangular coordinates (u, t), inverse of env_coords.

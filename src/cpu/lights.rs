@@ -24,10 +24,45 @@ pub fn env_local(b: &Bindings, d: Vec3) -> Vec3 {
 /// Equirectangular coordinates (u, t) of a direction; t = theta / pi from straight up.
 pub fn env_coords(b: &Bindings, d: Vec3) -> Vec2 {
     let l = env_local(b, d);
+    let sin_theta = (0.0f32).max((1.0 - l.y) * (1.0 + l.y)).sqrt();
     Vec2::new(
-        0.5 + l.x.atan2(-l.z) * (0.5 / PI),
-        l.y.clamp(-1.0, 1.0).acos() / PI,
+        0.5 + env_atan2(l.x, -l.z) * (0.5 / PI),
+        env_atan2(sin_theta, l.y) / PI,
     )
+}
+
+/// atan2(y, x) from only correctly rounded operations, as the shader computes it (both
+/// backends find the same texel of the image background): Abramowitz and Stegun's
+/// polynomial 4.4.49 for atan on [0, 1] (error below 2e-8), then the octant's reflection.
+pub fn env_atan2(y: f32, x: f32) -> f32 {
+    let (ax, ay) = (x.abs(), y.abs());
+    let hi = ax.max(ay);
+    let r = if hi == 0.0 { 0.0 } else { ax.min(ay) / hi };
+    let r2 = r * r;
+    let mut a = 0.0028662257f32;
+    for c in [
+        -0.0161657367,
+        0.0429096138,
+        -0.0752896400,
+        0.1065626393,
+        -0.1420889944,
+        0.1999355085,
+        -0.3333314528,
+    ] {
+        a = a * r2 + c;
+    }
+    a = (a * r2 + 1.0) * r;
+    if ay > ax {
+        a = 0.5 * PI - a;
+    }
+    if x < 0.0 {
+        a = PI - a;
+    }
+    if y < 0.0 {
+        -a
+    } else {
+        a
+    }
 }
 
 /// The direction of equirectangular coordinates (u, t).
