@@ -34,6 +34,8 @@ pub fn env_coords(b: &Bindings, d: Vec3) -> Vec2 {
 /// atan2(y, x) from only correctly rounded operations, as the shader computes it (both
 /// backends find the same texel of the image background): Abramowitz and Stegun's
 /// polynomial 4.4.49 for atan on [0, 1] (error below 2e-8), then the octant's reflection.
+// the coefficients as published and as the shader writes them (rounded to f32 alike)
+#[allow(clippy::excessive_precision)]
 pub fn env_atan2(y: f32, x: f32) -> f32 {
     let (ax, ay) = (x.abs(), y.abs());
     let hi = ax.max(ay);
