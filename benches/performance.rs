@@ -830,12 +830,29 @@ fn optimizations(md: &mut String, dir: &Path) {
          spot 0.262 to 0.348 (1.33x), nefertiti 0.202 to 0.342 (1.69x), heightfield \
          0.237 to 0.358 (1.51x); the visits are the same, so are the images. Tried and \
          not kept: leaves of up to 8 and a traversal cost of 2 with the postponed leaves \
-         (0.250 against 0.255, noise). What is left per node visit: 594 instructions, of \
-         which about 170 fetch the child pair (4 texels x 8 lanes, one load each), about \
-         115 push a stack entry (llvmpipe writes a private array lane by lane, reading \
-         back what a masked lane keeps) and about 50 pop one. A wide, quantized BVH (4 \
-         children in 4 texels) would halve both the fetches per child and the visits; it \
-         is the next step.\n"
+         (0.250 against 0.255, noise). What was left per node visit: 594 instructions, of \
+         which about 170 fetched the child pair (4 texels x 8 lanes, one load each), about \
+         115 pushed a stack entry (llvmpipe writes a private array for all 8 lanes, reading \
+         back what the lanes that do not push keep) and about 50 popped one.\n\n\
+         Third round. Kept: the traversal stacks in workgroup memory, one column per \
+         invocation (llvmpipe writes workgroup memory lane by lane, for the lanes that \
+         push only): nefertiti's bounce loop 9363 to 5152 instructions, the walk's inner \
+         loop 594 to 453; spot 0.370 to 0.489, nefertiti 0.334 to 0.422, heightfield \
+         0.356 to 0.372 Msamples/s, the same images bit for bit. Tried and not kept: a \
+         4-wide BVH (the binary SAH tree collapsed, each node's up to four children side \
+         by side in 8 texels, a sorting network for the nearest first, with the stack in \
+         workgroup memory): its step is 843 instructions against 453 for a binary step, \
+         so two binary levels cost 906 against 843, and nefertiti rendered 0.398 \
+         against 0.415, spot 0.480 against 0.481. Fetches stay 2 texels per child and \
+         take about 45 instructions each; child boxes quantized to 8 bits in the node's \
+         frame (Ylitie et al. 2017: 4 children in 4 texels) would save 4 of the 8 fetches \
+         and add about 70 instructions of decoding, about 735 per step: 1.23x on the \
+         interior loops, which a perf profile of the heightfield puts at 62% of its time \
+         (closest hit 33%, shadow rays 29%; leaf loops 11%, the rest of the bounce 9%), \
+         so about 1.13x on a mesh scene. Mitsuba 3's wheel traces the rays of its CPU \
+         variants with Embree (it ships `libembree3.so`): wide BVHs walked with the \
+         children's boxes tested in SIMD, where lavapipe runs 8 rays in SIMD and every node \
+         fetch is a gather of 8 loads. The cost of a visit, not the tree, is the gap.\n"
     );
 }
 
