@@ -72,6 +72,43 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
     return f * le * (w / ls.pdf);
 }
 
+#ifdef HAS_PUNCTUAL
+// Next-event estimation toward a light without a surface, chosen among them in proportion
+// to its power: a shadow ray to its position (or out of the scene, for a directional
+// light), and f x intensity x the spot's falloff / d^2 (or f x irradiance) over the
+// choice's probability. No MIS weight: no other strategy can find a point or a direction.
+fn direct_punctual(mat: Material, ray: Ray, hit: Hit, u: f32) -> vec3<f32> {
+    let e = emitter_record(choose_punctual(u));
+    let positioned = e.kind != LIGHT_DIRECTIONAL;
+    var dir = e.a.xyz;
+    var le = e.b.xyz;
+    var d2 = 1.0;
+    if (positioned) {
+        let v = e.a.xyz - hit.p;
+        d2 = dot(v, v);
+        dir = v / sqrt(d2);
+        var falloff = 1.0;
+        if (e.kind == LIGHT_SPOT) {
+            falloff = spot_falloff(-dot(dir, e.c.xyz), e.a.w, e.b.w);
+        }
+        le *= falloff / d2;
+    }
+    var shadow = spawn_ray(hit, dir);
+    var t_max = FAR;
+    if (positioned) {
+        let w = e.a.xyz - shadow.origin;
+        t_max = length(w);
+        shadow.dir = w / t_max;
+    }
+    let f = bsdf_eval(mat, ray, hit, dir);
+    let lit = e.prob > 0.0 && d2 > 0.0 && t_max > 0.0 && any(f != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
+    if (!lit || occluded(shadow, t_max)) {
+        return vec3<f32>(0.0);
+    }
+    return f * le / e.prob;
+}
+#endif
+
 // A camera path being traced: the ray to follow next, the radiance gathered so far, the
 // throughput, and the previous vertex for the MIS weight of an emitter the ray hits (its
 // point, the pdf of the ray's direction, and whether that came from a delta lobe, weight
@@ -140,6 +177,14 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         let ul = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT);
         let uc = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT_CHOICE);
         (*path).radiance += (*path).throughput * direct_light(mat, (*path).ray, hit, uc.x, ul);
+    }
+#endif
+#ifdef HAS_PUNCTUAL
+    // the lights without a surface, under every strategy: only next-event estimation
+    // finds them (the full shader holds this for scenes without any)
+    if (params.num_punctual != 0u && nee_applies(mat)) {
+        let up = bounce_2d(pixel, sample, (*path).depth, DIM_PUNCTUAL);
+        (*path).radiance += (*path).throughput * direct_punctual(mat, (*path).ray, hit, up.x);
     }
 #endif
 #ifdef HAS_MIXTURE

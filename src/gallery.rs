@@ -75,6 +75,11 @@ pub const ENTRIES: &[Entry] = &[
         "Finite cylinders, capped and open",
     ),
     entry(
+        "punctual",
+        "scenes/punctual.toml",
+        "Point, spot and directional lights: sharp shadows, glTF's spot falloff",
+    ),
+    entry(
         "cornell",
         "scenes/cornell.toml",
         "Lambertian: the Cornell box",

@@ -78,6 +78,16 @@ material = "patch"
     )
 }
 
+/// The patch of `patch_scene` seen straight from above, so that the points the camera sees
+/// lie symmetrically about the origin: the irradiance at their mean is the origin's to
+/// second order (a spot's falloff changes fast across its ramp).
+fn patch_scene_from_above(light: &str) -> String {
+    patch_scene(light).replace(
+        "look_from = [0, 0.04, 0.04]",
+        "look_from = [0, 0.05, 0]\nup = [0, 0, -1]",
+    )
+}
+
 /// Lambert's formula: irradiance at the origin (normal +y) from a polygon of radiance L,
 /// E = (L / 2) |sum theta_i (n . Gamma_i)|.
 fn lambert_polygon(vertices: &[DVec3], l: f64) -> f64 {
@@ -136,6 +146,73 @@ fn area_lights_give_their_closed_form_irradiance_under_every_strategy() {
             let scene = with_strategy(&src, strategy, &dir);
             let expected = albedo / PI * e;
             assert_mean(&format!("{name} {strategy:?}"), &scene, [expected; 3]);
+        }
+    }
+}
+
+/// Lights without a surface over the patch, under every strategy, on both backends: a
+/// point light gives E = I cos(theta) / d^2 (inverse square and cosine law, per channel);
+/// a spot aimed straight down gives that times glTF's falloff, halfway up its ramp; a
+/// directional light gives E cos(theta); a sphere between a point light and the patch
+/// casts its shadow; and a point light and a directional light together add up. The
+/// patch shows albedo / pi x E.
+#[test]
+fn point_spot_and_directional_lights_give_their_closed_form_irradiance_under_every_strategy() {
+    let albedo = 0.5;
+    let intensity = [2.0, 3.0, 4.0];
+    let p = DVec3::new(0.3, 2.0, 0.4);
+    let (d, cos) = (p.length(), p.y / p.length());
+    let point = |i: [f64; 3]| i.map(|c| c * cos / (d * d));
+    // the spot's axis is -y: the patch is seen at theta from it, cos(theta) = cos
+    let (inner, outer) = (5f64, 25f64);
+    let ramp =
+        (cos - outer.to_radians().cos()) / (inner.to_radians().cos() - outer.to_radians().cos());
+    assert!(
+        ramp > 0.2 && ramp < 0.8,
+        "the patch should lie on the ramp: {ramp}"
+    );
+    let irradiance = [1.0, 0.5, 0.25];
+    // travelling along (0.6, -0.8, 0): cos(theta) = 0.8 at the patch
+    let directional = irradiance.map(|c| c * 0.8);
+    let point_light =
+        "[[lights]]\ntype = \"point\"\nposition = [0.3, 2, 0.4]\nintensity = [2, 3, 4]\n";
+    let directional_light =
+        "[[lights]]\ntype = \"directional\"\ndirection = [0.6, -0.8, 0]\nirradiance = [1, 0.5, 0.25]\n";
+    let cases = [
+        ("point", point_light.to_string(), point(intensity)),
+        (
+            "spot",
+            format!(
+                "[[lights]]\ntype = \"spot\"\nposition = [0.3, 2, 0.4]\ndirection = [0, -1, 0]\n\
+                 intensity = [2, 3, 4]\ninner_angle = {inner}\nouter_angle = {outer}\n"
+            ),
+            point(intensity).map(|e| e * ramp * ramp),
+        ),
+        ("directional", directional_light.to_string(), directional),
+        (
+            "point in shadow",
+            format!(
+                "{point_light}[[objects]]\ntype = \"sphere\"\ncenter = [0.15, 1, 0.2]\n\
+                 radius = 0.1\nmaterial = \"patch\"\n"
+            ),
+            [0.0; 3],
+        ),
+        (
+            "point and directional",
+            format!("{point_light}{directional_light}"),
+            [0, 1, 2].map(|c| point(intensity)[c] + directional[c]),
+        ),
+    ];
+    let dir = std::env::temp_dir();
+    for (name, light, e) in &cases {
+        let src = patch_scene_from_above(light);
+        for strategy in STRATEGIES {
+            let scene = with_strategy(&src, strategy, &dir);
+            assert_mean(
+                &format!("{name} {strategy:?}"),
+                &scene,
+                e.map(|e| albedo / PI * e),
+            );
         }
     }
 }
@@ -699,4 +776,61 @@ material = "glow"
     let mut mis = scene.clone();
     mis.light_sampling = wgtrace::scene::format::LightSampling::Mis;
     assert!(wgtrace::Engine::gpu(&mis, 0).is_ok());
+}
+
+/// Mistakes in `[[lights]]` are named with the file, the line of the light's table and
+/// its key, all of them at once; a spot with a hard edge (equal angles) loads.
+#[test]
+fn light_mistakes_are_named_with_their_line_and_key() {
+    let base = "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n";
+    let cases = [
+        (
+            "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, -1, 1]\n",
+            vec!["bad.toml:4:1: lights[0].intensity: must be >= 0, got [1.0, -1.0, 1.0]"],
+        ),
+        (
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n",
+            vec!["bad.toml:4:1: lights[0]: needs exactly one of direction and look_at"],
+        ),
+        (
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\nlook_at = [0, 1, 0]\n\
+             intensity = [1, 1, 1]\ninner_angle = 30\nouter_angle = 20\n",
+            vec![
+                "bad.toml:4:1: lights[0].look_at: must differ from position",
+                "bad.toml:4:1: lights[0].inner_angle: must be in [0, outer_angle = 20] degrees, got 30",
+            ],
+        ),
+        (
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\n\
+             intensity = [1, 1, 1]\nouter_angle = 120\n",
+            vec!["bad.toml:4:1: lights[0].outer_angle: must be in (0, 90] degrees, got 120"],
+        ),
+        (
+            "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n\
+             [[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\nirradiance = [1, 1, 1]\n",
+            vec!["bad.toml:8:1: lights[1].direction: must be non-zero"],
+        ),
+        (
+            "[[lights]]\ntype = \"sun\"\ndirection = [0, -1, 0]\n",
+            vec!["bad.toml:5:8: unknown variant `sun`, expected one of `point`, `spot`, `directional`"],
+        ),
+    ];
+    for (lights, expected) in cases {
+        let src = format!("{base}{lights}");
+        let e = match wgtrace::load_scene_str(&src, Path::new("bad.toml"), &Overrides::default()) {
+            Ok(_) => panic!("should not load:\n{src}"),
+            Err(e) => e.to_string(),
+        };
+        for want in expected {
+            assert!(e.contains(want), "{want}\nnot in:\n{e}");
+        }
+    }
+    let hard = format!(
+        "{base}[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\n\
+         intensity = [1, 1, 1]\ninner_angle = 20\nouter_angle = 20\n"
+    );
+    let scene = wgtrace::load_scene_str(&hard, Path::new("hard.toml"), &Overrides::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(scene.num_punctual, 1);
+    assert!(scene.emits());
 }

@@ -131,14 +131,10 @@ fn env_pdf(d: vec3<f32>) -> f32 {
     return p_row * p_col / (2.0 * PI * PI * sin_theta);
 }
 
-// The index of the light whose CDF interval holds u: the first with u < cdf.
-fn choose_light(u: f32) -> u32 {
-#ifdef BAKED_EMITTERS
-    // a few lights written into the shader (gpu::codegen::baked_emitters)
-    return choose_light_baked(u);
-#else
-    var lo = 0u;
-    var hi = params.num_emitters - 1u;
+// The emitter among first ..= last whose CDF interval holds u: the first with u < cdf.
+fn search_cdf(first: u32, last: u32, u: f32) -> u32 {
+    var lo = first;
+    var hi = last;
     while (lo < hi) {
         let mid = (lo + hi) / 2u;
         if (u < emitter_record(mid).cdf) {
@@ -148,8 +144,32 @@ fn choose_light(u: f32) -> u32 {
         }
     }
     return lo;
+}
+
+// The index of the light whose CDF interval holds u.
+fn choose_light(u: f32) -> u32 {
+#ifdef BAKED_EMITTERS
+    // a few lights written into the shader (gpu::codegen::baked_emitters)
+    return choose_light_baked(u);
+#else
+    return search_cdf(0u, params.num_emitters - 1u, u);
 #endif
 }
+
+#ifdef HAS_PUNCTUAL
+// The light without a surface whose CDF interval holds u: emitters num_emitters ..
+// num_emitters + num_punctual, whose cdf runs over them alone.
+fn choose_punctual(u: f32) -> u32 {
+    return search_cdf(params.num_emitters, params.num_emitters + params.num_punctual - 1u, u);
+}
+
+// A spot's falloff at cos_theta from its axis (KHR_lights_punctual): 1 within the inner
+// cone, 0 beyond the outer, the square of a linear ramp in the cosine between.
+fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32) -> f32 {
+    let ramp = clamp((cos_theta - cos_outer) / max(0.001, cos_inner - cos_outer), 0.0, 1.0);
+    return ramp * ramp;
+}
+#endif
 
 // A direction toward a light from a reference point.
 struct LightSample {

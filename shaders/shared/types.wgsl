@@ -143,6 +143,11 @@ struct Params {
     rr_depth: u32,
     // samples sample_index .. sample_index + sample_count are traced by this dispatch
     sample_count: u32,
+    // lights without a surface: emitters num_emitters .. num_emitters + num_punctual
+    num_punctual: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 struct Ray {

@@ -140,9 +140,9 @@ pub fn env_pdf(b: &Bindings, d: Vec3) -> f32 {
     p_row * p_col / (2.0 * PI * PI * sin_theta)
 }
 
-/// The index of the light whose CDF interval holds u.
-pub fn choose_light(b: &Bindings, u: f32) -> u32 {
-    let (mut lo, mut hi) = (0u32, b.params.num_emitters - 1);
+/// The emitter among first ..= last whose CDF interval holds u: the first with u < cdf.
+pub fn search_cdf(b: &Bindings, first: u32, last: u32, u: f32) -> u32 {
+    let (mut lo, mut hi) = (first, last);
     while lo < hi {
         let mid = (lo + hi) / 2;
         if u < b.emitters[mid as usize].cdf {
@@ -152,6 +152,25 @@ pub fn choose_light(b: &Bindings, u: f32) -> u32 {
         }
     }
     lo
+}
+
+/// The index of the light whose CDF interval holds u.
+pub fn choose_light(b: &Bindings, u: f32) -> u32 {
+    search_cdf(b, 0, b.params.num_emitters - 1, u)
+}
+
+/// The light without a surface whose CDF interval holds u (emitters num_emitters ..
+/// num_emitters + num_punctual, whose cdf runs over them alone).
+pub fn choose_punctual(b: &Bindings, u: f32) -> u32 {
+    let p = &b.params;
+    search_cdf(b, p.num_emitters, p.num_emitters + p.num_punctual - 1, u)
+}
+
+/// A spot's falloff at cos_theta from its axis (KHR_lights_punctual): 1 within the inner
+/// cone, 0 beyond the outer, the square of a linear ramp in the cosine between.
+pub fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32) -> f32 {
+    let ramp = ((cos_theta - cos_outer) / (cos_inner - cos_outer).max(0.001)).clamp(0.0, 1.0);
+    ramp * ramp
 }
 
 /// A direction toward a light from a reference point.

@@ -6,18 +6,19 @@ use rayon::prelude::*;
 use super::bindings::Bindings;
 use super::intersect::{intersect_scene, occluded, surface_at};
 use super::lights::{
-    background_radiance, light_pdf, light_pdf_total, power_heuristic, sample_light,
+    background_radiance, choose_punctual, light_pdf, light_pdf_total, power_heuristic,
+    sample_light, spot_falloff,
 };
 use super::materials::{bsdf_eval, bsdf_pdf, emitted, mixture_applies, nee_applies, scatter};
 use super::rng::rand_2d;
-use super::samplers::{bounce_2d, sample_2d, DIM_RR};
+use super::samplers::{bounce_2d, sample_2d, DIM_PUNCTUAL, DIM_RR};
 use super::sampling::{offset_ray, sample_disk};
 use super::textures::material_at;
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{
-    Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE, NO_LIGHT,
-    PRIM_LIGHT_SHIFT,
+    Material, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE,
+    LIGHT_SPOT, NO_LIGHT, PRIM_LIGHT_SHIFT,
 };
 
 pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
@@ -121,6 +122,41 @@ pub fn direct_light(
     f * le * (w / ls.pdf)
 }
 
+/// Next-event estimation toward a light without a surface, chosen among them in
+/// proportion to its power: a shadow ray to its position (or out of the scene, for a
+/// directional light), f x intensity x the spot's falloff / d^2 (or f x irradiance) over
+/// the choice's probability, no MIS weight (trace.wgsl's `direct_punctual`).
+pub fn direct_punctual(b: &Bindings, mat: &Material, ray: &Ray, hit: &Hit, u: f32) -> Vec3 {
+    let e = &b.emitters[choose_punctual(b, u) as usize];
+    let positioned = e.kind != LIGHT_DIRECTIONAL;
+    let mut dir = xyz(e.a);
+    let mut le = xyz(e.b);
+    let mut d2 = 1.0;
+    if positioned {
+        let v = xyz(e.a) - hit.p;
+        d2 = v.dot(v);
+        dir = v / d2.sqrt();
+        let mut falloff = 1.0;
+        if e.kind == LIGHT_SPOT {
+            falloff = spot_falloff(-dir.dot(xyz(e.c)), e.a[3], e.b[3]);
+        }
+        le *= falloff / d2;
+    }
+    let mut shadow = spawn_ray(hit, dir);
+    let mut t_max = FAR;
+    if positioned {
+        let w = xyz(e.a) - shadow.origin;
+        t_max = w.length();
+        shadow.dir = w / t_max;
+    }
+    let f = bsdf_eval(mat, ray, hit, dir);
+    let lit = e.prob > 0.0 && d2 > 0.0 && t_max > 0.0 && f != Vec3::ZERO && le != Vec3::ZERO;
+    if !lit || occluded(b, &shadow, t_max) {
+        return Vec3::ZERO;
+    }
+    f * le / e.prob
+}
+
 /// A camera path being traced (trace.wgsl's `Path`): the next ray, the radiance so far,
 /// the throughput, the previous vertex for MIS, and the rays traced so far.
 pub struct Path {
@@ -189,6 +225,12 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         let ul = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT);
         let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);
         path.radiance += path.throughput * direct_light(b, mat, &path.ray, &hit, uc[0], ul);
+    }
+    // the lights without a surface, under every strategy: only next-event estimation
+    // finds them
+    if p.num_punctual > 0 && nee_applies(mat) {
+        let up = bounce_2d(b, pixel, sample, path.depth, DIM_PUNCTUAL);
+        path.radiance += path.throughput * direct_punctual(b, mat, &path.ray, &hit, up[0]);
     }
     if p.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat) {
         let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);

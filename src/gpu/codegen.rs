@@ -149,7 +149,9 @@ pub fn baked_emitters(scene: &FlatScene) -> String {
     let records: Vec<String> = scene.emitters.iter().map(wgsl_record).collect();
     let mut code = record_lookup("emitter_record", "Emitter", &records);
     code += "fn choose_light_baked(u: f32) -> u32 {\n    var i = 0u;\n";
-    for e in &scene.emitters[..scene.emitters.len() - 1] {
+    // choose_light picks among the lights with a surface and the image background only
+    let sampled = scene.emitters.len() - scene.num_punctual as usize;
+    for e in &scene.emitters[..sampled.saturating_sub(1)] {
         code += &format!("    i += select(0u, 1u, u >= {});\n", wgsl_f32(e.cdf));
     }
     code + "    return i;\n}\n"

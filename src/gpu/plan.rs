@@ -56,6 +56,9 @@ pub enum Feature {
     Mis,
     /// The 50/50 mixture of light and material sampling.
     Mixture,
+    /// Lights without a surface (point, spot, directional): next-event estimation toward
+    /// them under every strategy.
+    Punctual,
     /// The image background.
     EnvMap,
     /// Anything emits: without it no path is traced.
@@ -64,7 +67,7 @@ pub enum Feature {
 
 impl Feature {
     /// Every feature, in define order.
-    pub const ALL: [Feature; 25] = [
+    pub const ALL: [Feature; 26] = [
         Feature::Sphere,
         Feature::Triangle,
         Feature::Plane,
@@ -88,6 +91,7 @@ impl Feature {
         Feature::Sobol,
         Feature::Mis,
         Feature::Mixture,
+        Feature::Punctual,
         Feature::EnvMap,
         Feature::Emission,
     ];
@@ -118,6 +122,7 @@ impl Feature {
             Feature::Sobol => "HAS_SOBOL",
             Feature::Mis => "HAS_MIS",
             Feature::Mixture => "HAS_MIXTURE",
+            Feature::Punctual => "HAS_PUNCTUAL",
             Feature::EnvMap => "HAS_ENV_MAP",
             Feature::Emission => "HAS_EMISSION",
         }
@@ -181,7 +186,8 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     let bounded = scene.primitives.len() > scene.num_unbounded as usize;
     // lights are sampled only toward surfaces with a lobe that is not a delta
     // (`nee_applies`: Lambertian or microfacet), and only when there are lights
-    let lit = !scene.emitters.is_empty() && (mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET));
+    let nee = mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET);
+    let lit = scene.emitters.len() > scene.num_punctual as usize && nee;
     FeatureSet::default()
         .with(Feature::Sphere, prim(r::PRIM_SPHERE))
         .with(Feature::Triangle, prim(r::PRIM_TRIANGLE))
@@ -224,6 +230,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
             Feature::Mixture,
             lit && scene.light_sampling == LightSampling::Mixture,
         )
+        .with(Feature::Punctual, scene.num_punctual > 0 && nee)
         .with(Feature::EnvMap, scene.env.is_some())
         .with(Feature::Emission, scene.emits())
 }
@@ -306,7 +313,9 @@ impl ShaderSpec {
                 Slot::Params | Slot::Accum => true,
                 _ if !traced => false,
                 Slot::Primitives | Slot::Materials => buffer(slot),
-                Slot::Emitters => buffer(slot) && (f(Feature::Mis) || f(Feature::Mixture)),
+                Slot::Emitters => {
+                    buffer(slot) && (f(Feature::Mis) || f(Feature::Mixture) || f(Feature::Punctual))
+                }
                 Slot::Bvh => f(Feature::Bvh),
                 Slot::ShapeData => f(Feature::Transforms) || f(Feature::Triangle),
                 Slot::Textures => f(Feature::Textures) || f(Feature::EnvMap),
@@ -458,15 +467,19 @@ fn ray_loop_iterations(scene: &FlatScene, primitives_in_shader: bool) -> u64 {
 }
 
 /// Loop iterations of one path: a turn of the bounce loop per ray, plus the loops of its
-/// rays (camera or bounce, and the MIS shadow ray) and, for the mixture, the loop over
-/// lights.
+/// rays (camera or bounce, the MIS shadow ray, the shadow ray to a light without a
+/// surface) and, for the mixture, the loop over lights, and the binary search that
+/// chooses a light without a surface.
 fn path_loop_iterations(scene: &FlatScene, ray_loops: u64) -> u64 {
-    let lit = scene.light_sampling != LightSampling::Bsdf && !scene.emitters.is_empty();
-    let shadow = (lit && scene.light_sampling == LightSampling::Mis) as u64;
+    let area = scene.emitters.len() - scene.num_punctual as usize;
+    let lit = scene.light_sampling != LightSampling::Bsdf && area > 0;
+    let punctual = scene.num_punctual > 0;
+    let shadow = (lit && scene.light_sampling == LightSampling::Mis) as u64 + punctual as u64;
     let mixture = if lit && scene.light_sampling == LightSampling::Mixture {
-        scene.emitters.len() as u64
+        area as u64
     } else {
         0
     };
-    scene.max_depth as u64 * (1 + (1 + shadow) * ray_loops + mixture)
+    let choice = u64::from(32 - scene.num_punctual.saturating_sub(1).leading_zeros());
+    scene.max_depth as u64 * (1 + (1 + shadow) * ray_loops + mixture + choice)
 }

@@ -46,13 +46,17 @@ pub struct FlatScene {
     pub rr_depth: u32,
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
-    /// The light list: emissive primitives that can be sampled, then the image background.
+    /// The light list: emissive primitives that can be sampled, then the image background,
+    /// then the lights without a surface.
     pub emitters: Vec<Emitter>,
     /// Material names, in record order.
     pub material_names: Vec<String>,
     /// BVH over primitives `num_unbounded..` in `bvh::pair_layout` (the root at entry 0,
     /// entry 1 unused, the children of a node side by side); empty when `use_bvh` is false.
     pub bvh: Vec<BvhNode>,
+    /// The last `num_punctual` emitters are the lights without a surface (`[[lights]]`),
+    /// chosen among themselves.
+    pub num_punctual: u32,
     /// Depth of the deepest BVH leaf (the root is 0).
     pub bvh_depth: u32,
     /// Transforms and triangle vertex attributes, indexed by `Primitive::data`.
@@ -131,7 +135,8 @@ impl FlatScene {
             seed: self.seed,
             sample_index,
             num_primitives: self.primitives.len() as u32,
-            num_emitters: self.emitters.len() as u32,
+            num_emitters: self.emitters.len() as u32 - self.num_punctual,
+            num_punctual: self.num_punctual,
             tile_x: tile.x,
             tile_y: tile.y,
             tile_width: tile.width,
@@ -183,6 +188,12 @@ impl FlatScene {
             || bright(&self.background)
             || self.background_top.is_some_and(|t| bright(&t))
             || self.env.is_some()
+            || self.punctual().iter().any(|e| e.power > 0.0)
+    }
+
+    /// The lights without a surface: point, spot and directional lights.
+    pub fn punctual(&self) -> &[Emitter] {
+        &self.emitters[self.emitters.len() - self.num_punctual as usize..]
     }
 }
 

@@ -7,8 +7,8 @@ use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
-use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
-use super::lights::{env_distribution, light_list, Environment};
+use super::format::{ColorDesc, LightDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::lights::{env_distribution, light_list, punctual_lights, Environment};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA, NO_TEXTURE};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
@@ -492,21 +492,18 @@ pub fn flatten(
         env_cdf = texels.len() as u32;
         texels.extend(dist);
         // the scene's bounding radius, for the background's power
-        let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.union(b));
-        let radius = if boxes.is_empty() {
-            1.0
-        } else {
-            0.5 * (bounds.hi - bounds.lo).length()
-        };
-        (integral, radius)
+        (integral, bounding_sphere(&boxes).1)
     });
-    let (emitters, env_light) = light_list(
+    let (mut emitters, env_light) = light_list(
         &mut primitives,
         num_unbounded as usize,
         &materials,
         &shape_data,
         env,
     );
+    let punctual: Vec<LightDesc> = file.lights.iter().map(|l| l.get_ref().clone()).collect();
+    let num_punctual = punctual.len() as u32;
+    emitters.extend(punctual_lights(&punctual, bounding_sphere(&boxes)));
     let rotation = bg.rotation.unwrap_or(0.0).to_radians();
 
     let r = &file.render;
@@ -534,6 +531,7 @@ pub fn flatten(
         emitters,
         material_names,
         bvh,
+        num_punctual,
         bvh_depth,
         shape_data,
         num_unbounded,
@@ -541,6 +539,19 @@ pub fn flatten(
         textures,
         texels,
     })
+}
+
+/// The centre and half the diagonal of the bounded primitives' box (the origin and 1
+/// without any): the scene's extent for the power of lights, what reaches it.
+fn bounding_sphere(boxes: &[Aabb]) -> (Vec3, f32) {
+    if boxes.is_empty() {
+        return (Vec3::ZERO, 1.0);
+    }
+    let bounds = boxes.iter().fold(Aabb::empty(), |a, b| a.union(b));
+    (
+        0.5 * (bounds.lo + bounds.hi),
+        0.5 * (bounds.hi - bounds.lo).length(),
+    )
 }
 
 /// Every object's primitives (planes apart) and shape data; errors with the indices of

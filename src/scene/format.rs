@@ -22,6 +22,8 @@ pub struct SceneFile {
     pub materials: BTreeMap<String, Spanned<MaterialDesc>>,
     #[serde(default)]
     pub objects: Vec<Spanned<ObjectDesc>>,
+    #[serde(default)]
+    pub lights: Vec<Spanned<LightDesc>>,
 }
 
 /// `[render]`: image size, sample count, path length, seed.
@@ -391,6 +393,43 @@ impl ScaleDesc {
             ScaleDesc::Axes(a) => a,
         }
     }
+}
+
+/// `[[lights]]` entries, selected by `type`: lights without a surface. No ray can hit
+/// them, so paths reach them by next-event estimation under every `light_sampling`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum LightDesc {
+    /// Light from one point: `intensity` is the radiant intensity [r, g, b] in W/sr, the
+    /// irradiance at distance d facing it intensity / d^2.
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+    },
+    /// A point light in a cone about the axis `direction` (or toward `look_at`): the full
+    /// `intensity` within `inner_angle` of the axis, none beyond `outer_angle` (degrees),
+    /// glTF's smooth falloff between (the square of a linear ramp in the cosine).
+    Spot {
+        position: [f32; 3],
+        direction: Option<[f32; 3]>,
+        look_at: Option<[f32; 3]>,
+        intensity: [f32; 3],
+        #[serde(default)]
+        inner_angle: f32,
+        #[serde(default = "spot_outer_angle")]
+        outer_angle: f32,
+    },
+    /// Parallel light travelling along `direction`: `irradiance` [r, g, b] in W/m^2 on a
+    /// surface facing it, E cos(theta) on one tilted by theta.
+    Directional {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+    },
+}
+
+/// glTF's default outer cone angle, pi / 4.
+fn spot_outer_angle() -> f32 {
+    45.0
 }
 
 /// `[[objects]]` entries, selected by `type`. Every object names a `material` and may carry

@@ -4,9 +4,10 @@
 
 use glam::{Mat3, Vec3};
 
+use super::format::LightDesc;
 use super::records::{
-    self, Emitter, Material, Primitive, Texture, LIGHT_DISK, LIGHT_ENVIRONMENT, LIGHT_SPHERE,
-    LIGHT_TRIANGLE, NO_HIT, NO_LIGHT, PRIM_LIGHT_SHIFT,
+    self, Emitter, Material, Primitive, Texture, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
+    LIGHT_POINT, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_HIT, NO_LIGHT, PRIM_LIGHT_SHIFT,
 };
 use super::shapes::primitive_area;
 
@@ -74,6 +75,93 @@ pub fn env_distribution(env: &Environment) -> (Vec<[f32; 4]>, f64) {
         })
         .collect();
     (packed, integral * f64::from(env.strength))
+}
+
+/// The records of the lights without a surface (`[[lights]]`, validated), each chosen
+/// among them in proportion to the power it sends into the scene's bounding sphere
+/// (`bounds`: centre, radius), in luminance: pi r^2 E for a directional light, and I
+/// times a solid angle for a point light or a spot, the smaller of the one it lights
+/// (4 pi; a spot's cone to the middle of its falloff, 2 pi (1 - (cos inner + cos outer) /
+/// 2)) and the one the sphere subtends from it (4 pi from inside). Power alone (4 pi I,
+/// as pbrt-v4's power light sampler has it) would all but never choose a directional
+/// light over a point light in a small scene.
+pub fn punctual_lights(lights: &[LightDesc], bounds: (Vec3, f32)) -> Vec<Emitter> {
+    use std::f32::consts::PI;
+    let (center, radius) = bounds;
+    let lum = |c: [f32; 3]| luminance([c[0], c[1], c[2], 0.0]);
+    // the solid angle the scene's bounding sphere subtends from p
+    let seen = |p: Vec3| {
+        let s2 = radius * radius / (p - center).length_squared();
+        if s2 >= 1.0 {
+            4.0 * PI
+        } else {
+            2.0 * PI * s2 / (1.0 + (1.0 - s2).sqrt())
+        }
+    };
+    let mut out: Vec<Emitter> = lights
+        .iter()
+        .map(|l| match l {
+            LightDesc::Point {
+                position,
+                intensity,
+            } => Emitter {
+                primitive: NO_HIT,
+                kind: LIGHT_POINT,
+                a: Vec3::from(*position).extend(0.0).to_array(),
+                b: Vec3::from(*intensity).extend(0.0).to_array(),
+                power: (4.0 * PI).min(seen(Vec3::from(*position))) * lum(*intensity),
+                ..Default::default()
+            },
+            LightDesc::Spot {
+                position,
+                direction,
+                look_at,
+                intensity,
+                inner_angle,
+                outer_angle,
+            } => {
+                let p = Vec3::from(*position);
+                let axis = match (direction, look_at) {
+                    (Some(d), _) => Vec3::from(*d),
+                    (None, Some(t)) => Vec3::from(*t) - p,
+                    (None, None) => Vec3::NEG_Y,
+                }
+                .normalize();
+                let (cos_in, cos_out) = (
+                    inner_angle.to_radians().cos(),
+                    outer_angle.to_radians().cos(),
+                );
+                Emitter {
+                    primitive: NO_HIT,
+                    kind: LIGHT_SPOT,
+                    a: p.extend(cos_out).to_array(),
+                    b: Vec3::from(*intensity).extend(cos_in).to_array(),
+                    c: axis.extend(0.0).to_array(),
+                    power: (2.0 * PI * (1.0 - 0.5 * (cos_in + cos_out))).min(seen(p))
+                        * lum(*intensity),
+                    ..Default::default()
+                }
+            }
+            LightDesc::Directional {
+                direction,
+                irradiance,
+            } => Emitter {
+                primitive: NO_HIT,
+                kind: LIGHT_DIRECTIONAL,
+                a: (-Vec3::from(*direction).normalize()).extend(0.0).to_array(),
+                b: Vec3::from(*irradiance).extend(0.0).to_array(),
+                power: PI * radius * radius * lum(*irradiance),
+                ..Default::default()
+            },
+        })
+        .collect();
+    let powers: Vec<f64> = out.iter().map(|e| f64::from(e.power.max(0.0))).collect();
+    let c = cdf(&powers);
+    for (i, e) in out.iter_mut().enumerate() {
+        e.cdf = c[i + 1];
+        e.prob = c[i + 1] - c[i];
+    }
+    out
 }
 
 /// Running sums of `f` normalised to end at exactly 1 (n + 1 values from 0); uniform when

@@ -113,6 +113,13 @@ shared_constants! {
     LIGHT_DISK: u32 = 1;
     LIGHT_SPHERE: u32 = 2;
     LIGHT_ENVIRONMENT: u32 = 3;
+    /// Lights without a surface (`[[lights]]`), last in the list: `a` = position (a spot:
+    /// `.w` = cos of the outer angle), `b` = intensity (a spot: `.w` = cos of the inner
+    /// angle), `c` = a spot's unit axis; a directional light's `a` = the unit direction
+    /// toward it, `b` = its irradiance.
+    LIGHT_POINT: u32 = 4;
+    LIGHT_SPOT: u32 = 5;
+    LIGHT_DIRECTIONAL: u32 = 6;
     /// An index that names no light.
     NO_LIGHT: u32 = u32::MAX;
     /// `Primitive::flags >> PRIM_LIGHT_SHIFT` is the primitive's index in the light list
@@ -138,6 +145,8 @@ shared_constants! {
     DIM_LIGHT_CHOICE: u32 = 4;
     /// `.x` decides Russian roulette.
     DIM_RR: u32 = 5;
+    /// `.x` chooses the light without a surface.
+    DIM_PUNCTUAL: u32 = 6;
 
     /// The f32 nearest to pi.
     PI: f32 = std::f32::consts::PI;
@@ -354,6 +363,12 @@ pub struct Params {
     /// pixel (set per dispatch by the GPU backend; 0 in [`crate::scene::flat::FlatScene::params`],
     /// so it is not part of a checkpoint's scene hash).
     pub sample_count: u32,
+    /// Lights without a surface: emitters `num_emitters .. num_emitters + num_punctual`,
+    /// chosen among themselves (their `cdf` and `prob` are over them alone).
+    pub num_punctual: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
 }
 
 /// One node of a BVH. Interior (`count` = 0): as `bvh::build` makes them, depth-first, the
@@ -555,7 +570,11 @@ shared_record!(Params {
     env_light,
     accum_y,
     rr_depth,
-    sample_count
+    sample_count,
+    num_punctual,
+    pad0,
+    pad1,
+    pad2
 });
 shared_record!(KernelRay { origin, dir });
 shared_record!(TextureLookup { uv, p });

@@ -6,7 +6,7 @@ use super::error::Problem;
 use toml::Spanned;
 
 use super::format::{
-    CameraDesc, ColorDesc, MaterialDesc, ObjectDesc, RenderDesc, SceneFile, TextureDesc,
+    CameraDesc, ColorDesc, LightDesc, MaterialDesc, ObjectDesc, RenderDesc, SceneFile, TextureDesc,
     TransformDesc,
 };
 use super::shapes::polygon_normal;
@@ -50,6 +50,9 @@ pub fn validate(file: &SceneFile, src: &str, overridden: &[&str]) -> Vec<Problem
     }
     for (i, obj) in file.objects.iter().enumerate() {
         v.object(i, obj, file);
+    }
+    for (i, light) in file.lights.iter().enumerate() {
+        v.light(i, light);
     }
     v.problems
 }
@@ -317,6 +320,73 @@ impl Validator<'_> {
             self.transform(&format!("{key}.transform"), &t, at);
         }
         self.shape(&key, o, at);
+    }
+
+    /// One `[[lights]]` entry: finite placement, a non-zero axis, non-negative power,
+    /// spot angles in order.
+    fn light(&mut self, i: usize, light: &Spanned<LightDesc>) {
+        let at = light.span().start;
+        let key = format!("lights[{i}]");
+        match light.get_ref() {
+            LightDesc::Point {
+                position,
+                intensity,
+            } => {
+                self.finite3(&format!("{key}.position"), *position, at);
+                self.nonnegative3(&format!("{key}.intensity"), *intensity, at);
+            }
+            LightDesc::Spot {
+                position,
+                direction,
+                look_at,
+                intensity,
+                inner_angle,
+                outer_angle,
+            } => {
+                let placed = self.finite3(&format!("{key}.position"), *position, at);
+                self.nonnegative3(&format!("{key}.intensity"), *intensity, at);
+                match (direction, look_at) {
+                    (Some(d), None) => self.direction(&format!("{key}.direction"), *d, at),
+                    (None, Some(t)) => {
+                        if self.finite3(&format!("{key}.look_at"), *t, at)
+                            && placed
+                            && Vec3::from(*t) == Vec3::from(*position)
+                        {
+                            self.push(
+                                at,
+                                &format!("{key}.look_at"),
+                                "must differ from position".into(),
+                            );
+                        }
+                    }
+                    _ => self.push(
+                        at,
+                        &key,
+                        "needs exactly one of direction and look_at".into(),
+                    ),
+                }
+                if !(*outer_angle > 0.0 && *outer_angle <= 90.0) {
+                    self.push(
+                        at,
+                        &format!("{key}.outer_angle"),
+                        format!("must be in (0, 90] degrees, got {outer_angle}"),
+                    );
+                } else if !(*inner_angle >= 0.0 && inner_angle <= outer_angle) {
+                    self.push(
+                        at,
+                        &format!("{key}.inner_angle"),
+                        format!("must be in [0, outer_angle = {outer_angle}] degrees, got {inner_angle}"),
+                    );
+                }
+            }
+            LightDesc::Directional {
+                direction,
+                irradiance,
+            } => {
+                self.direction(&format!("{key}.direction"), *direction, at);
+                self.nonnegative3(&format!("{key}.irradiance"), *irradiance, at);
+            }
+        }
     }
 
     /// An object's shape: finite, non-degenerate, in range.
