@@ -331,7 +331,7 @@ fn random_triangles(rng: &mut Rng, n: usize, extent: f32, size: f32) -> Vec<[Vec
 /// shipped level-3 icosphere, subdivided further.
 fn icosphere(levels: u32, r: f32) -> Vec<[Vec3; 3]> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/icosphere.obj");
-    let mesh = wgtrace::scene::mesh::load_obj(&path).expect("scenes/meshes/icosphere.obj");
+    let mesh = wgtrace::scene::mesh::load_mesh(&path).expect("scenes/meshes/icosphere.obj");
     let mut tris: Vec<[Vec3; 3]> = mesh
         .triangles
         .iter()

@@ -116,7 +116,7 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 obj.span().start,
                 format!("objects[{i}].path"),
                 |p| {
-                    let m = mesh::load_obj(p)?;
+                    let m = mesh::load_mesh(p)?;
                     count_toward(
                         &triangles,
                         m.triangles.len() as u64,

@@ -1,8 +1,11 @@
-//! Triangle meshes from Wavefront OBJ files, read with `tobj`.
+//! Triangle meshes from Wavefront OBJ files, read with `tobj`, and from PLY files (ASCII
+//! and binary), read with `ply-rs-bw`.
 
 use std::path::Path;
 
 use glam::{Vec2, Vec3};
+use ply_rs_bw::parser::{Parser, Reader};
+use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
 
 /// A triangle mesh with one index per corner; `normals` and `uvs` are empty when the file
 /// has none (for any of its objects), else one per position.
@@ -20,15 +23,29 @@ pub const MAX_MESH_FILE_BYTES: u64 = 1 << 31;
 /// Most triangles of all a scene's meshes together (2^24, about 1.7 GB of records).
 pub const MAX_TRIANGLES: usize = 1 << 24;
 
-/// Reads every object of an OBJ file into one mesh (polygons are triangulated). Files
-/// over [`MAX_MESH_FILE_BYTES`] and meshes over [`MAX_TRIANGLES`] are refused.
-pub fn load_obj(path: &Path) -> Result<MeshData, String> {
+/// Reads a mesh file: PLY for a `.ply` name (any case), else OBJ. Files over
+/// [`MAX_MESH_FILE_BYTES`] and meshes over [`MAX_TRIANGLES`] are refused; so are faces
+/// that index no vertex and coordinates that are not finite.
+pub fn load_mesh(path: &Path) -> Result<MeshData, String> {
     let bytes = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
     if bytes > MAX_MESH_FILE_BYTES {
         return Err(format!(
             "is {bytes} bytes, more than the {MAX_MESH_FILE_BYTES} read for a mesh"
         ));
     }
+    let ply = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    let mesh = if ply {
+        load_ply(path)?
+    } else {
+        load_obj(path)?
+    };
+    check(mesh)
+}
+
+/// Every object of an OBJ file as one mesh (polygons are triangulated).
+fn load_obj(path: &Path) -> Result<MeshData, String> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -58,6 +75,204 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
                 .map(|t| [base + t[0], base + t[1], base + t[2]]),
         );
     }
+    Ok(mesh)
+}
+
+/// A PLY `vertex` element: position, and the normal and texture coordinates when the file
+/// declares them (any scalar type).
+#[derive(Default)]
+struct PlyVertex {
+    p: [f64; 3],
+    n: [f64; 3],
+    uv: [f64; 2],
+}
+
+impl PropertyAccess for PlyVertex {
+    fn new() -> Self {
+        Self::default()
+    }
+
+    fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        let Some(value) = ply_scalar(&property) else {
+            return PropertyAccessResult::Ignored;
+        };
+        let slot = match name {
+            "x" => &mut self.p[0],
+            "y" => &mut self.p[1],
+            "z" => &mut self.p[2],
+            "nx" => &mut self.n[0],
+            "ny" => &mut self.n[1],
+            "nz" => &mut self.n[2],
+            _ => match PLY_UV.iter().position(|names| names.contains(&name)) {
+                Some(k) => &mut self.uv[k],
+                None => return PropertyAccessResult::Ignored,
+            },
+        };
+        *slot = value;
+        PropertyAccessResult::Set
+    }
+}
+
+/// The names PLY writers give the texture coordinates u and v.
+const PLY_UV: [[&str; 4]; 2] = [
+    ["u", "s", "texture_u", "texture_s"],
+    ["v", "t", "texture_v", "texture_t"],
+];
+
+/// A PLY `face` element: its vertex indices (`vertex_indices` or `vertex_index`, a list of
+/// any integer type).
+#[derive(Default)]
+struct PlyFace {
+    indices: Vec<i64>,
+}
+
+impl PropertyAccess for PlyFace {
+    fn new() -> Self {
+        Self::default()
+    }
+
+    fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        if name != "vertex_indices" && name != "vertex_index" {
+            return PropertyAccessResult::Ignored;
+        }
+        let list: Vec<i64> = match property {
+            Property::ListChar(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListUChar(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListShort(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListUShort(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListInt(v) => v.into_iter().map(i64::from).collect(),
+            Property::ListUInt(v) => v.into_iter().map(i64::from).collect(),
+            _ => return PropertyAccessResult::UnsupportedType,
+        };
+        self.indices = list;
+        PropertyAccessResult::Set
+    }
+}
+
+/// Any other PLY element, read past.
+struct PlySkip;
+
+impl PropertyAccess for PlySkip {
+    fn new() -> Self {
+        PlySkip
+    }
+}
+
+fn ply_scalar(p: &Property) -> Option<f64> {
+    Some(match *p {
+        Property::Char(v) => v.into(),
+        Property::UChar(v) => v.into(),
+        Property::Short(v) => v.into(),
+        Property::UShort(v) => v.into(),
+        Property::Int(v) => v.into(),
+        Property::UInt(v) => v.into(),
+        Property::Float(v) => v.into(),
+        Property::Double(v) => v,
+        _ => return None,
+    })
+}
+
+/// A PLY file's `vertex` and `face` elements as one mesh, its polygons split into fans of
+/// triangles; normals and uvs when the vertex element declares all of their components.
+fn load_ply(path: &Path) -> Result<MeshData, String> {
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut reader = Reader::new(std::io::BufReader::new(file));
+    // the parser's message on one line: it spans several, with the offending text quoted
+    let bad = |e: ply_rs_bw::parser::ParseError| {
+        let words: Vec<String> = e
+            .to_string()
+            .split_whitespace()
+            .map(str::to_string)
+            .collect();
+        format!("is not a PLY file wgtrace reads: {}", words.join(" "))
+    };
+    let header = Parser::<PlySkip>::new()
+        .read_header(&mut reader)
+        .map_err(bad)?;
+    let declares = |element: &str, names: &[&str]| {
+        header
+            .elements
+            .get(element)
+            .is_some_and(|e| names.iter().all(|n| e.properties.contains_key(*n)))
+    };
+    for (element, names) in [("vertex", &["x", "y", "z"][..]), ("face", &[][..])] {
+        if !declares(element, names) {
+            return Err(format!(
+                "has no {element} element{}",
+                if names.is_empty() {
+                    String::new()
+                } else {
+                    format!(" with properties {}", names.join(", "))
+                }
+            ));
+        }
+    }
+    let normals = declares("vertex", &["nx", "ny", "nz"]);
+    let uv_names = PLY_UV.map(|names| names.iter().any(|n| declares("vertex", &[n])));
+    let uvs = uv_names[0] && uv_names[1];
+    let mut vertices = Vec::new();
+    let mut faces = Vec::new();
+    for (name, def) in &header.elements {
+        match name.as_str() {
+            "vertex" => {
+                vertices = Parser::<PlyVertex>::new()
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(bad)?
+            }
+            "face" => {
+                faces = Parser::<PlyFace>::new()
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(bad)?
+            }
+            _ => {
+                Parser::<PlySkip>::new()
+                    .read_payload_for_element(&mut reader, def, &header)
+                    .map_err(bad)?;
+            }
+        }
+    }
+    let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
+    let mut mesh = MeshData {
+        positions: vertices
+            .iter()
+            .map(|v| Vec3::from_slice(&f32s(&v.p)))
+            .collect(),
+        ..Default::default()
+    };
+    if normals {
+        mesh.normals = vertices
+            .iter()
+            .map(|v| Vec3::from_slice(&f32s(&v.n)))
+            .collect();
+    }
+    if uvs {
+        mesh.uvs = vertices
+            .iter()
+            .map(|v| Vec2::from_slice(&f32s(&v.uv)))
+            .collect();
+    }
+    let n = mesh.positions.len() as i64;
+    for (k, face) in faces.iter().enumerate() {
+        if let Some(&i) = face.indices.iter().find(|&&i| i < 0 || i >= n) {
+            return Err(format!(
+                "face {k} has vertex index {i}, outside its {n} vertices"
+            ));
+        }
+        let f = &face.indices;
+        for j in 1..f.len().saturating_sub(1) {
+            mesh.triangles
+                .push([f[0] as u32, f[j] as u32, f[j + 1] as u32]);
+        }
+        if mesh.triangles.len() > MAX_TRIANGLES {
+            break;
+        }
+    }
+    Ok(mesh)
+}
+
+/// What every mesh file must give: faces, within the caps, indices inside the vertex list,
+/// attributes that match the positions, finite coordinates.
+fn check(mesh: MeshData) -> Result<MeshData, String> {
     if mesh.triangles.is_empty() {
         return Err("has no faces".into());
     }
@@ -68,7 +283,8 @@ pub fn load_obj(path: &Path) -> Result<MeshData, String> {
         ));
     }
     let n = mesh.positions.len();
-    if (with_normals && mesh.normals.len() != n) || (with_uvs && mesh.uvs.len() != n) {
+    let matches = |len: usize| len == 0 || len == n;
+    if !matches(mesh.normals.len()) || !matches(mesh.uvs.len()) {
         return Err("has normals or texture coordinates that do not match its positions".into());
     }
     if mesh.triangles.iter().flatten().any(|&i| i as usize >= n) {

@@ -1,0 +1,266 @@
+//! Mesh files: PLY in ASCII and both binary byte orders loads into the same records as
+//! the same mesh in OBJ (positions, normals, uvs, polygons as fans); broken PLY files are
+//! refused with an error naming the scene's line and key and the mesh file, never a panic.
+//! Every file is written here. No GPU needed.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use proptest::prelude::*;
+use wgtrace::{FlatScene, Overrides};
+
+const HEAD: &str = "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\n\
+                    m = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }\n";
+
+/// A quad and a triangle: (position, normal, uv) per vertex.
+const VERTICES: [[f32; 8]; 5] = [
+    [0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0],
+    [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0],
+    [1.0, 1.0, 0.0, 0.0, 0.6, 0.8, 1.0, 1.0],
+    [0.0, 1.0, 0.0, 0.0, 0.6, 0.8, 0.0, 1.0],
+    [0.5, 2.0, 0.5, 0.0, 0.8, 0.6, 0.5, 0.25],
+];
+
+fn faces() -> Vec<Vec<u32>> {
+    vec![vec![0, 1, 2, 3], vec![3, 2, 4]]
+}
+
+/// The mesh as PLY: `format` is `ascii`, `binary_little_endian` or `binary_big_endian`;
+/// `uv` names the texture coordinates (`s`/`t`, `u`/`v`, ...). The file also has a
+/// comment, an `edge` element after the faces and double-precision normals.
+fn ply(format: &str, uv: [&str; 2], vertices: &[[f32; 8]], faces: &[Vec<u32>]) -> Vec<u8> {
+    let mut out = format!(
+        "ply\nformat {format} 1.0\ncomment written by tests/meshes.rs\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n\
+         property double nx\nproperty double ny\nproperty double nz\n\
+         property float {}\nproperty float {}\nelement face {}\n\
+         property list uchar int vertex_indices\nelement edge 1\n\
+         property int vertex1\nproperty int vertex2\nend_header\n",
+        vertices.len(),
+        uv[0],
+        uv[1],
+        faces.len()
+    )
+    .into_bytes();
+    let big = format == "binary_big_endian";
+    let f32b = |x: f32| {
+        if big {
+            x.to_be_bytes()
+        } else {
+            x.to_le_bytes()
+        }
+    };
+    let f64b = |x: f64| {
+        if big {
+            x.to_be_bytes()
+        } else {
+            x.to_le_bytes()
+        }
+    };
+    let i32b = |x: i32| {
+        if big {
+            x.to_be_bytes()
+        } else {
+            x.to_le_bytes()
+        }
+    };
+    for v in vertices {
+        if format == "ascii" {
+            let words: Vec<String> = v.iter().map(|x| x.to_string()).collect();
+            out.extend(format!("{}\n", words.join(" ")).bytes());
+        } else {
+            for (k, &x) in v.iter().enumerate() {
+                if (3..6).contains(&k) {
+                    out.extend(f64b(x as f64));
+                } else {
+                    out.extend(f32b(x));
+                }
+            }
+        }
+    }
+    for f in faces {
+        if format == "ascii" {
+            let words: Vec<String> = f.iter().map(|i| i.to_string()).collect();
+            out.extend(format!("{} {}\n", f.len(), words.join(" ")).bytes());
+        } else {
+            out.push(f.len() as u8);
+            for &i in f {
+                out.extend(i32b(i as i32));
+            }
+        }
+    }
+    if format == "ascii" {
+        out.extend(b"0 1\n");
+    } else {
+        out.extend(i32b(0));
+        out.extend(i32b(1));
+    }
+    out
+}
+
+/// The same mesh as OBJ.
+fn obj() -> String {
+    let mut s = String::new();
+    for v in VERTICES {
+        s += &format!(
+            "v {} {} {}\nvn {} {} {}\nvt {} {}\n",
+            v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7]
+        );
+    }
+    for f in faces() {
+        let corners: Vec<String> = f.iter().map(|i| format!("{0}/{0}/{0}", i + 1)).collect();
+        s += &format!("f {}\n", corners.join(" "));
+    }
+    s
+}
+
+/// A fresh folder for one test.
+fn dir(test: &str) -> PathBuf {
+    common::tmp_dir(&format!("meshes-{test}"))
+}
+
+fn load(dir: &Path, file: &str) -> Result<FlatScene, String> {
+    let src = format!("{HEAD}[[objects]]\ntype = \"mesh\"\npath = \"{file}\"\nmaterial = \"m\"\n");
+    wgtrace::load_scene_str(&src, &dir.join("scene.toml"), &Overrides::default())
+        .map_err(|e| e.to_string())
+}
+
+#[test]
+fn ply_in_ascii_and_binary_loads_the_records_of_the_same_obj() {
+    let dir = dir("same");
+    std::fs::write(dir.join("m.obj"), obj()).unwrap();
+    let reference = load(&dir, "m.obj").unwrap();
+    // a quad and a triangle: three triangles, with vertex normals and uvs
+    assert_eq!(reference.primitives.len(), 3);
+    assert!(!reference.shape_data.is_empty());
+    let variants = [
+        ("ascii", ["s", "t"]),
+        ("binary_little_endian", ["u", "v"]),
+        ("binary_big_endian", ["texture_u", "texture_v"]),
+    ];
+    for (format, uv) in variants {
+        let name = format!("m-{format}.PLY");
+        std::fs::write(dir.join(&name), ply(format, uv, &VERTICES, &faces())).unwrap();
+        let s = load(&dir, &name).unwrap_or_else(|e| panic!("{format}: {e}"));
+        assert_eq!(s.primitives, reference.primitives, "{format}");
+        assert_eq!(s.shape_data, reference.shape_data, "{format}");
+    }
+    // without normals and uvs: flat triangles, no attributes
+    let bare = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+                property float z\nelement face 1\nproperty list uchar uint vertex_index\n\
+                end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    std::fs::write(dir.join("bare.ply"), bare).unwrap();
+    let s = load(&dir, "bare.ply").unwrap();
+    assert_eq!(s.primitives.len(), 1);
+    assert!(s.shape_data.is_empty(), "no attributes to keep");
+}
+
+#[test]
+fn broken_ply_files_are_refused_with_the_file_and_the_reason() {
+    let dir = dir("broken");
+    let good = ply("binary_little_endian", ["s", "t"], &VERTICES, &faces());
+    let header_end = good.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let mut nan = VERTICES;
+    nan[2][1] = f32::NAN;
+    let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+        (
+            "truncated.ply",
+            good[..good.len() - 9].to_vec(),
+            "is not a PLY file",
+        ),
+        (
+            "header-only.ply",
+            good[..header_end].to_vec(),
+            "is not a PLY file",
+        ),
+        (
+            "index.ply",
+            ply("ascii", ["s", "t"], &VERTICES, &[vec![0, 1, 7]]),
+            "face 0 has vertex index 7, outside its 5 vertices",
+        ),
+        (
+            "nan.ply",
+            ply("binary_big_endian", ["s", "t"], &nan, &faces()),
+            "has a non-finite coordinate",
+        ),
+        (
+            "huge.ply",
+            String::from_utf8_lossy(&good[..header_end])
+                .replace("element vertex 5", "element vertex 4000000000")
+                .into_bytes(),
+            "is not a PLY file",
+        ),
+        (
+            "no-faces.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+              property float z\nend_header\n0 0 0\n"
+                .to_vec(),
+            "has no face element",
+        ),
+        (
+            "no-z.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n\
+              element face 0\nproperty list uchar int vertex_indices\nend_header\n0 0\n"
+                .to_vec(),
+            "has no vertex element with properties x, y, z",
+        ),
+        (
+            "text.ply",
+            b"solid cube\nfacet normal 0 0 1\n".to_vec(),
+            "is not a PLY file",
+        ),
+    ];
+    for (name, bytes, reason) in cases {
+        std::fs::write(dir.join(name), bytes).unwrap();
+        let e = match load(&dir, name) {
+            Ok(s) => panic!("{name} loaded: {} primitives", s.primitives.len()),
+            Err(e) => e,
+        };
+        assert!(
+            e.contains("scene.toml:")
+                && e.contains("objects[0].path")
+                && e.contains(name)
+                && e.contains(reason),
+            "{name}: {e}"
+        );
+    }
+    let e = load(&dir, "missing.ply").unwrap_err();
+    assert!(
+        e.contains("objects[0].path") && e.contains("missing.ply"),
+        "{e}"
+    );
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+    /// A PLY file with bytes cut, overwritten or inserted anywhere loads or is refused,
+    /// never a panic.
+    #[test]
+    fn mutated_ply_files_are_loaded_or_refused(
+        format in 0usize..3,
+        edits in proptest::collection::vec((any::<proptest::sample::Index>(), any::<u8>(), 0u8..3), 1..6),
+    ) {
+        let format = ["ascii", "binary_little_endian", "binary_big_endian"][format];
+        let mut bytes = ply(format, ["s", "t"], &VERTICES, &faces());
+        for (at, byte, kind) in edits {
+            let i = at.index(bytes.len());
+            match kind {
+                0 => bytes[i] = byte,
+                1 => bytes.insert(i, byte),
+                _ => bytes.truncate(i),
+            }
+            if bytes.is_empty() {
+                break;
+            }
+        }
+        static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+        let dir = DIR.get_or_init(|| dir("fuzz"));
+        let name = "fuzz.ply";
+        std::fs::write(dir.join(name), &bytes).unwrap();
+        if let Err(e) = load(dir, name) {
+            prop_assert!(e.contains("objects[0].path") && e.contains(name), "{}", e);
+        }
+    }
+}
