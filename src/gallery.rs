@@ -75,6 +75,11 @@ pub const ENTRIES: &[Entry] = &[
         "Finite cylinders, capped and open",
     ),
     entry(
+        "pbr",
+        "scenes/pbr.toml",
+        "glTF metallic-roughness: metallic 0, 0.5, 1 by roughness 0 to 1",
+    ),
+    entry(
         "punctual",
         "scenes/punctual.toml",
         "Point, spot and directional lights: sharp shadows, glTF's spot falloff",

@@ -317,6 +317,33 @@ material = "m"
             r#"{ type = "microfacet", albedo = [1, 1, 1], roughness = 1, ior = 3 }"#,
             false,
         ),
+        // glTF's metallic-roughness: its Lambertian limit (no specular layer) is lossless
+        (
+            "pbr without specular",
+            r#"{ type = "pbr", metallic = 0, roughness = 0.5, specular = 0 }"#,
+            true,
+        ),
+        (
+            "rough pbr dielectric",
+            r#"{ type = "pbr", metallic = 0, roughness = 0.5 }"#,
+            false,
+        ),
+        // a white metal at roughness 0 (a GGX lobe of alpha 0.001) loses about 3e-6
+        (
+            "smooth pbr metal",
+            r#"{ type = "pbr", metallic = 1, roughness = 0 }"#,
+            true,
+        ),
+        (
+            "rough pbr metal",
+            r#"{ type = "pbr", metallic = 1, roughness = 0.6 }"#,
+            false,
+        ),
+        (
+            "half-metallic pbr",
+            r#"{ type = "pbr", metallic = 0.5, roughness = 0.8, ior = 2 }"#,
+            false,
+        ),
     ] {
         let s = scene_from_str(&template.replace("MATERIAL", material));
         for (backend, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {

@@ -231,6 +231,29 @@ fn microfacet_is_reciprocal() {
     }
 }
 
+/// The red channel's directional albedo of `m` seen from `theta` degrees: the mean of
+/// 40,000 sampler weights (absorbed ones 0) and its standard error; every weight must be
+/// finite and not negative.
+fn directional_albedo(m: &Material, theta: f32, seed: u32) -> (f64, f64) {
+    let (_, ray, hit) = view(theta);
+    let mut rng = seed;
+    let n = 40_000;
+    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+        let s = scatter(m, &ray, &hit, u);
+        let w = if s.ok { s.weight.x as f64 } else { 0.0 };
+        assert!(w.is_finite() && w >= 0.0);
+        sum += w;
+        sum2 += w * w;
+    }
+    let mean = sum / n as f64;
+    (
+        mean,
+        ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
+    )
+}
+
 #[test]
 fn white_microfacet_never_reflects_more_than_arrives() {
     // kd = ks = 1: the naive sum of the lobes would exceed 1; the Fresnel-weighted base must not
@@ -239,20 +262,7 @@ fn white_microfacet_never_reflects_more_than_arrives() {
         for roughness in [0.0f32, 0.05, 0.2, 0.5, 1.0] {
             let m = microfacet(1.0, 1.0, roughness, ior);
             for theta in [0.0f32, 30.0, 60.0, 80.0, 89.0] {
-                let (_, ray, hit) = view(theta);
-                let mut rng = 17u32;
-                let n = 40_000;
-                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-                for _ in 0..n {
-                    let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
-                    let s = scatter(&m, &ray, &hit, u);
-                    let w = if s.ok { s.weight.x as f64 } else { 0.0 };
-                    assert!(w.is_finite() && w >= 0.0);
-                    sum += w;
-                    sum2 += w * w;
-                }
-                let mean = sum / n as f64;
-                let sigma = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
+                let (mean, sigma) = directional_albedo(&m, theta, 17);
                 assert!(
                     mean <= 1.0 + 4.0 * sigma + 1e-6,
                     "ior {ior}, roughness {roughness}, {theta} deg: albedo {mean} +- {sigma}"
@@ -282,16 +292,89 @@ fn roughness_zero_is_a_mirror_without_dividing_by_zero() {
     }
 }
 
-/// Chi-square test of the sampled directions against microfacet_pdf, as pbrt-v4 and
-/// Mitsuba 3 test their BSDFs: the upper hemisphere in 20 (cos theta) x 40 (phi) cells,
-/// expected counts by integrating the pdf over each cell, plus a cell for the directions
-/// the sampler absorbs (under the surface); cells expecting fewer than 5 are pooled.
-#[test]
-fn microfacet_sampling_matches_its_pdf() {
+/// Chi-square test of the directions `m`'s sampler draws, seen from `theta` degrees,
+/// against its pdf (`bsdf_pdf`), as pbrt-v4 and Mitsuba 3 test their BSDFs: the upper
+/// hemisphere in 20 (cos theta) x 40 (phi) cells, expected counts by integrating the pdf
+/// over each cell, plus a cell for the directions the sampler absorbs (under the
+/// surface); cells expecting fewer than 5 are pooled.
+fn assert_sampling_matches_pdf(m: &Material, theta: f32, label: &str) {
     const N: usize = 200_000;
     const NT: usize = 20;
     const NP: usize = 40;
     const SUB: usize = 10;
+    let (_, ray, hit) = view(theta);
+    let cell_of = |d: Vec3| {
+        let t = ((d.z * NT as f32) as usize).min(NT - 1);
+        let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
+        let p = ((phi / (2.0 * std::f32::consts::PI) * NP as f32) as usize).min(NP - 1);
+        t * NP + p
+    };
+    let mut observed = vec![0f64; NT * NP + 1];
+    let mut rng = 99u32;
+    for _ in 0..N {
+        let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+        let s = scatter(m, &ray, &hit, u);
+        let k = if s.ok { cell_of(s.dir) } else { NT * NP };
+        observed[k] += 1.0;
+    }
+    // expected: midpoint rule on SUB x SUB points per cell (d omega = d cos d phi)
+    let mut expected = vec![0f64; NT * NP + 1];
+    let (dc, dp) = (1.0 / NT as f64, 2.0 * std::f64::consts::PI / NP as f64);
+    for t in 0..NT {
+        for p in 0..NP {
+            let mut integral = 0.0f64;
+            for i in 0..SUB {
+                for j in 0..SUB {
+                    let c = (t as f64 + (i as f64 + 0.5) / SUB as f64) * dc;
+                    let phi = (p as f64 + (j as f64 + 0.5) / SUB as f64) * dp;
+                    let s = (1.0 - c * c).max(0.0).sqrt();
+                    let wi = Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
+                    integral += bsdf_pdf(m, &ray, &hit, wi) as f64;
+                }
+            }
+            expected[t * NP + p] = integral * dc * dp / (SUB * SUB) as f64 * N as f64;
+        }
+    }
+    let upper: f64 = expected[..NT * NP].iter().sum::<f64>() / N as f64;
+    assert!(
+        upper <= 1.0 + 2e-3,
+        "{label}, {theta} deg: the pdf integrates to {upper} > 1"
+    );
+    expected[NT * NP] = (1.0 - upper).max(0.0) * N as f64;
+    // pool the cells expecting fewer than 5
+    let (mut chi2, mut cells, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
+    for (e, o) in expected.iter().zip(&observed) {
+        if *e < 5.0 {
+            pool_e += e;
+            pool_o += o;
+        } else {
+            chi2 += (o - e) * (o - e) / e;
+            cells += 1;
+        }
+    }
+    if pool_e >= 5.0 {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        cells += 1;
+    } else {
+        assert!(
+            pool_o <= 5.0 + 4.0 * pool_e.sqrt() + 5.0,
+            "samples where the pdf is ~0: {pool_o}"
+        );
+    }
+    // critical value at significance 1e-3 (Wilson-Hilferty)
+    let k = (cells - 1) as f64;
+    let z = 3.09;
+    let critical = k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3);
+    assert!(
+        chi2 < critical,
+        "{label}, {theta} deg: chi2 {chi2:.1} over {cells} cells, critical {critical:.1}"
+    );
+    eprintln!("{label}, {theta} deg: chi2 {chi2:.1} / critical {critical:.1} ({cells} cells), pdf integral {upper:.4}");
+}
+
+/// The microfacet's sampling against its pdf (`assert_sampling_matches_pdf`).
+#[test]
+fn microfacet_sampling_matches_its_pdf() {
     for (roughness, theta) in [
         (0.1f32, 0.0f32),
         (0.1, 60.0),
@@ -300,72 +383,7 @@ fn microfacet_sampling_matches_its_pdf() {
         (1.0, 45.0),
     ] {
         let m = microfacet(0.5, 1.0, roughness, 1.5);
-        let (wo, ray, hit) = view(theta);
-        let cell_of = |d: Vec3| {
-            let t = ((d.z * NT as f32) as usize).min(NT - 1);
-            let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
-            let p = ((phi / (2.0 * std::f32::consts::PI) * NP as f32) as usize).min(NP - 1);
-            t * NP + p
-        };
-        let mut observed = vec![0f64; NT * NP + 1];
-        let mut rng = 99u32;
-        for _ in 0..N {
-            let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
-            let s = scatter(&m, &ray, &hit, u);
-            let k = if s.ok { cell_of(s.dir) } else { NT * NP };
-            observed[k] += 1.0;
-        }
-        // expected: midpoint rule on SUB x SUB points per cell (d omega = d cos d phi)
-        let mut expected = vec![0f64; NT * NP + 1];
-        let (dc, dp) = (1.0 / NT as f64, 2.0 * std::f64::consts::PI / NP as f64);
-        for t in 0..NT {
-            for p in 0..NP {
-                let mut integral = 0.0f64;
-                for i in 0..SUB {
-                    for j in 0..SUB {
-                        let c = (t as f64 + (i as f64 + 0.5) / SUB as f64) * dc;
-                        let phi = (p as f64 + (j as f64 + 0.5) / SUB as f64) * dp;
-                        let s = (1.0 - c * c).max(0.0).sqrt();
-                        let wi =
-                            Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
-                        integral += microfacet_pdf(&m, Vec3::Z, wo, wi) as f64;
-                    }
-                }
-                expected[t * NP + p] = integral * dc * dp / (SUB * SUB) as f64 * N as f64;
-            }
-        }
-        let upper: f64 = expected[..NT * NP].iter().sum::<f64>() / N as f64;
-        assert!(
-            upper <= 1.0 + 2e-3,
-            "roughness {roughness}, {theta} deg: the pdf integrates to {upper} > 1"
-        );
-        expected[NT * NP] = (1.0 - upper).max(0.0) * N as f64;
-        // pool the cells expecting fewer than 5
-        let (mut chi2, mut cells, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
-        for (e, o) in expected.iter().zip(&observed) {
-            if *e < 5.0 {
-                pool_e += e;
-                pool_o += o;
-            } else {
-                chi2 += (o - e) * (o - e) / e;
-                cells += 1;
-            }
-        }
-        if pool_e >= 5.0 {
-            chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-            cells += 1;
-        } else {
-            assert!(
-                pool_o <= 5.0 + 4.0 * pool_e.sqrt() + 5.0,
-                "samples where the pdf is ~0: {pool_o}"
-            );
-        }
-        // critical value at significance 1e-3 (Wilson-Hilferty)
-        let k = (cells - 1) as f64;
-        let z = 3.09;
-        let critical = k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3);
-        assert!(chi2 < critical, "roughness {roughness}, {theta} deg: chi2 {chi2:.1} over {cells} cells, critical {critical:.1}");
-        eprintln!("roughness {roughness}, {theta} deg: chi2 {chi2:.1} / critical {critical:.1} ({cells} cells), pdf integral {upper:.4}");
+        assert_sampling_matches_pdf(&m, theta, &format!("microfacet, roughness {roughness}"));
     }
 }
 
@@ -416,6 +434,107 @@ fn microfacet_sampling_density_integrates_to_one_over_the_sphere() {
         );
         eprintln!(
             "roughness {roughness}, {theta} deg: sphere {total:.4}, above the surface {upper:.4}"
+        );
+    }
+}
+
+// ------------------------------------------------- glTF metallic-roughness (`pbr`)
+
+use wgtrace::cpu::materials::{bsdf_pdf, pbr_eval};
+use wgtrace::scene::records::{ALPHA_SMOOTH, MAT_PBR};
+
+/// The record `type = "pbr"` flattens to: alpha = roughness^2 (at least ALPHA_SMOOTH).
+fn pbr(base: [f32; 3], metallic: f32, roughness: f32, ior: f32, specular: f32) -> Material {
+    Material {
+        tag: MAT_PBR,
+        albedo: [base[0], base[1], base[2], 0.0],
+        params: [
+            (roughness * roughness).max(ALPHA_SMOOTH),
+            ior,
+            metallic,
+            specular,
+        ],
+        extra: [1.0, 1.0, 1.0, 0.0],
+        ..Default::default()
+    }
+}
+
+/// f = eval / cos_i is symmetric in its two directions: both Fresnels are taken at v . h
+/// and G2 is symmetric.
+#[test]
+fn pbr_is_reciprocal() {
+    let mut rng = 5u32;
+    for (metallic, roughness) in [(0.0f32, 0.2f32), (0.5, 0.5), (1.0, 0.8), (0.3, 1.0)] {
+        let m = pbr([0.8, 0.5, 0.2], metallic, roughness, 1.5, 1.0);
+        for _ in 0..2000 {
+            let (a, b) = (common::random_unit(&mut rng), common::random_unit(&mut rng));
+            let (wo, wi) = (
+                Vec3::new(a.x, a.y, a.z.abs()),
+                Vec3::new(b.x, b.y, b.z.abs()),
+            );
+            let f1 = pbr_eval(&m, Vec3::Z, wo, wi) / wi.z;
+            let f2 = pbr_eval(&m, Vec3::Z, wi, wo) / wo.z;
+            assert!(
+                (f1 - f2).abs().max_element() <= 1e-4 * f1.max_element().max(1e-3),
+                "metallic {metallic}, roughness {roughness}: {f1} vs {f2}"
+            );
+        }
+    }
+}
+
+/// A white base never reflects more than arrives (directional albedo by the sampler's
+/// weights, to 4 standard errors), at every view angle, metallic and roughness; without
+/// its specular layer (specular = 0) the dielectric is exactly Lambertian: every weight is
+/// 1, so the furnace is 1.
+#[test]
+fn white_pbr_never_reflects_more_than_arrives_and_its_lambertian_limit_is_exact() {
+    let mut worst = 0.0f64;
+    for metallic in [0.0f32, 0.5, 1.0] {
+        for roughness in [0.0f32, 0.1, 0.3, 0.6, 1.0] {
+            for ior in [1.5f32, 3.0] {
+                let m = pbr([1.0; 3], metallic, roughness, ior, 1.0);
+                for theta in [0.0f32, 30.0, 60.0, 80.0, 89.0] {
+                    let (mean, sigma) = directional_albedo(&m, theta, 23);
+                    assert!(
+                        mean <= 1.0 + 4.0 * sigma + 1e-6,
+                        "metallic {metallic}, roughness {roughness}, ior {ior}, {theta} deg: albedo {mean} +- {sigma}"
+                    );
+                    worst = worst.max(mean);
+                }
+            }
+        }
+    }
+    eprintln!("largest directional albedo of a white pbr material: {worst:.4}");
+    let lambert = pbr([1.0; 3], 0.0, 0.5, 1.5, 0.0);
+    for theta in [0.0f32, 45.0, 85.0] {
+        let (_, ray, hit) = view(theta);
+        for u in grid() {
+            let s = scatter(&lambert, &ray, &hit, u);
+            assert!(s.ok, "{theta} deg: absorbed");
+            assert!(
+                (s.weight - Vec3::ONE).abs().max_element() < 1e-5,
+                "{theta} deg: weight {}",
+                s.weight
+            );
+        }
+    }
+}
+
+/// The metallic-roughness material's sampling against its pdf (chi-square).
+#[test]
+fn pbr_sampling_matches_its_pdf() {
+    for (metallic, roughness, theta) in [
+        (0.0f32, 0.3f32, 0.0f32),
+        (0.0, 0.5, 70.0),
+        (1.0, 0.3, 40.0),
+        (0.5, 0.7, 60.0),
+        (1.0, 1.0, 20.0),
+    ] {
+        let m = pbr([0.9, 0.6, 0.3], metallic, roughness, 1.5, 1.0);
+        assert_sampling_matches_pdf(
+            &m,
+            theta,
+            &format!("pbr, metallic {metallic}, roughness {roughness}"),
         );
     }
 }

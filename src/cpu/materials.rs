@@ -6,6 +6,7 @@ use super::sampling::{onb_tangents, sample_cosine_hemisphere, sample_sphere, PI}
 use super::types::{xyz, Hit, Ray};
 use crate::scene::records::{
     Material, MAT_DIELECTRIC, MAT_FLAG_TWO_SIDED, MAT_LAMBERTIAN, MAT_METAL, MAT_MICROFACET,
+    MAT_PBR,
 };
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -181,8 +182,15 @@ pub fn sample_ggx_vndf(wo: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
 /// Probability of sampling the specular lobe (depends on wo only).
 pub fn microfacet_spec_prob(mat: &Material, cos_o: f32) -> f32 {
     let f = schlick(cos_o, mat.params[1]);
-    let ws = luminance(xyz(mat.extra)) * f;
-    let wd = luminance(xyz(mat.albedo)) * (1.0 - f);
+    lobe_prob(
+        luminance(xyz(mat.extra)) * f,
+        luminance(xyz(mat.albedo)) * (1.0 - f),
+    )
+}
+
+/// The probability of the specular lobe of weight ws beside the diffuse one of weight wd:
+/// its share, kept in [0.1, 0.9] when both reflect.
+pub fn lobe_prob(ws: f32, wd: f32) -> f32 {
     if ws <= 0.0 {
         return 0.0;
     }
@@ -213,13 +221,23 @@ pub fn microfacet_eval(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
 
 /// The pdf of scatter_microfacet's directions.
 pub fn microfacet_pdf(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    ggx_lobes_pdf(
+        microfacet_spec_prob(mat, n.dot(wo)),
+        mat.params[0],
+        n,
+        wo,
+        wi,
+    )
+}
+
+/// The pdf of sample_ggx_lobes's directions: G1(wo) D(h) / (4 cos_o) with probability
+/// p_s, else the cosine pdf (the GGX lobe left out below ALPHA_SMOOTH).
+pub fn ggx_lobes_pdf(p_s: f32, alpha: f32, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
     let cos_o = n.dot(wo);
     let cos_i = n.dot(wi);
     if cos_o <= 0.0 || cos_i <= 0.0 {
         return 0.0;
     }
-    let alpha = mat.params[0];
-    let p_s = microfacet_spec_prob(mat, cos_o);
     let diff = (1.0 - p_s) * cos_i / PI;
     if alpha < ALPHA_SMOOTH {
         return diff;
@@ -253,15 +271,7 @@ pub fn scatter_microfacet(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
             delta: true,
         };
     }
-    let wi = if u[0] < p_s {
-        let tb = onb_tangents(n);
-        let local = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);
-        let h_l = sample_ggx_vndf(local, mat.params[0], [u[0] / p_s, u[1]]);
-        let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
-        (2.0 * wo.dot(h) * h - wo).normalize()
-    } else {
-        sample_cosine_hemisphere(n, [(u[0] - p_s) / (1.0 - p_s), u[1]])
-    };
+    let wi = sample_ggx_lobes(p_s, mat.params[0], n, wo, u);
     let pdf = microfacet_pdf(mat, n, wo, wi);
     // Written as in WGSL, so a NaN pdf takes the same branch on both backends.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -277,12 +287,101 @@ pub fn scatter_microfacet(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> 
     }
 }
 
+/// A direction from a GGX lobe of roughness alpha (a visible normal, then the mirror
+/// direction about it) with probability p_s, else from the cosine lobe.
+pub fn sample_ggx_lobes(p_s: f32, alpha: f32, n: Vec3, wo: Vec3, u: [f32; 2]) -> Vec3 {
+    if u[0] < p_s {
+        let tb = onb_tangents(n);
+        let local = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), n.dot(wo));
+        let h_l = sample_ggx_vndf(local, alpha, [u[0] / p_s, u[1]]);
+        let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
+        return (2.0 * wo.dot(h) * h - wo).normalize();
+    }
+    sample_cosine_hemisphere(n, [(u[0] - p_s) / (1.0 - p_s), u[1]])
+}
+
+/// Fresnel-Schlick of the metallic-roughness material's dielectric layer at cos c:
+/// F0 = min(((ior - 1) / (ior + 1))^2 specular colour, 1) specular, F90 = specular.
+pub fn pbr_dielectric_fresnel(mat: &Material, c: f32) -> Vec3 {
+    let r = (mat.params[1] - 1.0) / (mat.params[1] + 1.0);
+    let f0 = (Vec3::splat(r * r) * xyz(mat.extra)).min(Vec3::ONE) * mat.params[3];
+    let m = 1.0 - c.clamp(0.0, 1.0);
+    f0 + (Vec3::splat(mat.params[3]) - f0) * (m * m * m * m * m)
+}
+
+/// Fresnel-Schlick of its metal: F0 = the base colour.
+pub fn pbr_metal_fresnel(mat: &Material, c: f32) -> Vec3 {
+    let m = 1.0 - c.clamp(0.0, 1.0);
+    let base = xyz(mat.albedo);
+    base + (Vec3::ONE - base) * (m * m * m * m * m)
+}
+
+/// glTF's metallic-roughness BSDF x cos(theta_i) (materials.wgsl's `pbr_eval`, which says
+/// why the base is weighted as it is): mix((1 - F_d(cos_i)) (1 - F_d(cos_o)) base / pi
+/// cos_i + F_d(v . h) S, F_m(v . h) S, metallic), S = D G2 / (4 cos_o).
+pub fn pbr_eval(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+    let cos_o = n.dot(wo);
+    let cos_i = n.dot(wi);
+    if cos_o <= 0.0 || cos_i <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let alpha = mat.params[0];
+    let h = (wo + wi).normalize();
+    let vh = wo.dot(h);
+    let g2 = 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
+    let spec = ggx_d(n.dot(h), alpha) * g2 / (4.0 * cos_o);
+    let through = (Vec3::ONE - pbr_dielectric_fresnel(mat, cos_i))
+        * (Vec3::ONE - pbr_dielectric_fresnel(mat, cos_o));
+    let dielectric =
+        through * xyz(mat.albedo) * (cos_i / PI) + pbr_dielectric_fresnel(mat, vh) * spec;
+    let metallic = mat.params[2];
+    dielectric * (1.0 - metallic) + pbr_metal_fresnel(mat, vh) * spec * metallic
+}
+
+/// Probability of sampling the GGX lobe of the metallic-roughness material.
+pub fn pbr_spec_prob(mat: &Material, cos_o: f32) -> f32 {
+    let fd = pbr_dielectric_fresnel(mat, cos_o);
+    let metallic = mat.params[2];
+    let ws = luminance(fd * (1.0 - metallic) + pbr_metal_fresnel(mat, cos_o) * metallic);
+    let wd = (1.0 - mat.params[2]) * luminance((Vec3::ONE - fd) * xyz(mat.albedo));
+    lobe_prob(ws, wd)
+}
+
+pub fn pbr_pdf(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+    ggx_lobes_pdf(pbr_spec_prob(mat, n.dot(wo)), mat.params[0], n, wo, wi)
+}
+
+/// The metallic-roughness material: the GGX lobe or the cosine one; weight = eval / pdf.
+pub fn scatter_pbr(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    let n = side * hit.ns;
+    let wo = -ray.dir;
+    let cos_o = n.dot(wo);
+    if cos_o <= 0.0 {
+        return ABSORBED;
+    }
+    let wi = sample_ggx_lobes(pbr_spec_prob(mat, cos_o), mat.params[0], n, wo, u);
+    let pdf = pbr_pdf(mat, n, wo, wi);
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(pdf > 0.0) || side * wi.dot(hit.ng) <= 0.0 {
+        return ABSORBED;
+    }
+    Scatter {
+        ok: true,
+        dir: wi,
+        weight: pbr_eval(mat, n, wo, wi) / pdf,
+        pdf,
+        delta: false,
+    }
+}
+
 pub fn scatter(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
     match mat.tag {
         MAT_LAMBERTIAN => scatter_lambertian(mat, hit, u),
         MAT_METAL => scatter_metal(mat, ray, hit, u),
         MAT_DIELECTRIC => scatter_dielectric(mat, ray, hit, u),
         MAT_MICROFACET => scatter_microfacet(mat, ray, hit, u),
+        MAT_PBR => scatter_pbr(mat, ray, hit, u),
         // emissive and unknown materials absorb
         _ => ABSORBED,
     }
@@ -299,6 +398,7 @@ pub fn bsdf_eval(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> Vec3 {
     match mat.tag {
         MAT_LAMBERTIAN => xyz(mat.albedo) * (n.dot(wi).max(0.0) / PI),
         MAT_MICROFACET => microfacet_eval(mat, n, -ray.dir, wi),
+        MAT_PBR => pbr_eval(mat, n, -ray.dir, wi),
         _ => Vec3::ZERO,
     }
 }
@@ -309,16 +409,19 @@ pub fn bsdf_pdf(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> f32 {
     match mat.tag {
         MAT_LAMBERTIAN => n.dot(wi).max(0.0) / PI,
         MAT_MICROFACET => microfacet_pdf(mat, n, -ray.dir, wi),
+        MAT_PBR => pbr_pdf(mat, n, -ray.dir, wi),
         _ => 0.0,
     }
 }
 
 /// Whether next-event estimation applies: the material has a lobe that is not a delta.
 pub fn nee_applies(mat: &Material) -> bool {
-    mat.tag == MAT_LAMBERTIAN || mat.tag == MAT_MICROFACET
+    mat.tag == MAT_LAMBERTIAN || mat.tag == MAT_MICROFACET || mat.tag == MAT_PBR
 }
 
 /// Whether the 50/50 mixture samples lights: as `nee_applies`, less the smooth microfacet.
 pub fn mixture_applies(mat: &Material) -> bool {
-    mat.tag == MAT_LAMBERTIAN || (mat.tag == MAT_MICROFACET && mat.params[0] >= ALPHA_SMOOTH)
+    mat.tag == MAT_LAMBERTIAN
+        || mat.tag == MAT_PBR
+        || (mat.tag == MAT_MICROFACET && mat.params[0] >= ALPHA_SMOOTH)
 }

@@ -44,6 +44,8 @@ pub enum Feature {
     Metal,
     Dielectric,
     Microfacet,
+    /// glTF's metallic-roughness material.
+    Pbr,
     /// Textured material colours at all.
     Textures,
     ImageTexture,
@@ -67,7 +69,7 @@ pub enum Feature {
 
 impl Feature {
     /// Every feature, in define order.
-    pub const ALL: [Feature; 26] = [
+    pub const ALL: [Feature; 27] = [
         Feature::Sphere,
         Feature::Triangle,
         Feature::Plane,
@@ -82,6 +84,7 @@ impl Feature {
         Feature::Metal,
         Feature::Dielectric,
         Feature::Microfacet,
+        Feature::Pbr,
         Feature::Textures,
         Feature::ImageTexture,
         Feature::NoiseTexture,
@@ -113,6 +116,7 @@ impl Feature {
             Feature::Metal => "HAS_METAL",
             Feature::Dielectric => "HAS_DIELECTRIC",
             Feature::Microfacet => "HAS_MICROFACET",
+            Feature::Pbr => "HAS_PBR",
             Feature::Textures => "HAS_TEXTURES",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
             Feature::NoiseTexture => "HAS_NOISE_TEXTURE",
@@ -186,7 +190,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     let bounded = scene.primitives.len() > scene.num_unbounded as usize;
     // lights are sampled only toward surfaces with a lobe that is not a delta
     // (`nee_applies`: Lambertian or microfacet), and only when there are lights
-    let nee = mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET);
+    let nee = mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET) || mat(r::MAT_PBR);
     let lit = scene.emitters.len() > scene.num_punctual as usize && nee;
     FeatureSet::default()
         .with(Feature::Sphere, prim(r::PRIM_SPHERE))
@@ -212,6 +216,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         .with(Feature::Metal, mat(r::MAT_METAL))
         .with(Feature::Dielectric, mat(r::MAT_DIELECTRIC))
         .with(Feature::Microfacet, mat(r::MAT_MICROFACET))
+        .with(Feature::Pbr, mat(r::MAT_PBR))
         .with(Feature::Textures, !scene.textures.is_empty())
         .with(Feature::ImageTexture, texture(r::TEX_IMAGE))
         .with(Feature::NoiseTexture, texture(r::TEX_NOISE))

@@ -66,6 +66,29 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             [*roughness, *ior, 0.0, 0.0],
             slot(specular.as_ref().unwrap_or(albedo)),
         ),
+        MaterialDesc::Pbr {
+            base_color,
+            metallic,
+            roughness,
+            ior,
+            specular,
+            specular_color,
+            emission,
+            ..
+        } => (
+            records::MAT_PBR,
+            slot(base_color),
+            slot(emission),
+            // alpha = roughness^2, a GGX lobe even at roughness 0 (ALPHA_SMOOTH, 1e-3: a
+            // mirror for every purpose but a delta)
+            [
+                (roughness * roughness).max(records::ALPHA_SMOOTH),
+                *ior,
+                *metallic,
+                *specular,
+            ],
+            slot(specular_color),
+        ),
         MaterialDesc::Emissive { radiance, .. } => (
             records::MAT_EMISSIVE,
             ([0.0; 4], NO_TEXTURE),

@@ -332,6 +332,32 @@ pub enum MaterialDesc {
         #[serde(default)]
         two_sided: bool,
     },
+    /// glTF 2.0's metallic-roughness material (its Appendix B): a GGX lobe (alpha =
+    /// `roughness`^2, Smith's height-correlated visibility, Fresnel-Schlick) over a
+    /// Lambertian base of `base_color` for the dielectric (F0 from `ior`, scaled by
+    /// `specular` and `specular_color` as in KHR_materials_specular), mixed by `metallic`
+    /// with a metal whose F0 is `base_color`. The base gets what the Fresnel of both
+    /// directions lets through (Appendix B's 1 - F(v . h) reflects more than arrives near
+    /// roughness 0). Defaults are glTF's.
+    Pbr {
+        #[serde(default = "white_color")]
+        base_color: ColorDesc,
+        #[serde(default = "one")]
+        metallic: f32,
+        #[serde(default = "one")]
+        roughness: f32,
+        #[serde(default = "glass_ior")]
+        ior: f32,
+        #[serde(default = "one")]
+        specular: f32,
+        #[serde(default = "white_color")]
+        specular_color: ColorDesc,
+        #[serde(default)]
+        emission: ColorDesc,
+        /// Emit from the back side too.
+        #[serde(default)]
+        two_sided: bool,
+    },
     /// A light: emits `radiance` from its front side, or both with `two_sided`; absorbs.
     Emissive {
         radiance: ColorDesc,
@@ -348,6 +374,7 @@ impl MaterialDesc {
             | MaterialDesc::Metal { two_sided, .. }
             | MaterialDesc::Dielectric { two_sided, .. }
             | MaterialDesc::Microfacet { two_sided, .. }
+            | MaterialDesc::Pbr { two_sided, .. }
             | MaterialDesc::Emissive { two_sided, .. } => *two_sided,
         }
     }

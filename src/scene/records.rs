@@ -76,6 +76,7 @@ shared_constants! {
     MAT_METAL: u32 = 2;
     MAT_DIELECTRIC: u32 = 3;
     MAT_MICROFACET: u32 = 4;
+    MAT_PBR: u32 = 5;
     /// Material flag: emits from both sides.
     MAT_FLAG_TWO_SIDED: u32 = 1;
 

@@ -289,6 +289,40 @@ impl Validator<'_> {
                 }
                 self.color(&format!("{key}.emission"), emission, false, at);
             }
+            MaterialDesc::Pbr {
+                base_color,
+                metallic,
+                roughness,
+                ior,
+                specular,
+                specular_color,
+                emission,
+                ..
+            } => {
+                self.color(&format!("{key}.base_color"), base_color, true, at);
+                self.color(&format!("{key}.specular_color"), specular_color, false, at);
+                for (name, v) in [
+                    ("metallic", metallic),
+                    ("roughness", roughness),
+                    ("specular", specular),
+                ] {
+                    if !(0.0..=1.0).contains(v) {
+                        self.push(
+                            at,
+                            &format!("{key}.{name}"),
+                            format!("must be in [0, 1], got {v}"),
+                        );
+                    }
+                }
+                if !(*ior >= 1.0 && ior.is_finite()) {
+                    self.push(
+                        at,
+                        &format!("{key}.ior"),
+                        format!("must be >= 1, got {ior}"),
+                    );
+                }
+                self.color(&format!("{key}.emission"), emission, false, at);
+            }
             MaterialDesc::Emissive { radiance, .. } => {
                 self.color(&format!("{key}.radiance"), radiance, false, at);
             }
