@@ -188,7 +188,7 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     }
 #endif
 #ifdef HAS_MIXTURE
-    if (params.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat)) {
+    if (params.light_sampling == LIGHT_SAMPLING_MIXTURE && params.num_emitters != 0u && mixture_applies(mat)) {
         // one direction from the 50/50 mixture; the path goes on along it
         let uc = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT_CHOICE);
         var dir: vec3<f32>;

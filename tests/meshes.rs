@@ -1,6 +1,7 @@
 //! Mesh files: PLY in ASCII and both binary byte orders loads into the same records as
 //! the same mesh in OBJ (positions, normals, uvs, polygons as fans); broken PLY files are
-//! refused with an error naming the scene's line and key and the mesh file, never a panic.
+//! refused with an error naming the scene's line and key and the mesh file, never a panic,
+//! and counts beyond what a scene may hold are refused from the header.
 //! Every file is written here. No GPU needed.
 
 mod common;
@@ -189,7 +190,15 @@ fn broken_ply_files_are_refused_with_the_file_and_the_reason() {
             String::from_utf8_lossy(&good[..header_end])
                 .replace("element vertex 5", "element vertex 4000000000")
                 .into_bytes(),
-            "is not a PLY file",
+            "declares 4000000000 vertices and 2 faces, more than the 16777216 triangles",
+        ),
+        (
+            "list-x.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 1\nproperty list uchar float x\n\
+              property float y\nproperty float z\nelement face 0\n\
+              property list uchar int vertex_indices\nend_header\n1 0 0 0\n"
+                .to_vec(),
+            "has a vertex property x that is a list",
         ),
         (
             "no-faces.ply",

@@ -293,14 +293,16 @@ fn pbr_eval(mat: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f
     let spec = ggx_d(dot(n, h), alpha) * g2 / (4.0 * cos_o);
     let through = (vec3<f32>(1.0) - pbr_dielectric_fresnel(mat, cos_i)) * (vec3<f32>(1.0) - pbr_dielectric_fresnel(mat, cos_o));
     let dielectric = through * mat.albedo.rgb * (cos_i / PI) + pbr_dielectric_fresnel(mat, vh) * spec;
-    return mix(dielectric, pbr_metal_fresnel(mat, vh) * spec, mat.params.z);
+    let metallic = mat.params.z;
+    return dielectric * (1.0 - metallic) + pbr_metal_fresnel(mat, vh) * spec * metallic;
 }
 
 // Probability of sampling the GGX lobe: its share at the view angle (both Fresnels at
 // cos_o, the diffuse lobe's colour), kept in [0.1, 0.9] when both lobes reflect.
 fn pbr_spec_prob(mat: Material, cos_o: f32) -> f32 {
     let fd = pbr_dielectric_fresnel(mat, cos_o);
-    let ws = luminance(mix(fd, pbr_metal_fresnel(mat, cos_o), mat.params.z));
+    let metallic = mat.params.z;
+    let ws = luminance(fd * (1.0 - metallic) + pbr_metal_fresnel(mat, cos_o) * metallic);
     let wd = (1.0 - mat.params.z) * luminance((vec3<f32>(1.0) - fd) * mat.albedo.rgb);
     return lobe_prob(ws, wd);
 }

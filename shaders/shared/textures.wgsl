@@ -174,7 +174,10 @@ fn material_at(m: Material, hit: Hit) -> Material {
         mat.albedo = vec4<f32>(min(texture_value(mat.tex_albedo, hit.uv, hit.p), vec3<f32>(1.0)), 0.0);
     }
     if (mat.tex_extra != NO_TEXTURE) {
-        mat.extra = vec4<f32>(min(texture_value(mat.tex_extra, hit.uv, hit.p), vec3<f32>(1.0)), 0.0);
+        // a reflectance, but for pbr's specular colour, which may exceed 1
+        // (KHR_materials_specular; its F0 is clamped to 1 instead)
+        let extra = texture_value(mat.tex_extra, hit.uv, hit.p);
+        mat.extra = vec4<f32>(select(min(extra, vec3<f32>(1.0)), extra, mat.tag == MAT_PBR), 0.0);
     }
     if (mat.tex_emission != NO_TEXTURE) {
         mat.emission = vec4<f32>(texture_value(mat.tex_emission, hit.uv, hit.p), 0.0);

@@ -5,7 +5,8 @@ use glam::{IVec3, Vec2, Vec3};
 use super::bindings::Bindings;
 use super::types::{xyz, Hit};
 use crate::scene::records::{
-    Material, Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK, TEX_NOISE,
+    Material, Texture, MAT_PBR, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK,
+    TEX_NOISE,
 };
 
 /// A texture coordinate folded into [0, 1] by the wrap mode (0 repeat, 1 clamp, 2 mirror).
@@ -154,10 +155,14 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
             .to_array();
     }
     if mat.tex_extra != NO_TEXTURE {
-        mat.extra = texture_value(b, mat.tex_extra, hit.uv, hit.p)
-            .min(Vec3::ONE)
-            .extend(0.0)
-            .to_array();
+        // a reflectance, but for pbr's specular colour, which may exceed 1
+        let extra = texture_value(b, mat.tex_extra, hit.uv, hit.p);
+        let extra = if mat.tag == MAT_PBR {
+            extra
+        } else {
+            extra.min(Vec3::ONE)
+        };
+        mat.extra = extra.extend(0.0).to_array();
     }
     if mat.tex_emission != NO_TEXTURE {
         mat.emission = texture_value(b, mat.tex_emission, hit.uv, hit.p)

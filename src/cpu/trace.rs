@@ -232,7 +232,7 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         let up = bounce_2d(b, pixel, sample, path.depth, DIM_PUNCTUAL);
         path.radiance += path.throughput * direct_punctual(b, mat, &path.ray, &hit, up[0]);
     }
-    if p.light_sampling == LIGHT_SAMPLING_MIXTURE && mixture_applies(mat) {
+    if p.light_sampling == LIGHT_SAMPLING_MIXTURE && p.num_emitters != 0 && mixture_applies(mat) {
         let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);
         let dir = if uc[1] < 0.5 {
             let ul = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT);

@@ -189,7 +189,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     let texture = |tag: u32| scene.textures.iter().any(|t| t.tag == tag);
     let bounded = scene.primitives.len() > scene.num_unbounded as usize;
     // lights are sampled only toward surfaces with a lobe that is not a delta
-    // (`nee_applies`: Lambertian or microfacet), and only when there are lights
+    // (`nee_applies`: Lambertian, microfacet or pbr), and only when there are lights
     let nee = mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET) || mat(r::MAT_PBR);
     let lit = scene.emitters.len() > scene.num_punctual as usize && nee;
     FeatureSet::default()

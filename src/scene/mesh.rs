@@ -207,6 +207,27 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
             ));
         }
     }
+    // the counts are capped before anything is read (a face becomes at least one
+    // triangle; a mesh cannot need more than three vertices a triangle), and the
+    // properties read as numbers must be scalars
+    let count = |element: &str| header.elements.get(element).map_or(0, |e| e.count);
+    if count("face") > MAX_TRIANGLES || count("vertex") > 3 * MAX_TRIANGLES {
+        return Err(format!(
+            "declares {} vertices and {} faces, more than the {MAX_TRIANGLES} triangles a scene may hold",
+            count("vertex"),
+            count("face")
+        ));
+    }
+    let numeric = ["x", "y", "z", "nx", "ny", "nz"]
+        .into_iter()
+        .chain(PLY_UV.into_iter().flatten());
+    for name in numeric {
+        if let Some(p) = header.elements["vertex"].properties.get(name) {
+            if !matches!(p.data_type, ply_rs_bw::ply::PropertyType::Scalar(_)) {
+                return Err(format!("has a vertex property {name} that is a list"));
+            }
+        }
+    }
     let normals = declares("vertex", &["nx", "ny", "nz"]);
     let uv_names = PLY_UV.map(|names| names.iter().any(|n| declares("vertex", &[n])));
     let uvs = uv_names[0] && uv_names[1];
@@ -259,12 +280,14 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
             ));
         }
         let f = &face.indices;
+        if mesh.triangles.len() + f.len().saturating_sub(2) > MAX_TRIANGLES {
+            return Err(format!(
+                "has more than the {MAX_TRIANGLES} triangles a scene may hold"
+            ));
+        }
         for j in 1..f.len().saturating_sub(1) {
             mesh.triangles
                 .push([f[0] as u32, f[j] as u32, f[j + 1] as u32]);
-        }
-        if mesh.triangles.len() > MAX_TRIANGLES {
-            break;
         }
     }
     Ok(mesh)

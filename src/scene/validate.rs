@@ -380,11 +380,13 @@ impl Validator<'_> {
                 let placed = self.finite3(&format!("{key}.position"), *position, at);
                 self.nonnegative3(&format!("{key}.intensity"), *intensity, at);
                 match (direction, look_at) {
-                    (Some(d), None) => self.direction(&format!("{key}.direction"), *d, at),
+                    (Some(d), None) => self.light_axis(&format!("{key}.direction"), *d, at),
                     (None, Some(t)) => {
                         if self.finite3(&format!("{key}.look_at"), *t, at)
                             && placed
-                            && Vec3::from(*t) == Vec3::from(*position)
+                            && (Vec3::from(*t) - Vec3::from(*position))
+                                .try_normalize()
+                                .is_none()
                         {
                             self.push(
                                 at,
@@ -417,9 +419,17 @@ impl Validator<'_> {
                 direction,
                 irradiance,
             } => {
-                self.direction(&format!("{key}.direction"), *direction, at);
+                self.light_axis(&format!("{key}.direction"), *direction, at);
                 self.nonnegative3(&format!("{key}.irradiance"), *irradiance, at);
             }
+        }
+    }
+
+    /// A light's axis: a direction that normalizes in f32 (neither zero nor so large or
+    /// small that its length overflows or underflows).
+    fn light_axis(&mut self, key: &str, d: [f32; 3], at: usize) {
+        if self.finite3(key, d, at) && Vec3::from(d).try_normalize().is_none() {
+            self.push(at, key, "must be non-zero (and normalizable in f32)".into());
         }
     }
 
