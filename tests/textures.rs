@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 use wgtrace::cpu::bindings::Bindings;
-use wgtrace::cpu::textures::{perlin, texture_value};
+use wgtrace::cpu::textures::{material_at, perlin, texture_value};
 use wgtrace::gpu::kernel::lookup_textures;
 use wgtrace::scene::records::TextureLookup;
 use wgtrace::scene::textures::srgb_to_linear;
@@ -219,4 +219,34 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
         s.textures.len()
     );
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A texture in a material's extra slot is clamped to 1 where it is a reflectance (the
+/// microfacet's specular colour) but not as pbr's specular colour, which
+/// KHR_materials_specular lets exceed 1: there a texture gives what the same constant
+/// gives.
+#[test]
+fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
+    let src = "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n\
+               t = { type = \"constant\", color = [2.5, 0.5, 1.5] }\n[materials]\n\
+               a = { type = \"pbr\", specular_color = \"t\" }\n\
+               b = { type = \"pbr\", specular_color = [2.5, 0.5, 1.5] }\n\
+               c = { type = \"microfacet\", albedo = [0.5, 0.5, 0.5], specular = \"t\", roughness = 0.2 }\n";
+    let s = wgtrace::load_scene_str(src, Path::new("t.toml"), &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let b = Bindings::new(&s, s.params(0, s.full_tile()));
+    let hit = wgtrace::cpu::types::Hit {
+        p: Vec3::ZERO,
+        ng: Vec3::Z,
+        ns: Vec3::Z,
+        uv: Vec2::splat(0.5),
+        front_face: true,
+        material: 0,
+        err: 0.0,
+    };
+    // materials are numbered in name order: a, b, c
+    let extra = |i: usize| Vec3::from_slice(&material_at(&b, &s.materials[i], &hit).extra[..3]);
+    assert_close(extra(0), Vec3::new(2.5, 0.5, 1.5));
+    assert_close(extra(0), extra(1));
+    assert_close(extra(2), Vec3::new(1.0, 0.5, 1.0));
 }
