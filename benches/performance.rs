@@ -838,12 +838,15 @@ fn optimizations(md: &mut String, dir: &Path) {
          invocation (llvmpipe writes workgroup memory lane by lane, for the lanes that \
          push only): nefertiti's bounce loop 9363 to 5152 instructions, the walk's inner \
          loop 594 to 453; spot 0.370 to 0.489, nefertiti 0.334 to 0.422, heightfield \
-         0.356 to 0.372 Msamples/s, the same images bit for bit. Tried and not kept: a \
+         0.356 to 0.372 Msamples/s (geometric mean 1.20x over the three meshes, worst \
+         1.04x, the heightfield; the two Cornell boxes do not walk the BVH), the same \
+         images bit for bit. Tried and not kept: a \
          4-wide BVH (the binary SAH tree collapsed, each node's up to four children side \
          by side in 8 texels, a sorting network for the nearest first, with the stack in \
          workgroup memory): its step is 843 instructions against 453 for a binary step, \
-         so two binary levels cost 906 against 843, and nefertiti rendered 0.398 \
-         against 0.415, spot 0.480 against 0.481. Fetches stay 2 texels per child and \
+         so two binary levels cost 906 against 843, and on the two meshes it was tried \
+         on nefertiti rendered 0.398 against 0.415 and spot 0.480 against 0.481 (0.96x \
+         and 1.00x). Fetches stay 2 texels per child and \
          take about 45 instructions each; child boxes quantized to 8 bits in the node's \
          frame (Ylitie et al. 2017: 4 children in 4 texels) would save 4 of the 8 fetches \
          and add about 70 instructions of decoding, about 735 per step: 1.23x on the \

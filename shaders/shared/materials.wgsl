@@ -125,6 +125,11 @@ fn smith_lambda(c: f32, alpha: f32) -> f32 {
     return 0.5 * (sqrt(c2 + alpha * alpha * (1.0 - c2)) / c - 1.0);
 }
 
+// Smith's height-correlated masking-shadowing G2 = 1 / (1 + Lambda(cos_o) + Lambda(cos_i)).
+fn smith_g2(cos_o: f32, cos_i: f32, alpha: f32) -> f32 {
+    return 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
+}
+
 // A visible normal of GGX seen from wo (local frame, z = the normal), sampled as in Heitz,
 // "Sampling the GGX Distribution of Visible Normals" (JCGT 2018).
 fn sample_ggx_vndf(wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
@@ -182,8 +187,7 @@ fn microfacet_eval(mat: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) ->
         return mat.albedo.rgb * diff;
     }
     let h = normalize(wo + wi);
-    let g2 = 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
-    let spec = ggx_d(dot(n, h), alpha) * g2 * schlick(dot(wi, h), ior) / (4.0 * cos_o);
+    let spec = ggx_d(dot(n, h), alpha) * smith_g2(cos_o, cos_i, alpha) * schlick(dot(wi, h), ior) / (4.0 * cos_o);
     return mat.extra.rgb * spec + mat.albedo.rgb * diff;
 }
 
@@ -289,8 +293,7 @@ fn pbr_eval(mat: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f
     let alpha = mat.params.x;
     let h = normalize(wo + wi);
     let vh = dot(wo, h);
-    let g2 = 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
-    let spec = ggx_d(dot(n, h), alpha) * g2 / (4.0 * cos_o);
+    let spec = ggx_d(dot(n, h), alpha) * smith_g2(cos_o, cos_i, alpha) / (4.0 * cos_o);
     let through = (vec3<f32>(1.0) - pbr_dielectric_fresnel(mat, cos_i)) * (vec3<f32>(1.0) - pbr_dielectric_fresnel(mat, cos_o));
     let dielectric = through * mat.albedo.rgb * (cos_i / PI) + pbr_dielectric_fresnel(mat, vh) * spec;
     let metallic = mat.params.z;

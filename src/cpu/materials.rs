@@ -162,6 +162,11 @@ pub fn smith_lambda(c: f32, alpha: f32) -> f32 {
 }
 
 /// A visible normal of GGX seen from wo (local frame, z = normal), Heitz 2018.
+/// Smith's height-correlated masking-shadowing G2 (materials.wgsl's `smith_g2`).
+pub fn smith_g2(cos_o: f32, cos_i: f32, alpha: f32) -> f32 {
+    1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha))
+}
+
 pub fn sample_ggx_vndf(wo: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
     let vh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
     let len2 = vh.x * vh.x + vh.y * vh.y;
@@ -214,8 +219,8 @@ pub fn microfacet_eval(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
         return xyz(mat.albedo) * diff;
     }
     let h = (wo + wi).normalize();
-    let g2 = 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
-    let spec = ggx_d(n.dot(h), alpha) * g2 * schlick(wi.dot(h), ior) / (4.0 * cos_o);
+    let spec = ggx_d(n.dot(h), alpha) * smith_g2(cos_o, cos_i, alpha) * schlick(wi.dot(h), ior)
+        / (4.0 * cos_o);
     xyz(mat.extra) * spec + xyz(mat.albedo) * diff
 }
 
@@ -328,8 +333,7 @@ pub fn pbr_eval(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
     let alpha = mat.params[0];
     let h = (wo + wi).normalize();
     let vh = wo.dot(h);
-    let g2 = 1.0 / (1.0 + smith_lambda(cos_o, alpha) + smith_lambda(cos_i, alpha));
-    let spec = ggx_d(n.dot(h), alpha) * g2 / (4.0 * cos_o);
+    let spec = ggx_d(n.dot(h), alpha) * smith_g2(cos_o, cos_i, alpha) / (4.0 * cos_o);
     let through = (Vec3::ONE - pbr_dielectric_fresnel(mat, cos_i))
         * (Vec3::ONE - pbr_dielectric_fresnel(mat, cos_o));
     let dielectric =

@@ -7,7 +7,7 @@ use glam::{Affine3A, Mat3, Vec2, Vec3};
 
 use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
-use super::format::{ColorDesc, LightDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
 use super::lights::{env_distribution, light_list, punctual_lights, Environment};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA, NO_TEXTURE};
@@ -524,9 +524,11 @@ pub fn flatten(
         &shape_data,
         env,
     );
-    let punctual: Vec<LightDesc> = file.lights.iter().map(|l| l.get_ref().clone()).collect();
-    let num_punctual = punctual.len() as u32;
-    emitters.extend(punctual_lights(&punctual, bounding_sphere(&boxes)));
+    let num_punctual = file.lights.len() as u32;
+    emitters.extend(punctual_lights(
+        file.lights.iter().map(|l| l.get_ref()),
+        bounding_sphere(&boxes),
+    ));
     let rotation = bg.rotation.unwrap_or(0.0).to_radians();
 
     let r = &file.render;

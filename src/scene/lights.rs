@@ -85,7 +85,10 @@ pub fn env_distribution(env: &Environment) -> (Vec<[f32; 4]>, f64) {
 /// 2)) and the one the sphere subtends from it (4 pi from inside). Power alone (4 pi I,
 /// as pbrt-v4's power light sampler has it) would all but never choose a directional
 /// light over a point light in a small scene.
-pub fn punctual_lights(lights: &[LightDesc], bounds: (Vec3, f32)) -> Vec<Emitter> {
+pub fn punctual_lights<'a>(
+    lights: impl IntoIterator<Item = &'a LightDesc>,
+    bounds: (Vec3, f32),
+) -> Vec<Emitter> {
     use std::f32::consts::PI;
     let (center, radius) = bounds;
     let lum = |c: [f32; 3]| luminance([c[0], c[1], c[2], 0.0]);
@@ -99,7 +102,7 @@ pub fn punctual_lights(lights: &[LightDesc], bounds: (Vec3, f32)) -> Vec<Emitter
         }
     };
     let mut out: Vec<Emitter> = lights
-        .iter()
+        .into_iter()
         .map(|l| match l {
             LightDesc::Point {
                 position,

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glam::{Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
 
@@ -252,24 +252,23 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
             }
         }
     }
-    let f32s = |v: &[f64]| v.iter().map(|&x| x as f32).collect::<Vec<f32>>();
     let mut mesh = MeshData {
         positions: vertices
             .iter()
-            .map(|v| Vec3::from_slice(&f32s(&v.p)))
+            .map(|v| DVec3::from(v.p).as_vec3())
             .collect(),
         ..Default::default()
     };
     if normals {
         mesh.normals = vertices
             .iter()
-            .map(|v| Vec3::from_slice(&f32s(&v.n)))
+            .map(|v| DVec3::from(v.n).as_vec3())
             .collect();
     }
     if uvs {
         mesh.uvs = vertices
             .iter()
-            .map(|v| Vec2::from_slice(&f32s(&v.uv)))
+            .map(|v| DVec2::from(v.uv).as_vec2())
             .collect();
     }
     let n = mesh.positions.len() as i64;
