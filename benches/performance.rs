@@ -192,7 +192,7 @@ fn mitsuba(
 }
 
 fn rgb(path: &Path) -> Vec<f32> {
-    let img = load_image(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let img = load_image(path, true).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect()
 }
 

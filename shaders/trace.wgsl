@@ -26,6 +26,9 @@ fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
     // code for the rest of the shader 1.0x to 3.2x slower (docs/specialization.md)
     let d = sample_disk(lens) * params.cam_origin.w;
     let lens_offset = right * d.x + up * d.y;
+    if (params.orthographic != 0u) {
+        return Ray(params.cam_origin.xyz + target_offset - forward * params.cam_forward.w, forward);
+    }
     return Ray(params.cam_origin.xyz + lens_offset, normalize(target_offset - lens_offset));
 }
 
@@ -34,11 +37,40 @@ fn spawn_ray(hit: Hit, dir: vec3<f32>) -> Ray {
     return Ray(offset_ray(hit.p, select(-hit.ng, hit.ng, dot(dir, hit.ng) > 0.0), hit.err), dir);
 }
 
+// Whether anything opaque lies on a shadow ray before t_max. With alpha materials the
+// surfaces on the way are found one after the other (closest hit) and passed through where
+// transparent, u deciding for blended ones; without, the first hit found ends the search.
+fn shadowed(ray: Ray, t_max: f32, u: f32) -> bool {
+#ifdef HAS_ALPHA
+    var r = ray;
+    var t = t_max;
+    for (var k = 0u; k < MAX_ALPHA_SKIPS; k++) {
+        let cand = intersect_scene(r, t);
+        if (cand.prim == NO_HIT) {
+            return false;
+        }
+        let hit = surface_at(r, cand);
+        if (!transparent_at(hit, alpha_u(u, k))) {
+            return true;
+        }
+        let next = spawn_ray(hit, r.dir);
+        t -= dot(next.origin - r.origin, r.dir);
+        if (t <= 0.0) {
+            return false;
+        }
+        r = next;
+    }
+    return true;
+#else
+    return occluded(ray, t_max);
+#endif
+}
+
 // Next-event estimation at a hit: a direction toward a light, a shadow ray from just off
 // the surface to just short of the sampled point, and the light's emission there (its own
 // shading record: side, texture) times BSDF x cos, weighed against BSDF sampling by the
 // power heuristic and divided by the light's pdf.
-fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -> vec3<f32> {
+fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>, u_alpha: f32) -> vec3<f32> {
     // Every step runs whatever the earlier ones found, and one test at the end keeps the
     // contribution or not: llvmpipe runs both sides of each branch anyway, and its masked
     // early returns cost more (1.3% of the Cornell box's bounce loop). A value of a failed
@@ -65,7 +97,7 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
         shadow.dir = v / t_max;
     }
     let lit = ls.light != NO_LIGHT && any(f != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0)) && t_max > 0.0;
-    if (!lit || occluded(shadow, t_max)) {
+    if (!lit || shadowed(shadow, t_max, u_alpha)) {
         return vec3<f32>(0.0);
     }
     let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, pdf_dir));
@@ -77,7 +109,7 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>) -
 // to its power: a shadow ray to its position (or out of the scene, for a directional
 // light), and f x intensity x the spot's falloff / d^2 (or f x irradiance) over the
 // choice's probability. No MIS weight: no other strategy can find a point or a direction.
-fn direct_punctual(mat: Material, ray: Ray, hit: Hit, u: f32) -> vec3<f32> {
+fn direct_punctual(mat: Material, ray: Ray, hit: Hit, u: f32, u_alpha: f32) -> vec3<f32> {
     let e = emitter_record(choose_punctual(u));
     let positioned = e.kind != LIGHT_DIRECTIONAL;
     var dir = e.a.xyz;
@@ -102,7 +134,7 @@ fn direct_punctual(mat: Material, ray: Ray, hit: Hit, u: f32) -> vec3<f32> {
     }
     let f = bsdf_eval(mat, ray, hit, dir);
     let lit = e.prob > 0.0 && d2 > 0.0 && t_max > 0.0 && any(f != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
-    if (!lit || occluded(shadow, t_max)) {
+    if (!lit || shadowed(shadow, t_max, u_alpha)) {
         return vec3<f32>(0.0);
     }
     return f * le / e.prob;
@@ -144,7 +176,28 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         }
         (*path).throughput /= survive;
     }
-    let cand = intersect_scene((*path).ray, FAR);
+    var u_alpha = vec2<f32>(0.0);
+    var cand: Candidate;
+#ifdef HAS_ALPHA
+    u_alpha = bounce_2d(pixel, sample, (*path).depth, DIM_ALPHA);
+    // one call of the closest-hit search (llvmpipe inlines each call site whole)
+    for (var k = 0u; k < MAX_ALPHA_SKIPS; k++) {
+        cand = intersect_scene((*path).ray, FAR);
+        // a surface transparent where the ray meets it is passed through: the ray goes on
+        // from just beyond, its origin moved but its direction's pdf and the vertex it
+        // left (prev_p) kept, and the bounce not counted
+        if (cand.prim != NO_HIT) {
+            let h = surface_at((*path).ray, cand);
+            if (transparent_at(h, alpha_u(u_alpha.x, k))) {
+                (*path).ray = spawn_ray(h, (*path).ray.dir);
+                continue;
+            }
+        }
+        break;
+    }
+#else
+    cand = intersect_scene((*path).ray, FAR);
+#endif
 #ifdef HAS_MIS
     let mis = params.light_sampling == LIGHT_SAMPLING_MIS && !(*path).prev_delta;
 #endif
@@ -158,8 +211,13 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         (*path).radiance += (*path).throughput * le;
         return false;
     }
-    let hit = surface_at((*path).ray, cand);
-    let mat = material_at(material_record(hit.material), hit);
+    let surface = surface_at((*path).ray, cand);
+    let mat = material_at(material_record(surface.material), surface);
+#ifdef HAS_NORMAL_MAP
+    let hit = normal_mapped(mat, surface);
+#else
+    let hit = surface;
+#endif
     var le = emitted(mat, hit);
 #ifdef HAS_MIS
     let light = primitive_record(cand.prim).flags >> PRIM_LIGHT_SHIFT;
@@ -176,7 +234,7 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     if (params.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat)) {
         let ul = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT);
         let uc = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT_CHOICE);
-        (*path).radiance += (*path).throughput * direct_light(mat, (*path).ray, hit, uc.x, ul);
+        (*path).radiance += (*path).throughput * direct_light(mat, (*path).ray, hit, uc.x, ul, u_alpha.y);
     }
 #endif
 #ifdef HAS_PUNCTUAL
@@ -184,7 +242,7 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     // finds them (the full shader holds this for scenes without any)
     if (params.num_punctual != 0u && nee_applies(mat)) {
         let up = bounce_2d(pixel, sample, (*path).depth, DIM_PUNCTUAL);
-        (*path).radiance += (*path).throughput * direct_punctual(mat, (*path).ray, hit, up.x);
+        (*path).radiance += (*path).throughput * direct_punctual(mat, (*path).ray, hit, up.x, u_alpha.y);
     }
 #endif
 #ifdef HAS_MIXTURE

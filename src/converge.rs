@@ -357,7 +357,7 @@ pub fn reference(
         max_depth: Some(max_depth),
         sampler: Some(SamplerKind::Sobol),
         light_sampling: Some(LightSampling::Mis),
-        ..opts.overrides
+        ..opts.overrides.clone()
     };
     let scene = load(&opts.scene, &overrides)?;
     let mut session = session(scene.clone(), opts.reference_backend)?;
@@ -397,7 +397,7 @@ pub fn reference(
 
 /// A reference EXR the user gave, which must have the renders' size.
 fn given_reference(path: &Path, probe: &FlatScene) -> Result<Vec<f32>, ConvergeError> {
-    let img = crate::scene::textures::load_image(path).map_err(|e| file_err(path, e))?;
+    let img = crate::scene::textures::load_image(path, true).map_err(|e| file_err(path, e))?;
     if (img.width, img.height) != (probe.width, probe.height) {
         return Err(file_err(
             path,
@@ -432,7 +432,7 @@ fn cached_reference(
     if !wanted {
         return Ok(None);
     }
-    let img = crate::scene::textures::load_image(&exr).map_err(|e| file_err(&exr, e))?;
+    let img = crate::scene::textures::load_image(&exr, true).map_err(|e| file_err(&exr, e))?;
     let rgb = img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
     Ok(Some((rgb, info)))
 }
@@ -530,7 +530,7 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
                 sampler: Some(config.sampler),
                 light_sampling: Some(config.strategy),
                 max_depth: config.max_depth.or(opts.overrides.max_depth),
-                ..opts.overrides
+                ..opts.overrides.clone()
             };
             // one render per run, measured at each ladder point; or one render per point
             let renders: Vec<Vec<u32>> = if config.prefix_is_a_render() {
@@ -544,7 +544,7 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
                     &opts.scene,
                     &Overrides {
                         spp: Some(last),
-                        ..overrides
+                        ..overrides.clone()
                     },
                 )?;
                 let render = Render {

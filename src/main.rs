@@ -48,7 +48,7 @@ enum Command {
     /// Print the features a scene uses, the shader defines they select, and the size of the
     /// specialized shader against the full one.
     Features {
-        /// Scene file (TOML).
+        /// Scene file: TOML, or a glTF 2.0 file (.gltf, .glb) on its own.
         scene: PathBuf,
     },
     /// Check scene files without rendering them: parse, validate every value, load their
@@ -104,7 +104,7 @@ struct GalleryArgs {
 
 #[derive(clap::Args)]
 struct ConvergeArgs {
-    /// Scene file (TOML).
+    /// Scene file: TOML, or a glTF 2.0 file (.gltf, .glb) on its own.
     scene: PathBuf,
     /// Reference image (linear EXR of the same size). Default: render one at
     /// --reference-spp, cached in the output folder with its settings beside it.
@@ -159,7 +159,7 @@ enum BackendArg {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file: TOML, or a glTF 2.0 file (.gltf, .glb) on its own.
     scene: PathBuf,
     /// Output image; the extension picks the format: .png (8-bit sRGB), .exr (linear float),
     /// .ppm (binary P6). Default: the scene's name with .png, in the current directory.
@@ -186,6 +186,14 @@ struct RenderArgs {
     /// Random seed (overrides [render] seed).
     #[arg(long)]
     seed: Option<u32>,
+    /// A glTF file's camera, by its name or its node's (default: the file's first camera;
+    /// without one, a view that frames the scene).
+    #[arg(long, value_name = "NAME")]
+    camera: Option<String>,
+    /// A uniform background of this radiance (replaces the scene's [background], and a
+    /// glTF file's default of 1 when it has no light).
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    background: Option<[f32; 3]>,
     /// Rewrite the output file every N passes, to watch the render converge.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
     preview_every: Option<u32>,
@@ -257,6 +265,18 @@ fn tune_help() -> String {
         s += &format!("\n  {name}: {what}");
     }
     s
+}
+
+fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<f32> = s
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("must be three numbers R,G,B, got {s}"))?;
+    match parts[..] {
+        [r, g, b] if parts.iter().all(|x| *x >= 0.0 && x.is_finite()) => Ok([r, g, b]),
+        _ => Err(format!("must be three numbers >= 0, R,G,B, got {s}")),
+    }
 }
 
 fn positive_f64(s: &str) -> Result<f64, String> {
@@ -334,20 +354,25 @@ fn validate(paths: &[PathBuf]) -> anyhow::Result<()> {
                 Ok(scene)
             });
         match checked {
-            Ok(scene) => println!(
-                "{}: ok: {} x {}, {} spp, max depth {}; primitives {}, materials {}, \
+            Ok(scene) => {
+                for w in &scene.warnings {
+                    println!("note: {}: {w}", path.display());
+                }
+                println!(
+                    "{}: ok: {} x {}, {} spp, max depth {}; primitives {}, materials {}, \
                  textures {}, lights {}{}",
-                path.display(),
-                scene.width,
-                scene.height,
-                scene.spp,
-                scene.max_depth,
-                scene.primitives.len(),
-                scene.materials.len(),
-                scene.textures.len(),
-                scene.emitters.len(),
-                if scene.use_bvh { ", BVH" } else { "" }
-            ),
+                    path.display(),
+                    scene.width,
+                    scene.height,
+                    scene.spp,
+                    scene.max_depth,
+                    scene.primitives.len(),
+                    scene.materials.len(),
+                    scene.textures.len(),
+                    scene.emitters.len(),
+                    if scene.use_bvh { ", BVH" } else { "" }
+                )
+            }
             Err(e) => {
                 failed += 1;
                 eprintln!("error: {e:#}");
@@ -590,6 +615,8 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         seed: args.seed,
         sampler: args.sampler,
         light_sampling: args.light_sampling,
+        background: args.background,
+        camera: args.camera.clone(),
     };
     let tuning = args.tune.unwrap_or_default();
     let loading = std::time::Instant::now();
@@ -611,6 +638,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         interrupt: Some(interrupt),
         until: None,
     };
+    for w in &scene.warnings {
+        eprintln!("note: {}: {w}", args.scene.display());
+    }
     if !args.quiet {
         eprintln!(
             "scene: {} primitives ({} unbounded), {} BVH nodes of depth {}, {:.2} s to load",

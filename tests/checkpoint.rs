@@ -47,7 +47,7 @@ fn the_scene_hash_is_the_same_on_every_build() {
     let scene = common::scene_from_str(SPHERE);
     assert_eq!(
         scene_hash(&scene),
-        0xc62d_08f3_a169_8f04,
+        0xd76e_c278_cc08_55fc,
         "the scene hash changed: checkpoints written before are refused as another scene's"
     );
     let with =

@@ -432,8 +432,11 @@ fn overrides_replace_render_settings_and_are_validated() {
         seed: Some(9),
         sampler: None,
         light_sampling: Some(wgtrace::scene::format::LightSampling::Mixture),
+        background: Some([0.5, 0.25, 0.125]),
+        camera: None,
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
+    assert_eq!(s.background, [0.5, 0.25, 0.125]);
     assert_eq!(
         (s.width, s.height, s.spp, s.max_depth, s.seed),
         (33, 17, 3, 2, 9)

@@ -32,6 +32,7 @@ fn hit_at_origin(d: Vec3, origin: Vec3) -> (Ray, Hit) {
         front_face: ray.dir.z < 0.0,
         material: 0,
         err: 0.0,
+        tangent: glam::Vec4::ZERO,
     };
     (ray, hit)
 }

@@ -273,3 +273,95 @@ proptest! {
         }
     }
 }
+
+/// An OBJ file's .mtl materials apply when the object names none: Kd (times map_Kd), Ks,
+/// Ns, Ni, d and Ke onto `pbr`, illum 7 onto `dielectric`, map_Bump onto a normal map
+/// with MikkTSpace tangents; a `material` of the scene replaces them; a PLY file or an OBJ
+/// without a .mtl then needs one.
+#[test]
+fn obj_materials_come_from_the_mtl_unless_the_scene_names_one() {
+    use wgtrace::scene::records;
+    let dir = common::tmp_dir("mtl");
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+               vn 0 0 1\no a\nusemtl paint\nf 1/1/1 2/2/1 3/3/1\no b\nusemtl glass\nf 1/1/1 3/3/1 4/4/1\n";
+    std::fs::write(dir.join("m.obj"), obj).unwrap();
+    let mtl = "newmtl paint\nKd 0.5 0.25 1\nKs 0.5 0.5 0.5\nNs 98\nNi 1.6\nd 0.75\nKe 2 0 0\n\
+               map_Kd tex.png\nmap_Bump -bm 0.5 normal.png\n\
+               newmtl glass\nillum 7\nNi 1.33\nKd 0 0 0\n";
+    std::fs::write(dir.join("m.mtl"), mtl).unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([255, 255, 255]))
+        .save(dir.join("tex.png"))
+        .unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([128, 128, 255]))
+        .save(dir.join("normal.png"))
+        .unwrap();
+    let scene =
+        |object: &str| format!("{HEAD}[[objects]]\ntype = \"mesh\"\npath = \"m.obj\"\n{object}");
+    let s = wgtrace::load_scene_str(&scene(""), &dir.join("s.toml"), &Overrides::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    // the scene's material m, then the .mtl's paint and glass
+    assert_eq!(s.materials.len(), 3, "{:?}", s.material_names);
+    let (paint, glass) = (s.materials[1], s.materials[2]);
+    assert_eq!(paint.tag, records::MAT_PBR);
+    let roughness = (2.0f32 / 100.0).powf(0.25);
+    assert_eq!(paint.params, [roughness * roughness, 1.6, 0.0, 1.0]);
+    assert_eq!(&paint.extra[..3], &[0.5, 0.5, 0.5]);
+    assert_eq!(paint.extra[3], 0.5, "-bm scales the normal map");
+    assert_eq!(&paint.emission[..3], &[2.0, 0.0, 0.0]);
+    assert_eq!(paint.albedo[3], 0.75);
+    assert_ne!(paint.flags & records::MAT_FLAG_ALPHA_BLEND, 0);
+    assert_ne!(paint.tex_normal, records::NO_TEXTURE);
+    // map_Kd times Kd: the texture's factor
+    let base = s.textures[paint.tex_albedo as usize];
+    assert_eq!(&base.color0[..3], &[0.5, 0.25, 1.0]);
+    assert_eq!(glass.tag, records::MAT_DIELECTRIC);
+    assert_eq!(glass.params[0], 1.33);
+    // the normal-mapped triangle has tangents, +x along u
+    let mapped = s.primitives.iter().find(|p| p.material == 1).unwrap();
+    assert_ne!(mapped.flags & records::PRIM_FLAG_TANGENTS, 0);
+    assert_eq!(s.shape_data[mapped.data as usize + 4], [1.0, 0.0, 0.0, 1.0]);
+    // the scene's material instead
+    let s = wgtrace::load_scene_str(
+        &scene("material = \"m\"\n"),
+        &dir.join("s.toml"),
+        &Overrides::default(),
+    )
+    .unwrap();
+    assert_eq!(s.materials.len(), 1);
+    assert!(s.primitives.iter().all(|p| p.material == 0));
+    // without a .mtl, or a PLY file, a material is needed
+    std::fs::write(dir.join("bare.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let e = wgtrace::load_scene_str(
+        &scene("").replace("m.obj", "bare.obj"),
+        &dir.join("s.toml"),
+        &Overrides::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("objects[0].path: ") && e.contains("has no materials"),
+        "{e}"
+    );
+    std::fs::write(
+        dir.join("p.ply"),
+        ply("ascii", ["u", "v"], &VERTICES, &faces()),
+    )
+    .unwrap();
+    let e = wgtrace::load_scene_str(
+        &scene("").replace("m.obj", "p.ply"),
+        &dir.join("s.toml"),
+        &Overrides::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("a PLY file has no materials"), "{e}");
+    // a .mtl naming an image that is not there
+    std::fs::remove_file(dir.join("tex.png")).unwrap();
+    let e = wgtrace::load_scene_str(&scene(""), &dir.join("s.toml"), &Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("material \"paint\"") && e.contains("tex.png"),
+        "{e}"
+    );
+}

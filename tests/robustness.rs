@@ -31,8 +31,8 @@ fn tmp_dir(name: &str) -> PathBuf {
     common::tmp_dir(&format!("robust-{name}"))
 }
 
-fn load(src: &str, dir: &Path, o: Overrides) -> FlatScene {
-    wgtrace::load_scene_str(src, &dir.join("scene.toml"), &o).unwrap_or_else(|e| panic!("{e}"))
+fn load(src: &str, dir: &Path, o: &Overrides) -> FlatScene {
+    wgtrace::load_scene_str(src, &dir.join("scene.toml"), o).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// A sample that is NaN, infinite, or whose square overflows is dropped and counted; the
@@ -199,7 +199,7 @@ material = "wall"
     // value, and unbiased: the image mean lies within 4 standard errors of it (the error
     // from the pixels' own sample variances), and paths did end early (the variance is
     // not zero)
-    let scene = load(src, &dir, Overrides::default());
+    let scene = load(src, &dir, &Overrides::default());
     for (name, img) in [("gpu", render_gpu(&scene)), ("cpu", render_cpu(&scene))] {
         let n = img.pixel_count();
         let mean = (0..n).map(|i| img.mean(i)[0] as f64).sum::<f64>() / n as f64;
@@ -263,7 +263,7 @@ fn the_cornell_box_is_the_same_at_every_scale_and_position() {
         ..Default::default()
     };
     let dir = tmp_dir("scale");
-    let base = render_gpu(&load(&place(1.0, [0.0; 3]), &dir, o));
+    let base = render_gpu(&load(&place(1.0, [0.0; 3]), &dir, &o));
     for (scale, shift) in [
         (1e-3, [0.0; 3]),
         (1e4, [0.0; 3]),
@@ -271,7 +271,7 @@ fn the_cornell_box_is_the_same_at_every_scale_and_position() {
         (1.0, [0.0, 1e4, 0.0]),
         (1.0, [0.0, 0.0, 1e4]),
     ] {
-        let img = render_gpu(&load(&place(scale, shift), &dir, o));
+        let img = render_gpu(&load(&place(scale, shift), &dir, &o));
         let c = common::compare(&img, &base, 8);
         let (m, _) = image_mean(&img);
         eprintln!(
@@ -476,6 +476,7 @@ fn microfacet_roughness_near_zero_is_finite_and_continuous() {
         front_face: true,
         material: 0,
         err: 1e-6,
+        tangent: glam::Vec4::ZERO,
     };
     let mut last_spread = 0.0f64;
     for alpha in [1.0f32, 1e-2, 1e-3, 1e-4, 1e-6, 0.0] {

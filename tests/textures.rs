@@ -243,6 +243,7 @@ fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
         front_face: true,
         material: 0,
         err: 0.0,
+        tangent: glam::Vec4::ZERO,
     };
     // materials are numbered in name order: a, b, c
     let extra = |i: usize| Vec3::from_slice(&material_at(&b, &s.materials[i], &hit).extra[..3]);

@@ -630,6 +630,7 @@ struct Surface {
     ns: vec3<f32>,
     uv: vec2<f32>,
     err: f32,
+    tangent: vec4<f32>,
 }
 
 // Angle of q about the unit axis n, in the onb_tangents frame, as a fraction in [0, 1].
@@ -644,7 +645,7 @@ fn angle_uv(q: vec3<f32>, n: vec3<f32>) -> f32 {
 // surface to within a few ulps of the primitive's own magnitudes whatever the distance
 // travelled; err bounds that (16 ulps, 8 for triangles).
 fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
-    var s = Surface(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.0), 0.0);
+    var s = Surface(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.0), 0.0, vec4<f32>(0.0));
     switch prim.tag {
 #ifdef HAS_SPHERE
         case PRIM_SPHERE: {
@@ -685,6 +686,14 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
                         s.ns = n * (select(-1.0, 1.0, dot(n, s.ng) >= 0.0) / len);
                     }
                 }
+#ifdef HAS_NORMAL_MAP
+                if ((prim.flags & PRIM_FLAG_TANGENTS) != 0u) {
+                    let t0 = shape_data[prim.data + 4u];
+                    let t1 = shape_data[prim.data + 5u];
+                    let t2 = shape_data[prim.data + 6u];
+                    s.tangent = vec4<f32>(w.x * t0.xyz + w.y * t1.xyz + w.z * t2.xyz, t0.w);
+                }
+#endif
             }
         }
 #endif
@@ -789,5 +798,5 @@ fn surface_at(ray: Ray, cand: Candidate) -> Hit {
 #else
     s = surface_local(prim, ray, cand);
 #endif
-    return Hit(s.p, s.ng, s.ns, s.uv, dot(ray.dir, s.ng) < 0.0, prim.material, s.err);
+    return Hit(s.p, s.ng, s.ns, s.uv, dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent);
 }

@@ -31,9 +31,12 @@ fn wrap_texel(i: i32, n: i32, mode: u32) -> u32 {
     }
 }
 
-// Bilinear image lookup; v = 0 is the bottom row of the image, texel centres at half
+// Bilinear image lookup of (r, g, b, alpha) after the texture's uv transform (rows in
+// color1 and params); v = 0 is the bottom row of the image, texel centres at half
 // integers.
-fn image_value(tex: Texture, uv: vec2<f32>) -> vec3<f32> {
+fn image_rgba(tex: Texture, surface_uv: vec2<f32>) -> vec4<f32> {
+    let q = vec3<f32>(surface_uv, 1.0);
+    let uv = vec2<f32>(dot(tex.color1.xyz, q), dot(tex.params.xyz, q));
     let mode = tex.flags & TEX_MODE_MASK;
     let w = i32(tex.width);
     let h = i32(tex.height);
@@ -49,9 +52,14 @@ fn image_value(tex: Texture, uv: vec2<f32>) -> vec3<f32> {
     let yb = wrap_texel(i32(y0) + 1, h, mode);
     let row_a = tex.offset + ya * tex.width;
     let row_b = tex.offset + yb * tex.width;
-    let top = mix(texels[row_a + xa].rgb, texels[row_a + xb].rgb, fx);
-    let bottom = mix(texels[row_b + xa].rgb, texels[row_b + xb].rgb, fx);
+    let top = mix(texels[row_a + xa], texels[row_a + xb], fx);
+    let bottom = mix(texels[row_b + xa], texels[row_b + xb], fx);
     return mix(top, bottom, fy);
+}
+
+// An image texture's colour: the bilinear texels times its factor (color0).
+fn image_value(tex: Texture, uv: vec2<f32>) -> vec3<f32> {
+    return image_rgba(tex, uv).rgb * tex.color0.rgb;
 }
 
 // One corner of Perlin's gradient noise: the random vector picked by the three
@@ -170,18 +178,93 @@ fn texture_value(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
 fn material_at(m: Material, hit: Hit) -> Material {
     var mat = m;
 #ifdef HAS_TEXTURES
+    // the .w of each colour is a scalar of its own (pbr: alpha, normal scale, cutoff)
     if (mat.tex_albedo != NO_TEXTURE) {
-        mat.albedo = vec4<f32>(min(texture_value(mat.tex_albedo, hit.uv, hit.p), vec3<f32>(1.0)), 0.0);
+        mat.albedo = vec4<f32>(min(texture_value(mat.tex_albedo, hit.uv, hit.p), vec3<f32>(1.0)), mat.albedo.w);
     }
     if (mat.tex_extra != NO_TEXTURE) {
         // a reflectance, but for pbr's specular colour, which may exceed 1
         // (KHR_materials_specular; its F0 is clamped to 1 instead)
         let extra = texture_value(mat.tex_extra, hit.uv, hit.p);
-        mat.extra = vec4<f32>(select(min(extra, vec3<f32>(1.0)), extra, mat.tag == MAT_PBR), 0.0);
+        mat.extra = vec4<f32>(select(min(extra, vec3<f32>(1.0)), extra, mat.tag == MAT_PBR), mat.extra.w);
     }
     if (mat.tex_emission != NO_TEXTURE) {
-        mat.emission = vec4<f32>(texture_value(mat.tex_emission, hit.uv, hit.p), 0.0);
+        mat.emission = vec4<f32>(texture_value(mat.tex_emission, hit.uv, hit.p), mat.emission.w);
     }
+#ifdef HAS_PBR
+    if (mat.tex_params != NO_TEXTURE) {
+        // glTF's metallicRoughnessTexture: green scales the roughness (alpha = r^2), blue
+        // the metallic factor
+        let mr = min(texture_value(mat.tex_params, hit.uv, hit.p), vec3<f32>(1.0));
+        mat.params.x = max(mat.params.x * mr.y * mr.y, ALPHA_SMOOTH);
+        mat.params.z *= mr.z;
+    }
+#endif
 #endif
     return mat;
 }
+
+#ifdef HAS_NORMAL_MAP
+// The hit with its shading normal taken from the material's tangent-space normal map: n =
+// normalize(t x + b y + ns z) over the frame of the interpolated tangent, made
+// orthogonal to ns (b = sign x ns cross t), the map's x and y scaled by extra.w. A hit
+// without tangents, or a mapped normal that would face away from the geometric side, keeps
+// its normal.
+fn normal_mapped(mat: Material, hit: Hit) -> Hit {
+    var h = hit;
+#ifdef HAS_TEXTURES
+    let t_len = length(hit.tangent.xyz);
+    if (mat.tex_normal == NO_TEXTURE || t_len == 0.0) {
+        return h;
+    }
+    let n = hit.ns;
+    let t = normalize(hit.tangent.xyz - n * dot(n, hit.tangent.xyz));
+    let b = cross(n, t) * select(-1.0, 1.0, hit.tangent.w >= 0.0);
+    var c = 2.0 * texture_value(mat.tex_normal, hit.uv, hit.p) - vec3<f32>(1.0);
+    c = vec3<f32>(c.xy * mat.extra.w, c.z);
+    let m = t * c.x + b * c.y + n * c.z;
+    let len = length(m);
+    if (len > 0.0 && dot(m, hit.ng) > 0.0) {
+        h.ns = m / len;
+    }
+#endif
+    return h;
+}
+#endif
+
+#ifdef HAS_ALPHA
+// A texture's alpha at uv: an image's own, else 1.
+fn texture_alpha(index: u32, uv: vec2<f32>) -> f32 {
+    let tex = textures[index];
+    if (tex.tag == TEX_IMAGE) {
+        return image_rgba(tex, uv).a;
+    }
+    return 1.0;
+}
+
+// Whether a ray passes through a hit: a pbr surface with alpha (albedo.w times its base
+// colour texture's alpha) cut out below the cutoff (emission.w) with MAT_FLAG_ALPHA_MASK,
+// or transparent when u >= alpha with MAT_FLAG_ALPHA_BLEND (u uniform in [0, 1)).
+fn transparent_at(hit: Hit, u: f32) -> bool {
+    let m = material_record(hit.material);
+    if ((m.flags & (MAT_FLAG_ALPHA_MASK | MAT_FLAG_ALPHA_BLEND)) == 0u) {
+        return false;
+    }
+    var alpha = m.albedo.w;
+#ifdef HAS_TEXTURES
+    if (m.tex_albedo != NO_TEXTURE) {
+        alpha *= texture_alpha(m.tex_albedo, hit.uv);
+    }
+#endif
+    if ((m.flags & MAT_FLAG_ALPHA_MASK) != 0u) {
+        return alpha < m.emission.w;
+    }
+    return u >= alpha;
+}
+
+// The uniform number of the k-th surface a ray meets: u moved by k times the golden
+// ratio's fraction, so that each surface has its own.
+fn alpha_u(u: f32, k: u32) -> f32 {
+    return fract(u + f32(k) * 0.618034);
+}
+#endif

@@ -50,9 +50,9 @@ struct Material {
     extra: vec4<f32>,
     // texture of extra (microfacet specular), or NO_TEXTURE
     tex_extra: u32,
+    tex_params: u32,
+    tex_normal: u32,
     pad0: u32,
-    pad1: u32,
-    pad2: u32,
 }
 
 // Constant: color0 | checker: cells of textures even / odd (color0 / color1 where
@@ -145,7 +145,8 @@ struct Params {
     sample_count: u32,
     // lights without a surface: emitters num_emitters .. num_emitters + num_punctual
     num_punctual: u32,
-    pad0: u32,
+    // 1: an orthographic camera (parallel rays along cam_forward), 0: a perspective one
+    orthographic: u32,
     pad1: u32,
     pad2: u32,
 }
@@ -181,4 +182,7 @@ struct Hit {
     material: u32,
     // bound on the absolute error of each coordinate of p, from the primitive's magnitude
     err: f32,
+    // interpolated vertex tangent (xyz, not unit) and bitangent sign (w) of a triangle
+    // with tangents (HAS_NORMAL_MAP), else zero
+    tangent: vec4<f32>,
 }

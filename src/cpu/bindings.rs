@@ -14,6 +14,9 @@ pub struct Bindings<'a> {
     pub shape_data: &'a [[f32; 4]],
     pub textures: &'a [Texture],
     pub texels: &'a [[f32; 4]],
+    /// A material has alpha (mask or blend): rays pass through transparent surfaces (the
+    /// shader's HAS_ALPHA).
+    pub has_alpha: bool,
 }
 
 impl<'a> Bindings<'a> {
@@ -27,6 +30,12 @@ impl<'a> Bindings<'a> {
             shape_data: &scene.shape_data,
             textures: &scene.textures,
             texels: &scene.texels,
+            has_alpha: scene.materials.iter().any(|m| {
+                m.flags
+                    & (crate::scene::records::MAT_FLAG_ALPHA_MASK
+                        | crate::scene::records::MAT_FLAG_ALPHA_BLEND)
+                    != 0
+            }),
         }
     }
 }

@@ -8,7 +8,7 @@ use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
     BvhNode, Primitive, BVH_COUNT_BITS, BVH_COUNT_MASK, BVH_STACK_SIZE, PRIM_BOX, PRIM_CYLINDER,
-    PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_SHADING_NORMALS,
+    PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS,
     PRIM_FLAG_TRANSFORM, PRIM_PLANE, PRIM_SPHERE, PRIM_TRIANGLE,
 };
 
@@ -547,6 +547,7 @@ pub struct Surface {
     pub ns: Vec3,
     pub uv: Vec2,
     pub err: f32,
+    pub tangent: Vec4,
 }
 
 /// Angle of q about the unit axis n, as a fraction in [0, 1].
@@ -563,6 +564,7 @@ pub fn surface_local(b: &Bindings, prim: &Primitive, ray: &Ray, cand: &Candidate
         ns: Vec3::Z,
         uv: Vec2::ZERO,
         err: 0.0,
+        tangent: Vec4::ZERO,
     };
     match prim.tag {
         PRIM_SPHERE => {
@@ -599,6 +601,12 @@ pub fn surface_local(b: &Bindings, prim: &Primitive, ray: &Ray, cand: &Candidate
                         let sign = if n.dot(s.ng) >= 0.0 { 1.0 } else { -1.0 };
                         s.ns = n * (sign / len);
                     }
+                }
+                if prim.flags & PRIM_FLAG_TANGENTS != 0 {
+                    let (t0, t1) = (row(b, prim.data + 4), row(b, prim.data + 5));
+                    let t2 = row(b, prim.data + 6);
+                    let t = w.x * t0.truncate() + w.y * t1.truncate() + w.z * t2.truncate();
+                    s.tangent = t.extend(t0.w);
                 }
             }
         }
@@ -708,5 +716,6 @@ pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
         front_face: ray.dir.dot(s.ng) < 0.0,
         material: prim.material,
         err: s.err,
+        tangent: s.tangent,
     }
 }

@@ -5,7 +5,7 @@ use super::rng::{pcg4d, rand_2d, u32_to_unit_float};
 use crate::scene::records::{SAMPLER_HAMMERSLEY, SAMPLER_JITTERED, SAMPLER_SOBOL};
 
 pub use crate::scene::records::{
-    DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL, DIM_PUNCTUAL, DIM_RR,
+    DIM_ALPHA, DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL, DIM_PUNCTUAL, DIM_RR,
 };
 
 /// Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction

@@ -1,12 +1,12 @@
 //! Mirrors `shaders/shared/textures.wgsl`.
 
-use glam::{IVec3, Vec2, Vec3};
+use glam::{IVec3, Vec2, Vec3, Vec4};
 
 use super::bindings::Bindings;
 use super::types::{xyz, Hit};
 use crate::scene::records::{
-    Material, Texture, MAT_PBR, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK,
-    TEX_NOISE,
+    Material, Texture, ALPHA_SMOOTH, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_PBR,
+    NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK, TEX_NOISE,
 };
 
 /// A texture coordinate folded into [0, 1] by the wrap mode (0 repeat, 1 clamp, 2 mirror).
@@ -38,7 +38,12 @@ fn texel(b: &Bindings, i: u32) -> Vec3 {
 }
 
 /// Bilinear image lookup; v = 0 is the bottom row.
-pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec2) -> Vec3 {
+pub fn image_rgba(b: &Bindings, tex: &Texture, surface_uv: Vec2) -> Vec4 {
+    let q = surface_uv.extend(1.0);
+    let uv = Vec2::new(
+        Vec3::from_slice(&tex.color1[..3]).dot(q),
+        Vec3::from_slice(&tex.params[..3]).dot(q),
+    );
     let mode = tex.flags & TEX_MODE_MASK;
     let (w, h) = (tex.width as i32, tex.height as i32);
     let x = wrap_uv(uv.x, mode) * w as f32 - 0.5;
@@ -51,9 +56,15 @@ pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec2) -> Vec3 {
     let yb = wrap_texel(y0 as i32 + 1, h, mode);
     let row_a = tex.offset + ya * tex.width;
     let row_b = tex.offset + yb * tex.width;
-    let top = texel(b, row_a + xa).lerp(texel(b, row_a + xb), fx);
-    let bottom = texel(b, row_b + xa).lerp(texel(b, row_b + xb), fx);
+    let texel4 = |i: u32| Vec4::from(b.texels[i as usize]);
+    let top = texel4(row_a + xa).lerp(texel4(row_a + xb), fx);
+    let bottom = texel4(row_b + xa).lerp(texel4(row_b + xb), fx);
     top.lerp(bottom, fy)
+}
+
+/// An image texture's colour: the bilinear texels times its factor (`color0`).
+pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec2) -> Vec3 {
+    image_rgba(b, tex, uv).truncate() * Vec3::from_slice(&tex.color0[..3])
 }
 
 /// One corner of Perlin's gradient noise.
@@ -148,10 +159,11 @@ pub fn texture_value(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
 /// The material at a hit with its textured colours looked up (reflectances clamped to 1).
 pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     let mut mat = *m;
+    // the .w of each colour is a scalar of its own (pbr: alpha, normal scale, cutoff)
     if mat.tex_albedo != NO_TEXTURE {
         mat.albedo = texture_value(b, mat.tex_albedo, hit.uv, hit.p)
             .min(Vec3::ONE)
-            .extend(0.0)
+            .extend(mat.albedo[3])
             .to_array();
     }
     if mat.tex_extra != NO_TEXTURE {
@@ -162,12 +174,74 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
         } else {
             extra.min(Vec3::ONE)
         };
-        mat.extra = extra.extend(0.0).to_array();
+        mat.extra = extra.extend(mat.extra[3]).to_array();
     }
     if mat.tex_emission != NO_TEXTURE {
         mat.emission = texture_value(b, mat.tex_emission, hit.uv, hit.p)
-            .extend(0.0)
+            .extend(mat.emission[3])
             .to_array();
     }
+    if mat.tag == MAT_PBR && mat.tex_params != NO_TEXTURE {
+        // glTF's metallicRoughnessTexture: green scales the roughness (alpha = r^2), blue
+        // the metallic factor
+        let mr = texture_value(b, mat.tex_params, hit.uv, hit.p).min(Vec3::ONE);
+        mat.params[0] = (mat.params[0] * mr.y * mr.y).max(ALPHA_SMOOTH);
+        mat.params[2] *= mr.z;
+    }
     mat
+}
+
+/// The hit with its shading normal from the material's tangent-space normal map
+/// (textures.wgsl's `normal_mapped`).
+pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
+    let mut h = *hit;
+    let tangent = hit.tangent.truncate();
+    if mat.tex_normal == NO_TEXTURE || tangent.length() == 0.0 {
+        return h;
+    }
+    let n = hit.ns;
+    let t = (tangent - n * n.dot(tangent)).normalize();
+    let sign = if hit.tangent.w >= 0.0 { 1.0 } else { -1.0 };
+    let bt = n.cross(t) * sign;
+    let c = 2.0 * texture_value(b, mat.tex_normal, hit.uv, hit.p) - Vec3::ONE;
+    let (x, y) = (c.x * mat.extra[3], c.y * mat.extra[3]);
+    let m = t * x + bt * y + n * c.z;
+    let len = m.length();
+    if len > 0.0 && m.dot(hit.ng) > 0.0 {
+        h.ns = m / len;
+    }
+    h
+}
+
+/// A texture's alpha at uv: an image's own, else 1.
+pub fn texture_alpha(b: &Bindings, index: u32, uv: Vec2) -> f32 {
+    let tex = &b.textures[index as usize];
+    if tex.tag == TEX_IMAGE {
+        image_rgba(b, tex, uv).w
+    } else {
+        1.0
+    }
+}
+
+/// Whether a ray passes through a hit (textures.wgsl's `transparent_at`): cut out below
+/// the cutoff (mask), or transparent when u >= alpha (blend).
+pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
+    let m = &b.materials[hit.material as usize];
+    if m.flags & (MAT_FLAG_ALPHA_MASK | MAT_FLAG_ALPHA_BLEND) == 0 {
+        return false;
+    }
+    let mut alpha = m.albedo[3];
+    if m.tex_albedo != NO_TEXTURE {
+        alpha *= texture_alpha(b, m.tex_albedo, hit.uv);
+    }
+    if m.flags & MAT_FLAG_ALPHA_MASK != 0 {
+        return alpha < m.emission[3];
+    }
+    u >= alpha
+}
+
+/// The uniform number of the k-th surface a ray meets (textures.wgsl's `alpha_u`).
+pub fn alpha_u(u: f32, k: u32) -> f32 {
+    let x = u + k as f32 * 0.618034;
+    x - x.floor()
 }

@@ -11,14 +11,14 @@ use super::lights::{
 };
 use super::materials::{bsdf_eval, bsdf_pdf, emitted, mixture_applies, nee_applies, scatter};
 use super::rng::rand_2d;
-use super::samplers::{bounce_2d, sample_2d, DIM_PUNCTUAL, DIM_RR};
+use super::samplers::{bounce_2d, sample_2d, DIM_ALPHA, DIM_PUNCTUAL, DIM_RR};
 use super::sampling::{offset_ray, sample_disk};
-use super::textures::material_at;
+use super::textures::{alpha_u, material_at, normal_mapped, transparent_at};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{
     Material, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE,
-    LIGHT_SPOT, NO_LIGHT, PRIM_LIGHT_SHIFT,
+    LIGHT_SPOT, MAX_ALPHA_SKIPS, NO_LIGHT, PRIM_LIGHT_SHIFT,
 };
 
 pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
@@ -36,6 +36,12 @@ pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]
         + up * ((1.0 - 2.0 * t) * p.cam_up[3]);
     let d = sample_disk(lens) * p.cam_origin[3];
     let lens_offset = right * d.x + up * d.y;
+    if p.orthographic != 0 {
+        return Ray {
+            origin: xyz(p.cam_origin) + target_offset - forward * p.cam_forward[3],
+            dir: forward,
+        };
+    }
     Ray {
         origin: xyz(p.cam_origin) + lens_offset,
         dir: (target_offset - lens_offset).normalize(),
@@ -55,6 +61,33 @@ pub fn spawn_ray(hit: &Hit, dir: Vec3) -> Ray {
     }
 }
 
+/// Whether anything opaque lies on a shadow ray before t_max (trace.wgsl's `shadowed`):
+/// with alpha materials, the surfaces on the way are passed through where transparent.
+pub fn shadowed(b: &Bindings, ray: &Ray, t_max: f32, u: f32) -> bool {
+    if !b.has_alpha {
+        return occluded(b, ray, t_max);
+    }
+    let mut r = *ray;
+    let mut t = t_max;
+    for k in 0..MAX_ALPHA_SKIPS {
+        let cand = intersect_scene(b, &r, t);
+        if cand.prim == NO_HIT {
+            return false;
+        }
+        let hit = surface_at(b, &r, &cand);
+        if !transparent_at(b, &hit, alpha_u(u, k)) {
+            return true;
+        }
+        let next = spawn_ray(&hit, r.dir);
+        t -= (next.origin - r.origin).dot(r.dir);
+        if t <= 0.0 {
+            return false;
+        }
+        r = next;
+    }
+    true
+}
+
 /// Next-event estimation at a hit: shadow ray to just short of a sampled light point, the
 /// light's emission there times BSDF x cos, power-heuristic weight, over the light's pdf.
 pub fn direct_light(
@@ -64,6 +97,7 @@ pub fn direct_light(
     hit: &Hit,
     u_light: f32,
     u: [f32; 2],
+    u_alpha: f32,
 ) -> Vec3 {
     let ls = sample_light(b, hit.p, u_light, u);
     if ls.light == NO_LIGHT {
@@ -115,7 +149,7 @@ pub fn direct_light(
         shadow.dir = v / t_max;
         le
     };
-    if occluded(b, &shadow, t_max) {
+    if shadowed(b, &shadow, t_max, u_alpha) {
         return Vec3::ZERO;
     }
     let w = power_heuristic(ls.pdf, bsdf_pdf(mat, ray, hit, pdf_dir));
@@ -126,7 +160,14 @@ pub fn direct_light(
 /// proportion to its power: a shadow ray to its position (or out of the scene, for a
 /// directional light), f x intensity x the spot's falloff / d^2 (or f x irradiance) over
 /// the choice's probability, no MIS weight (trace.wgsl's `direct_punctual`).
-pub fn direct_punctual(b: &Bindings, mat: &Material, ray: &Ray, hit: &Hit, u: f32) -> Vec3 {
+pub fn direct_punctual(
+    b: &Bindings,
+    mat: &Material,
+    ray: &Ray,
+    hit: &Hit,
+    u: f32,
+    u_alpha: f32,
+) -> Vec3 {
     let e = &b.emitters[choose_punctual(b, u) as usize];
     let positioned = e.kind != LIGHT_DIRECTIONAL;
     let mut dir = xyz(e.a);
@@ -151,7 +192,7 @@ pub fn direct_punctual(b: &Bindings, mat: &Material, ray: &Ray, hit: &Hit, u: f3
     }
     let f = bsdf_eval(mat, ray, hit, dir);
     let lit = e.prob > 0.0 && d2 > 0.0 && t_max > 0.0 && f != Vec3::ZERO && le != Vec3::ZERO;
-    if !lit || occluded(b, &shadow, t_max) {
+    if !lit || shadowed(b, &shadow, t_max, u_alpha) {
         return Vec3::ZERO;
     }
     f * le / e.prob
@@ -193,7 +234,24 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         }
         path.throughput /= survive;
     }
-    let cand = intersect_scene(b, &path.ray, FAR);
+    let mut cand = intersect_scene(b, &path.ray, FAR);
+    let mut u_alpha = [0.0; 2];
+    if b.has_alpha {
+        // surfaces transparent where the ray meets them are passed through, as the
+        // shader does
+        u_alpha = bounce_2d(b, pixel, sample, path.depth, DIM_ALPHA);
+        for k in 0..MAX_ALPHA_SKIPS {
+            if cand.prim == NO_HIT {
+                break;
+            }
+            let h = surface_at(b, &path.ray, &cand);
+            if !transparent_at(b, &h, alpha_u(u_alpha[0], k)) {
+                break;
+            }
+            path.ray = spawn_ray(&h, path.ray.dir);
+            cand = intersect_scene(b, &path.ray, FAR);
+        }
+    }
     let mis = p.light_sampling == LIGHT_SAMPLING_MIS && !path.prev_delta;
     if cand.prim == NO_HIT {
         let mut le = background_radiance(b, path.ray.dir);
@@ -206,8 +264,9 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         path.radiance += path.throughput * le;
         return false;
     }
-    let hit = surface_at(b, &path.ray, &cand);
-    let mat = &material_at(b, &b.materials[hit.material as usize], &hit);
+    let surface = surface_at(b, &path.ray, &cand);
+    let mat = &material_at(b, &b.materials[surface.material as usize], &surface);
+    let hit = normal_mapped(b, mat, &surface);
     let mut le = emitted(mat, &hit);
     let light = b.primitives[cand.prim as usize].flags >> PRIM_LIGHT_SHIFT;
     if mis && light != 0 && le.cmpgt(Vec3::ZERO).any() {
@@ -224,13 +283,15 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
     if p.light_sampling == LIGHT_SAMPLING_MIS && nee_applies(mat) {
         let ul = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT);
         let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);
-        path.radiance += path.throughput * direct_light(b, mat, &path.ray, &hit, uc[0], ul);
+        path.radiance +=
+            path.throughput * direct_light(b, mat, &path.ray, &hit, uc[0], ul, u_alpha[1]);
     }
     // the lights without a surface, under every strategy: only next-event estimation
     // finds them
     if p.num_punctual > 0 && nee_applies(mat) {
         let up = bounce_2d(b, pixel, sample, path.depth, DIM_PUNCTUAL);
-        path.radiance += path.throughput * direct_punctual(b, mat, &path.ray, &hit, up[0]);
+        path.radiance +=
+            path.throughput * direct_punctual(b, mat, &path.ray, &hit, up[0], u_alpha[1]);
     }
     if p.light_sampling == LIGHT_SAMPLING_MIXTURE && p.num_emitters != 0 && mixture_applies(mat) {
         let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);

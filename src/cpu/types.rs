@@ -1,6 +1,6 @@
 //! Mirrors the non-record structs of `shaders/shared/types.wgsl`.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 pub use crate::scene::records::{FAR, NO_HIT};
 
@@ -38,4 +38,7 @@ pub struct Hit {
     pub material: u32,
     /// Bound on the absolute error of each coordinate of p.
     pub err: f32,
+    /// Interpolated vertex tangent (xyz, not unit) and bitangent sign (w) of a triangle
+    /// with tangents, else zero.
+    pub tangent: Vec4,
 }

@@ -48,6 +48,11 @@ pub enum Feature {
     Pbr,
     /// Textured material colours at all.
     Textures,
+    /// Tangent-space normal maps (pbr's `normal_map`), with the vertex tangents they need.
+    NormalMap,
+    /// Materials with alpha (pbr's `alpha_mode` mask or blend): rays pass through where a
+    /// surface is transparent.
+    Alpha,
     ImageTexture,
     NoiseTexture,
     CheckerTexture,
@@ -69,7 +74,7 @@ pub enum Feature {
 
 impl Feature {
     /// Every feature, in define order.
-    pub const ALL: [Feature; 27] = [
+    pub const ALL: [Feature; 29] = [
         Feature::Sphere,
         Feature::Triangle,
         Feature::Plane,
@@ -86,6 +91,8 @@ impl Feature {
         Feature::Microfacet,
         Feature::Pbr,
         Feature::Textures,
+        Feature::NormalMap,
+        Feature::Alpha,
         Feature::ImageTexture,
         Feature::NoiseTexture,
         Feature::CheckerTexture,
@@ -118,6 +125,8 @@ impl Feature {
             Feature::Microfacet => "HAS_MICROFACET",
             Feature::Pbr => "HAS_PBR",
             Feature::Textures => "HAS_TEXTURES",
+            Feature::NormalMap => "HAS_NORMAL_MAP",
+            Feature::Alpha => "HAS_ALPHA",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
             Feature::NoiseTexture => "HAS_NOISE_TEXTURE",
             Feature::CheckerTexture => "HAS_CHECKER_TEXTURE",
@@ -218,6 +227,20 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         .with(Feature::Microfacet, mat(r::MAT_MICROFACET))
         .with(Feature::Pbr, mat(r::MAT_PBR))
         .with(Feature::Textures, !scene.textures.is_empty())
+        .with(
+            Feature::NormalMap,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.tex_normal != r::NO_TEXTURE),
+        )
+        .with(
+            Feature::Alpha,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.flags & (r::MAT_FLAG_ALPHA_MASK | r::MAT_FLAG_ALPHA_BLEND) != 0),
+        )
         .with(Feature::ImageTexture, texture(r::TEX_IMAGE))
         .with(Feature::NoiseTexture, texture(r::TEX_NOISE))
         .with(Feature::CheckerTexture, texture(r::TEX_CHECKER))

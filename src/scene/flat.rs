@@ -23,11 +23,17 @@ pub struct CameraFrame {
     pub half_height: f32,
     pub focus_distance: f32,
     pub lens_radius: f32,
+    /// Parallel rays along `forward` from the rectangle of half sizes `half_width` x
+    /// `half_height` about `origin` (no lens).
+    pub orthographic: bool,
 }
 
 /// A validated scene flattened into shader records.
 #[derive(Debug, Clone)]
 pub struct FlatScene {
+    /// What the loader left out or approximated (a glTF file's unsupported parts, a
+    /// background it chose), one line each, for stderr.
+    pub warnings: Vec<String>,
     pub width: u32,
     pub height: u32,
     pub spp: u32,
@@ -158,6 +164,7 @@ impl FlatScene {
             env_cdf: self.env.map_or(0, |e| e.cdf),
             env_light: self.env.map_or(records::NO_LIGHT, |e| e.light),
             rr_depth: self.rr_depth,
+            orthographic: c.orthographic as u32,
             ..Default::default()
         }
     }

@@ -3,11 +3,15 @@
 //! keep an object-space record and a transform in `shape_data`. Bounded primitives are
 //! ordered by the BVH built over them; planes come first and stay outside it.
 
-use glam::{Affine3A, Mat3, Vec2, Vec3};
+use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
 
 use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
-use super::format::{ColorDesc, MaterialDesc, ObjectDesc, SceneFile, TransformDesc};
+use super::format::{
+    AlphaMode, ColorDesc, LightDesc, MaterialDesc, ObjectDesc, Projection, SceneFile, TextureDesc,
+    TransformDesc,
+};
+use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights, Environment};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA, NO_TEXTURE};
@@ -16,6 +20,12 @@ use super::textures::{color_slot, texture_records, ImageData};
 
 fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
     let slot = |c: &ColorDesc| color_slot(c, textures);
+    let named = |t: &Option<String>| {
+        t.as_ref().map_or(NO_TEXTURE, |name| {
+            textures.iter().position(|n| n == name).expect("validated") as u32
+        })
+    };
+    let mut pbr_extras = None;
     let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
     let (tag, albedo, emission, params, extra) = match m {
         MaterialDesc::Lambertian {
@@ -74,21 +84,37 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             specular,
             specular_color,
             emission,
+            metallic_roughness,
+            normal_map,
+            normal_scale,
+            alpha,
+            alpha_mode,
+            alpha_cutoff,
             ..
-        } => (
-            records::MAT_PBR,
-            slot(base_color),
-            slot(emission),
-            // alpha = roughness^2, a GGX lobe even at roughness 0 (ALPHA_SMOOTH, 1e-3: a
-            // mirror for every purpose but a delta)
-            [
-                (roughness * roughness).max(records::ALPHA_SMOOTH),
-                *ior,
-                *metallic,
-                *specular,
-            ],
-            slot(specular_color),
-        ),
+        } => {
+            pbr_extras = Some((
+                named(metallic_roughness),
+                named(normal_map),
+                *normal_scale,
+                *alpha,
+                *alpha_mode,
+                *alpha_cutoff,
+            ));
+            (
+                records::MAT_PBR,
+                slot(base_color),
+                slot(emission),
+                // alpha = roughness^2, a GGX lobe even at roughness 0 (ALPHA_SMOOTH, 1e-3: a
+                // mirror for every purpose but a delta)
+                [
+                    (roughness * roughness).max(records::ALPHA_SMOOTH),
+                    *ior,
+                    *metallic,
+                    *specular,
+                ],
+                slot(specular_color),
+            )
+        }
         MaterialDesc::Emissive { radiance, .. } => (
             records::MAT_EMISSIVE,
             ([0.0; 4], NO_TEXTURE),
@@ -98,7 +124,7 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
         ),
     };
     let two_sided = m.two_sided();
-    Material {
+    let mut record = Material {
         tag,
         flags: if two_sided {
             records::MAT_FLAG_TWO_SIDED
@@ -113,7 +139,20 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
         extra: extra.0,
         tex_extra: extra.1,
         ..Default::default()
+    };
+    if let Some((mr, normal, scale, alpha, mode, cutoff)) = pbr_extras {
+        record.tex_params = mr;
+        record.tex_normal = normal;
+        record.extra[3] = scale;
+        record.albedo[3] = alpha;
+        record.emission[3] = cutoff;
+        record.flags |= match mode {
+            AlphaMode::Opaque => 0,
+            AlphaMode::Mask => records::MAT_FLAG_ALPHA_MASK,
+            AlphaMode::Blend => records::MAT_FLAG_ALPHA_BLEND,
+        };
     }
+    record
 }
 
 /// Object-to-world matrix of a transform: translate * Rz * Ry * Rx * scale.
@@ -145,6 +184,19 @@ struct Placement {
 }
 
 impl Placement {
+    /// A triangle mesh's placement by any affine matrix (a glTF node's): only what
+    /// triangles need is exact; analytic shapes never come this way.
+    fn from_matrix(m: Affine3A) -> Self {
+        let linear = Mat3::from(m.matrix3);
+        Placement {
+            m,
+            normal_m: linear.inverse().transpose(),
+            uniform: None,
+            axis_aligned: false,
+            mirrored: linear.determinant() < 0.0,
+        }
+    }
+
     fn new(t: Option<TransformDesc>) -> Self {
         let t = t.unwrap_or_default();
         let m = transform_matrix(&t);
@@ -195,11 +247,13 @@ impl Builder {
         self.bounded.push(prim);
     }
 
-    /// A triangle; `attributes` = per-vertex (normal, uv) when it has any.
+    /// A triangle; `attributes` = per-vertex (normal, uv) when it has any, `tangents` the
+    /// corners' tangents and bitangent signs (for normal maps; only with attributes).
     fn push_triangle(
         &mut self,
         v: [Vec3; 3],
         attributes: Option<([Vec3; 3], [Vec2; 3])>,
+        tangents: Option<[Vec4; 3]>,
         smooth: bool,
         material: u32,
     ) {
@@ -228,6 +282,10 @@ impl Builder {
                 self.shape_data.push(v4(n[k], uv[k].x));
             }
             self.shape_data.push([uv[0].y, uv[1].y, uv[2].y, 0.0]);
+            if let Some(t) = tangents {
+                prim.flags |= records::PRIM_FLAG_TANGENTS;
+                self.shape_data.extend(t.map(|t| t.to_array()));
+            }
         }
         self.bounded.push(prim);
     }
@@ -239,6 +297,7 @@ impl Builder {
         at: &Placement,
         mut v: [Vec3; 3],
         mut attributes: Option<([Vec3; 3], [Vec2; 3])>,
+        mut tangents: Option<[Vec4; 3]>,
         smooth: bool,
         material: u32,
     ) {
@@ -257,14 +316,37 @@ impl Builder {
                 };
             }
         }
+        if let Some(t) = tangents.as_mut() {
+            // tangents turn with the surface (the linear part, not the normals' inverse
+            // transpose); a mirror flips the bitangent's handedness
+            for k in t.iter_mut() {
+                let d = Mat3::from(at.m.matrix3) * k.truncate();
+                let sign = if at.mirrored { -k.w } else { k.w };
+                *k = d.normalize_or_zero().extend(sign);
+            }
+        }
         if at.mirrored {
             v.swap(1, 2);
             if let Some((n, uv)) = attributes.as_mut() {
                 n.swap(1, 2);
                 uv.swap(1, 2);
             }
+            if let Some(t) = tangents.as_mut() {
+                t.swap(1, 2);
+            }
         }
-        self.push_triangle(v, attributes, smooth, material);
+        self.push_triangle(v, attributes, tangents, smooth, material);
+    }
+
+    /// A glTF file's instances under the object's transform; its materials are numbered
+    /// from `first_material`.
+    fn push_imported(&mut self, o: &ObjectDesc, g: &ImportedScene, first_material: u32) {
+        let object = transform_matrix(&o.transform().unwrap_or_default());
+        for inst in &g.instances {
+            let at = Placement::from_matrix(object * inst.transform);
+            let material = first_material + inst.material as u32;
+            self.push_mesh(&at, &g.meshes[inst.mesh], material);
+        }
     }
 
     fn push_object(&mut self, o: &ObjectDesc, mesh: Option<&MeshData>, material: u32) {
@@ -291,7 +373,7 @@ impl Builder {
             ObjectDesc::Triangle { vertices, uvs, .. } => {
                 let v = vertices.map(Vec3::from);
                 let attributes = uvs.map(|uv| ([Vec3::ZERO; 3], uv.map(Vec2::from)));
-                self.push_placed_triangle(&at, v, attributes, false, material);
+                self.push_placed_triangle(&at, v, attributes, None, false, material);
             }
             ObjectDesc::Polygon { vertices, .. } => self.push_polygon(&at, vertices, material),
             ObjectDesc::Tetrahedron { vertices, .. } => {
@@ -370,6 +452,7 @@ impl Builder {
                 let mesh = mesh.expect("meshes are loaded before flattening");
                 self.push_mesh(&at, mesh, material);
             }
+            ObjectDesc::Gltf { .. } => unreachable!("glTF objects are pushed by push_imported"),
         }
     }
 
@@ -384,7 +467,7 @@ impl Builder {
         for i in 1..pts.len() - 1 {
             let v = [pts[0], pts[i], pts[i + 1]];
             let attributes = Some(([Vec3::ZERO; 3], v.map(uv)));
-            self.push_placed_triangle(at, v, attributes, false, material);
+            self.push_placed_triangle(at, v, attributes, None, false, material);
         }
     }
 
@@ -397,7 +480,7 @@ impl Builder {
             if (f[1] - f[0]).cross(f[2] - f[0]).dot(p[k] - f[0]) > 0.0 {
                 f.swap(1, 2);
             }
-            self.push_placed_triangle(at, f, None, false, material);
+            self.push_placed_triangle(at, f, None, None, false, material);
         }
     }
 
@@ -406,7 +489,7 @@ impl Builder {
         let smooth = !mesh.normals.is_empty();
         let has_attributes = smooth || !mesh.uvs.is_empty();
         self.bounded.reserve(mesh.triangles.len());
-        for t in &mesh.triangles {
+        for (i, t) in mesh.triangles.iter().enumerate() {
             let v = t.map(|i| mesh.positions[i as usize]);
             let attributes = has_attributes.then(|| {
                 let n = if smooth {
@@ -421,7 +504,8 @@ impl Builder {
                 };
                 (n, uv)
             });
-            self.push_placed_triangle(at, v, attributes, smooth, material);
+            let tangents = mesh.tangents.get(i).copied().filter(|_| has_attributes);
+            self.push_placed_triangle(at, v, attributes, tangents, smooth, material);
         }
     }
 }
@@ -466,29 +550,58 @@ pub struct Build {
     pub russian_roulette: bool,
 }
 
-/// Flattens a validated scene into records; `meshes[i]` holds object i's mesh when it is
-/// one, `images[i]` texture i's image. With the BVH, the bounded primitives are in its
-/// leaves' order; without it they are sorted by type (stable), and there are no BVH nodes.
-/// Errors with the indices of objects whose records degenerate in f32 (see `record_ok`).
+/// What a scene's objects and textures bring from files, read before flattening.
+#[derive(Debug, Default)]
+pub struct SceneFiles {
+    /// Object i's mesh when it is a mesh.
+    pub meshes: Vec<Option<MeshData>>,
+    /// Object i's glTF scene when it is a glTF file.
+    pub imported: Vec<Option<ImportedScene>>,
+    /// Texture i's image (in the file's order of names) when it is an image.
+    pub images: Vec<Option<ImageData>>,
+}
+
+/// Flattens a validated scene into records, with the meshes, glTF scenes and images its
+/// objects and textures name (`files`). The materials and textures of glTF objects
+/// follow the file's own, object by object. With the BVH, the bounded primitives are in
+/// its leaves' order; without it they are sorted by type (stable), and there are no BVH
+/// nodes. Errors with the indices of objects whose records degenerate in f32 (see
+/// `record_ok`).
 pub fn flatten(
     file: &SceneFile,
-    meshes: &[Option<MeshData>],
-    images: &[Option<ImageData>],
+    files: &SceneFiles,
     build: Build,
 ) -> Result<FlatScene, Vec<usize>> {
-    let texture_names: Vec<String> = file.textures.keys().cloned().collect();
-    let (textures, texels) = texture_records(&file.textures, images);
-    let material_names: Vec<String> = file.materials.keys().cloned().collect();
-    let materials: Vec<Material> = file
+    let gltfs = || files.imported.iter().flatten();
+    let texture_list: Vec<(String, &TextureDesc, Option<&ImageData>)> = file
+        .textures
+        .iter()
+        .zip(&files.images)
+        .map(|((name, t), image)| (name.clone(), t.get_ref(), image.as_ref()))
+        .chain(gltfs().flat_map(|g| {
+            g.textures
+                .iter()
+                .map(|t| (t.name.clone(), &t.desc, Some(&t.image)))
+        }))
+        .collect();
+    let texture_names: Vec<String> = texture_list.iter().map(|t| t.0.clone()).collect();
+    let (textures, texels) = texture_records(&texture_list);
+    let material_list: Vec<(&String, &MaterialDesc)> = file
         .materials
-        .values()
-        .map(|m| material_record(m.get_ref(), &texture_names))
+        .iter()
+        .map(|(name, m)| (name, m.get_ref()))
+        .chain(gltfs().flat_map(|g| g.materials.iter().map(|(n, m)| (n, m))))
+        .collect();
+    let material_names: Vec<String> = material_list.iter().map(|m| m.0.clone()).collect();
+    let materials: Vec<Material> = material_list
+        .iter()
+        .map(|m| material_record(m.1, &texture_names))
         .collect();
     let Builder {
         unbounded,
         bounded,
         shape_data,
-    } = build_primitives(file, meshes, &material_names)?;
+    } = build_primitives(file, files, &material_names)?;
     let boxes: Vec<Aabb> = bounded
         .iter()
         .map(|p| world_bounds(p, &shape_data))
@@ -524,15 +637,28 @@ pub fn flatten(
         &shape_data,
         env,
     );
-    let num_punctual = file.lights.len() as u32;
+    let gltf_lights: Vec<LightDesc> = file
+        .objects
+        .iter()
+        .zip(&files.imported)
+        .filter_map(|(o, g)| {
+            Some((
+                transform_matrix(&o.get_ref().transform().unwrap_or_default()),
+                g.as_ref()?,
+            ))
+        })
+        .flat_map(|(m, g)| g.lights.iter().map(move |l| l.transformed(m)))
+        .collect();
+    let num_punctual = (file.lights.len() + gltf_lights.len()) as u32;
     emitters.extend(punctual_lights(
-        file.lights.iter().map(|l| l.get_ref()),
+        file.lights.iter().map(|l| l.get_ref()).chain(&gltf_lights),
         bounding_sphere(&boxes),
     ));
     let rotation = bg.rotation.unwrap_or(0.0).to_radians();
 
     let r = &file.render;
     Ok(FlatScene {
+        warnings: Vec::new(),
         width: r.width,
         height: r.height,
         spp: r.spp,
@@ -583,16 +709,25 @@ fn bounding_sphere(boxes: &[Aabb]) -> (Vec3, f32) {
 /// objects whose records degenerate in f32 (see `record_ok`).
 fn build_primitives(
     file: &SceneFile,
-    meshes: &[Option<MeshData>],
+    files: &SceneFiles,
     material_names: &[String],
 ) -> Result<Builder, Vec<usize>> {
     let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
     let mut builder = Builder::default();
     let mut degenerate = Vec::new();
-    for (i, (obj, mesh)) in file.objects.iter().zip(meshes).enumerate() {
+    // the glTF objects' materials follow the file's, in object order
+    let mut next_gltf_material = file.materials.len() as u32;
+    for (i, obj) in file.objects.iter().enumerate() {
         let o = obj.get_ref();
         let (u, b) = (builder.unbounded.len(), builder.bounded.len());
-        builder.push_object(o, mesh.as_ref(), material_index(o.material()));
+        match (&files.imported[i], o.material()) {
+            (Some(g), _) => {
+                builder.push_imported(o, g, next_gltf_material);
+                next_gltf_material += g.materials.len() as u32;
+            }
+            (None, Some(m)) => builder.push_object(o, files.meshes[i].as_ref(), material_index(m)),
+            (None, None) => unreachable!("an object without a material is a glTF file"),
+        }
         let added = builder.unbounded[u..].iter().chain(&builder.bounded[b..]);
         if !added.clone().all(|p| record_ok(p, &builder.shape_data)) {
             degenerate.push(i);
@@ -640,7 +775,11 @@ fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
     let right = forward.cross(Vec3::from(c.up)).normalize();
     let up = right.cross(forward);
     let focus_distance = c.focus_distance.unwrap_or(to_target.length());
-    let half_height = (c.vfov.to_radians() * 0.5).tan() * focus_distance;
+    let orthographic = c.projection == Projection::Orthographic;
+    let half_height = match c.height {
+        Some(h) if orthographic => 0.5 * h,
+        _ => (c.vfov.to_radians() * 0.5).tan() * focus_distance,
+    };
     CameraFrame {
         origin,
         right,
@@ -649,6 +788,7 @@ fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
         half_width: half_height * aspect,
         half_height,
         focus_distance,
-        lens_radius: c.aperture * 0.5,
+        lens_radius: if orthographic { 0.0 } else { c.aperture * 0.5 },
+        orthographic,
     }
 }

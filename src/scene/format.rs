@@ -156,6 +156,22 @@ pub struct CameraDesc {
     /// Distance to the plane in focus; defaults to |look_at - look_from|.
     #[serde(default)]
     pub focus_distance: Option<f32>,
+    /// `perspective` (vfov, aperture) or `orthographic` (parallel rays over a view
+    /// `height` scene units tall; the width from the image's aspect).
+    #[serde(default)]
+    pub projection: Projection,
+    /// An orthographic view's height in scene units.
+    #[serde(default)]
+    pub height: Option<f32>,
+}
+
+/// `[camera] projection`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Projection {
+    #[default]
+    Perspective,
+    Orthographic,
 }
 
 fn default_up() -> [f32; 3] {
@@ -230,11 +246,18 @@ pub enum TextureDesc {
         mapping: CheckerMapping,
     },
     /// An image file (PNG, JPEG, HDR, EXR, PPM), `path` relative to the scene file; 8- and
-    /// 16-bit images are sRGB-decoded to linear; bilinear filtering.
+    /// 16-bit images are sRGB-decoded to linear unless `color_space = "linear"` (data such
+    /// as roughness); bilinear filtering. `factor` multiplies the texels; `transform` maps
+    /// the surface's uv before the look-up.
     Image {
         path: String,
         #[serde(default)]
         wrap: WrapMode,
+        #[serde(default = "white")]
+        factor: [f32; 3],
+        #[serde(default)]
+        color_space: ColorSpace,
+        transform: Option<UvTransformDesc>,
     },
     /// Perlin noise ("Ray Tracing: The Next Week"): `color` x 0.5 (1 + noise), turbulence,
     /// or marble, at `scale`.
@@ -258,6 +281,57 @@ pub enum CheckerMapping {
     #[default]
     Uv,
     Solid,
+}
+
+/// How an image texture's 8- and 16-bit values map to linear ones.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ColorSpace {
+    /// The sRGB transfer function undone: colours.
+    #[default]
+    Srgb,
+    /// Taken as they are (value / 255): data.
+    Linear,
+}
+
+/// `transform = { offset, rotation, scale }` of an image texture's uv, as glTF's
+/// KHR_texture_transform in wgtrace's uv (v up): uv' = offset + R(rotation) (scale * uv),
+/// R turning counter-clockwise by `rotation` degrees.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UvTransformDesc {
+    #[serde(default)]
+    pub offset: [f32; 2],
+    #[serde(default)]
+    pub rotation: f32,
+    #[serde(default = "unit2")]
+    pub scale: [f32; 2],
+}
+
+fn unit2() -> [f32; 2] {
+    [1.0; 2]
+}
+
+impl UvTransformDesc {
+    /// The two rows of the affine map uv -> uv'.
+    pub fn rows(&self) -> [[f32; 3]; 2] {
+        let (s, c) = self.rotation.to_radians().sin_cos();
+        let [sx, sy] = self.scale;
+        [
+            [c * sx, -s * sy, self.offset[0]],
+            [s * sx, c * sy, self.offset[1]],
+        ]
+    }
+
+    /// The same map for uv whose v runs down (glTF's): conjugated by v -> 1 - v.
+    pub fn from_v_down(offset: [f32; 2], rotation_radians: f32, scale: [f32; 2]) -> Self {
+        let (s, c) = rotation_radians.sin_cos();
+        UvTransformDesc {
+            offset: [offset[0] + s * scale[1], 1.0 - offset[1] - c * scale[1]],
+            rotation: rotation_radians.to_degrees(),
+            scale,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
@@ -352,6 +426,25 @@ pub enum MaterialDesc {
         specular: f32,
         #[serde(default = "white_color")]
         specular_color: ColorDesc,
+        /// A texture whose green channel multiplies `roughness` and blue `metallic`
+        /// (glTF's metallicRoughnessTexture; give it `color_space = "linear"`).
+        #[serde(default)]
+        metallic_roughness: Option<String>,
+        /// A tangent-space normal map (`color_space = "linear"`, +y toward growing v),
+        /// its x and y scaled by `normal_scale`; it needs a mesh with normals and uvs.
+        #[serde(default)]
+        normal_map: Option<String>,
+        #[serde(default = "one")]
+        normal_scale: f32,
+        /// Opacity, times the base colour texture's alpha.
+        #[serde(default = "one")]
+        alpha: f32,
+        /// `opaque` (alpha ignored), `mask` (cut out where alpha < `alpha_cutoff`) or
+        /// `blend` (opaque with probability alpha), for camera and shadow rays alike.
+        #[serde(default)]
+        alpha_mode: AlphaMode,
+        #[serde(default = "half")]
+        alpha_cutoff: f32,
         #[serde(default)]
         emission: ColorDesc,
         /// Emit from the back side too.
@@ -378,6 +471,20 @@ impl MaterialDesc {
             | MaterialDesc::Emissive { two_sided, .. } => *two_sided,
         }
     }
+}
+
+/// `alpha_mode` of a pbr material, as glTF's alphaMode.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AlphaMode {
+    #[default]
+    Opaque,
+    Mask,
+    Blend,
+}
+
+fn half() -> f32 {
+    0.5
 }
 
 fn glass_ior() -> f32 {
@@ -454,6 +561,45 @@ pub enum LightDesc {
     },
 }
 
+impl LightDesc {
+    /// The light placed by `m` (positions moved, directions turned; powers kept).
+    pub fn transformed(&self, m: glam::Affine3A) -> LightDesc {
+        let point = |p: [f32; 3]| m.transform_point3(p.into()).into();
+        let dir = |d: [f32; 3]| m.transform_vector3(d.into()).normalize_or_zero().into();
+        match self.clone() {
+            LightDesc::Point {
+                position,
+                intensity,
+            } => LightDesc::Point {
+                position: point(position),
+                intensity,
+            },
+            LightDesc::Spot {
+                position,
+                direction,
+                look_at,
+                intensity,
+                inner_angle,
+                outer_angle,
+            } => LightDesc::Spot {
+                position: point(position),
+                direction: direction.map(dir),
+                look_at: look_at.map(point),
+                intensity,
+                inner_angle,
+                outer_angle,
+            },
+            LightDesc::Directional {
+                direction,
+                irradiance,
+            } => LightDesc::Directional {
+                direction: dir(direction),
+                irradiance,
+            },
+        }
+    }
+}
+
 /// glTF's default outer cone angle, pi / 4.
 fn spot_outer_angle() -> f32 {
     45.0
@@ -525,10 +671,18 @@ pub enum ObjectDesc {
         material: String,
         transform: Option<TransformDesc>,
     },
-    /// A Wavefront OBJ file, `path` relative to the scene file.
+    /// A Wavefront OBJ or PLY file, `path` relative to the scene file. Without
+    /// `material`, an OBJ file's own .mtl materials apply.
     Mesh {
         path: String,
-        material: String,
+        material: Option<String>,
+        transform: Option<TransformDesc>,
+    },
+    /// A glTF 2.0 file (`.gltf` or `.glb`), `path` relative to the scene file: its first
+    /// scene's meshes with their materials, and its KHR_lights_punctual lights, placed by
+    /// `transform`. Its cameras are left out: the scene file's camera applies.
+    Gltf {
+        path: String,
         transform: Option<TransformDesc>,
     },
 }
@@ -554,11 +708,13 @@ impl ObjectDesc {
             ObjectDesc::Cylinder { .. } => "cylinder",
             ObjectDesc::Disk { .. } => "disk",
             ObjectDesc::Mesh { .. } => "mesh",
+            ObjectDesc::Gltf { .. } => "gltf",
         }
     }
 
-    pub fn material(&self) -> &str {
-        match self {
+    /// The material the object names (a glTF file brings its own).
+    pub fn material(&self) -> Option<&str> {
+        Some(match self {
             ObjectDesc::Sphere { material, .. }
             | ObjectDesc::Triangle { material, .. }
             | ObjectDesc::Polygon { material, .. }
@@ -566,9 +722,10 @@ impl ObjectDesc {
             | ObjectDesc::Plane { material, .. }
             | ObjectDesc::Box { material, .. }
             | ObjectDesc::Cylinder { material, .. }
-            | ObjectDesc::Disk { material, .. }
-            | ObjectDesc::Mesh { material, .. } => material,
-        }
+            | ObjectDesc::Disk { material, .. } => material,
+            ObjectDesc::Mesh { material, .. } => return material.as_deref(),
+            ObjectDesc::Gltf { .. } => return None,
+        })
     }
 
     pub fn transform(&self) -> Option<TransformDesc> {
@@ -581,7 +738,8 @@ impl ObjectDesc {
             | ObjectDesc::Box { transform, .. }
             | ObjectDesc::Cylinder { transform, .. }
             | ObjectDesc::Disk { transform, .. }
-            | ObjectDesc::Mesh { transform, .. } => *transform,
+            | ObjectDesc::Mesh { transform, .. }
+            | ObjectDesc::Gltf { transform, .. } => *transform,
         }
     }
 }

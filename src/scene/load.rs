@@ -1,20 +1,31 @@
-//! Loading: a scene file read (size checked first), parsed, validated, its meshes and
-//! images read relative to it, and flattened.
+//! Loading: a scene file read (size checked first), parsed, validated, its meshes, glTF
+//! files and images read relative to it, and flattened; or a glTF file on its own, with a
+//! scene made around it (its camera or one that frames it, a background when it has no
+//! light).
 
 use std::cell::Cell;
 use std::path::Path;
 
+use glam::Vec3;
+use toml::Spanned;
+
 use super::error::{self, Problem, SceneError};
 use super::flat::FlatScene;
-use super::flatten::{self, Build};
-use super::format::{LightSampling, ObjectDesc, SamplerKind, SceneFile, TextureDesc};
-use super::{mesh, textures, validate};
+use super::flatten::{self, Build, SceneFiles};
+use super::format::{
+    BackgroundDesc, CameraDesc, ColorSpace, LightSampling, ObjectDesc, Projection, RenderDesc,
+    SamplerKind, SceneFile, TextureDesc,
+};
+use super::gltf_file::{self, GltfError};
+use super::imported::ImportedScene;
+use super::{mesh, mtl, textures, validate};
 
 /// Largest scene file read (64 MiB).
 pub const MAX_SCENE_FILE_BYTES: u64 = 1 << 26;
 
-/// Command-line values that replace the scene's `[render]` settings.
-#[derive(Debug, Clone, Copy, Default)]
+/// Command-line values that replace the scene's `[render]` settings, its background, and
+/// for a glTF file the camera.
+#[derive(Debug, Clone, Default)]
 pub struct Overrides {
     pub width: Option<u32>,
     pub height: Option<u32>,
@@ -23,14 +34,27 @@ pub struct Overrides {
     pub seed: Option<u32>,
     pub sampler: Option<SamplerKind>,
     pub light_sampling: Option<LightSampling>,
+    /// A constant background radiance instead of the scene's.
+    pub background: Option<[f32; 3]>,
+    /// A glTF file's camera by its name or its node's (default: the first).
+    pub camera: Option<String>,
 }
 
-/// Reads, validates and flattens a scene file.
+/// Whether `path` names a glTF file (`.gltf`, `.glb`, any case).
+pub fn is_gltf(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
+}
+
+/// Reads, validates and flattens a scene file: TOML, or a glTF file on its own.
 pub fn load_scene(
     path: &Path,
     overrides: &Overrides,
     build: Build,
 ) -> Result<FlatScene, SceneError> {
+    if is_gltf(path) {
+        return load_gltf_scene(path, overrides, build);
+    }
     let io = |cause| SceneError::Io {
         path: path.to_path_buf(),
         cause,
@@ -67,14 +91,37 @@ pub fn load_scene_str(
         };
         invalid(vec![Problem::at(src, offset, "", message)])
     })?;
+    if overrides.camera.is_some() {
+        return Err(invalid(vec![Problem::at(
+            src,
+            0,
+            "--camera",
+            "chooses among a glTF file's cameras; a scene file has its [camera]",
+        )]));
+    }
     let overridden = apply_overrides(&mut file, overrides);
     let problems = validate::validate(&file, src, &overridden);
     if !problems.is_empty() {
         return Err(invalid(problems));
     }
     let dir = path.parent().unwrap_or(Path::new(""));
-    let (meshes, images) = read_files(&file, src, dir).map_err(invalid)?;
-    flatten::flatten(&file, &meshes, &images, build).map_err(|objects| {
+    let files = read_files(&file, src, dir).map_err(invalid)?;
+    let warnings = files
+        .imported
+        .iter()
+        .zip(&file.objects)
+        .enumerate()
+        .filter_map(|(i, (g, o))| Some((i, g.as_ref()?, o.get_ref())))
+        .flat_map(|(i, g, o)| {
+            let (ObjectDesc::Gltf { path, .. } | ObjectDesc::Mesh { path, .. }) = o else {
+                unreachable!("only glTF and mesh objects import a scene")
+            };
+            g.warnings
+                .iter()
+                .map(move |w| format!("objects[{i}] ({path}): {w}"))
+        })
+        .collect();
+    let mut scene = flatten::flatten(&file, &files, build).map_err(|objects| {
         invalid(
             objects
                 .into_iter()
@@ -89,29 +136,207 @@ pub fn load_scene_str(
                 })
                 .collect(),
         )
-    })
+    })?;
+    scene.warnings = warnings;
+    Ok(scene)
 }
 
-/// Meshes of one object each (None for other objects) and images of one texture each.
-type SceneFiles = (
-    Vec<Option<mesh::MeshData>>,
-    Vec<Option<textures::ImageData>>,
-);
+/// A glTF file rendered on its own: its first scene, under its first camera (or the one
+/// `overrides.camera` names; without any, one that frames the scene), the render
+/// settings' defaults and overrides, and a uniform background of radiance 1 when it has
+/// no light and no emissive material (or the background the overrides give).
+fn load_gltf_scene(
+    path: &Path,
+    overrides: &Overrides,
+    build: Build,
+) -> Result<FlatScene, SceneError> {
+    let invalid = |problems| SceneError::Invalid {
+        path: path.to_path_buf(),
+        problems,
+    };
+    let gltf_problem = |e: GltfError| Problem::at("", 0, e.key, e.message);
+    let g = gltf_file::load_gltf(path, "").map_err(|e| invalid(vec![gltf_problem(e)]))?;
+    let mut warnings = g.warnings.clone();
+    let bounds = g.bounds();
+    if bounds.is_empty() {
+        return Err(invalid(vec![Problem::at(
+            "",
+            0,
+            "",
+            "its scene places no triangles (nothing to render)",
+        )]));
+    }
+    let mut file = SceneFile {
+        render: RenderDesc::default(),
+        camera: CameraDesc {
+            look_from: [0.0, 0.0, 1.0],
+            look_at: [0.0; 3],
+            up: [0.0, 1.0, 0.0],
+            vfov: 40.0,
+            aperture: 0.0,
+            focus_distance: None,
+            projection: Projection::Perspective,
+            height: None,
+        },
+        background: BackgroundDesc::default(),
+        textures: Default::default(),
+        materials: Default::default(),
+        objects: vec![Spanned::new(
+            0..0,
+            ObjectDesc::Gltf {
+                path: path.display().to_string(),
+                transform: None,
+            },
+        )],
+        lights: Vec::new(),
+    };
+    let overridden = apply_overrides(&mut file, overrides);
+    let aspect = file.render.width.max(1) as f32 / file.render.height.max(1) as f32;
+    file.camera = match &overrides.camera {
+        Some(name) => g
+            .cameras
+            .iter()
+            .find(|c| c.name == *name || c.node_name.as_deref() == Some(name))
+            .map(|c| c.desc.clone())
+            .ok_or_else(|| {
+                let known: Vec<&str> = g.cameras.iter().map(|c| c.name.as_str()).collect();
+                invalid(vec![Problem::at(
+                    "",
+                    0,
+                    "--camera",
+                    format!(
+                        "no camera named \"{name}\" (the file has: {})",
+                        if known.is_empty() {
+                            "none".to_string()
+                        } else {
+                            known.join(", ")
+                        }
+                    ),
+                )])
+            })?,
+        None => match g.cameras.first() {
+            Some(c) => c.desc.clone(),
+            None => {
+                warnings.push("no camera: a view that frames the scene's bounds".into());
+                framing_camera(bounds.lo, bounds.hi, aspect)
+            }
+        },
+    };
+    if overrides.background.is_none() && g.lights.is_empty() && !g.emits() {
+        warnings.push(
+            "no light and no emissive material: a uniform background of radiance 1 \
+             lights it (--background R,G,B sets another)"
+                .into(),
+        );
+        file.background.color = Some([1.0; 3]);
+    }
+    let problems = validate::validate(&file, "", &overridden);
+    if !problems.is_empty() {
+        return Err(invalid(problems));
+    }
+    let files = SceneFiles {
+        meshes: vec![None],
+        imported: vec![Some(g)],
+        images: Vec::new(),
+    };
+    let mut scene = flatten::flatten(&file, &files, build).map_err(|_| {
+        invalid(vec![Problem::at(
+            "",
+            0,
+            "",
+            "a mesh degenerates in f32 under its node's transform",
+        )])
+    })?;
+    scene.warnings = warnings;
+    Ok(scene)
+}
 
-/// Reads the files the scene names (OBJ meshes, images), relative to its folder `dir`;
-/// every problem with its line and key. The caps hold for all meshes and all images of the
-/// scene together, counted as they load, so that naming one file many times cannot
-/// exhaust memory either.
+/// A camera that frames the box lo..hi: looking at its centre from the front (+z, glTF's
+/// front) and a little above, far enough that its bounding sphere fits the narrower
+/// field of view (40 degrees vertically).
+fn framing_camera(lo: Vec3, hi: Vec3, aspect: f32) -> CameraDesc {
+    let vfov = 40.0f32;
+    let center = 0.5 * (lo + hi);
+    let radius = (0.5 * (hi - lo).length()).max(1e-3);
+    let half = (0.5 * vfov).to_radians();
+    let narrow = if aspect < 1.0 {
+        (half.tan() * aspect).atan()
+    } else {
+        half
+    };
+    let distance = radius / narrow.sin();
+    let from = center + distance * Vec3::new(0.0, 0.25, 1.0).normalize();
+    CameraDesc {
+        look_from: from.into(),
+        look_at: center.into(),
+        up: [0.0, 1.0, 0.0],
+        vfov,
+        aperture: 0.0,
+        focus_distance: None,
+        projection: Projection::Perspective,
+        height: None,
+    }
+}
+
+/// Reads the files the scene names (meshes, glTF files, images), relative to its folder
+/// `dir`; every problem with its line and key. The caps hold for all meshes and all
+/// images of the scene together, counted as they load, so that naming one file many
+/// times cannot exhaust memory either.
 fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec<Problem>> {
     let mut problems = Vec::new();
     let triangles = Cell::new(0u64);
     let texels = Cell::new(0u64);
+    // glTF files, and OBJ files that bring their own materials
+    let imported = file
+        .objects
+        .iter()
+        .enumerate()
+        .map(|(i, obj)| match obj.get_ref() {
+            ObjectDesc::Gltf { path, .. }
+            | ObjectDesc::Mesh {
+                path,
+                material: None,
+                ..
+            } => read_relative(
+                (src, dir, path),
+                obj.span().start,
+                format!("objects[{i}].path"),
+                |p| {
+                    let prefix = format!("objects[{i}]/");
+                    let g: ImportedScene = if matches!(obj.get_ref(), ObjectDesc::Gltf { .. }) {
+                        gltf_file::load_gltf(p, &prefix).map_err(|e| e.to_string())?
+                    } else if mesh::is_ply(p) {
+                        return Err(
+                            "a PLY file has no materials: give the object a `material`".into()
+                        );
+                    } else {
+                        mtl::load_obj_scene(p, &prefix)?
+                    };
+                    count_toward(
+                        &triangles,
+                        g.instanced_triangles(),
+                        mesh::MAX_TRIANGLES as u64,
+                        "mesh triangles",
+                    )?;
+                    let n = g.textures.iter().map(|t| t.image.texels.len() as u64).sum();
+                    count_toward(&texels, n, textures::MAX_TEXELS, "image texels")?;
+                    Ok(g)
+                },
+                &mut problems,
+            ),
+            _ => None,
+        })
+        .collect();
     let meshes = file
         .objects
         .iter()
         .enumerate()
         .map(|(i, obj)| match obj.get_ref() {
-            ObjectDesc::Mesh { path, .. } => read_relative(
+            ObjectDesc::Mesh {
+                path,
+                material: Some(_),
+                ..
+            } => read_relative(
                 (src, dir, path),
                 obj.span().start,
                 format!("objects[{i}].path"),
@@ -134,12 +359,14 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
         .textures
         .iter()
         .map(|(name, t)| match t.get_ref() {
-            TextureDesc::Image { path, .. } => read_relative(
+            TextureDesc::Image {
+                path, color_space, ..
+            } => read_relative(
                 (src, dir, path),
                 t.span().start,
                 format!("textures.{name}.path"),
                 |p| {
-                    let img = textures::load_image(p)?;
+                    let img = textures::load_image(p, *color_space == ColorSpace::Srgb)?;
                     let n = img.width as u64 * img.height as u64;
                     count_toward(&texels, n, textures::MAX_TEXELS, "image texels")?;
                     Ok(img)
@@ -150,7 +377,11 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
         })
         .collect();
     if problems.is_empty() {
-        Ok((meshes, images))
+        Ok(SceneFiles {
+            meshes,
+            imported,
+            images,
+        })
     } else {
         Err(problems)
     }
@@ -201,6 +432,12 @@ fn apply_overrides(file: &mut SceneFile, o: &Overrides) -> Vec<&'static str> {
     r.seed = o.seed.unwrap_or(r.seed);
     r.sampler = o.sampler.unwrap_or(r.sampler);
     r.light_sampling = o.light_sampling.unwrap_or(r.light_sampling);
+    if let Some(c) = o.background {
+        file.background = BackgroundDesc {
+            color: Some(c),
+            ..Default::default()
+        };
+    }
     [
         ("width", o.width.is_some()),
         ("height", o.height.is_some()),

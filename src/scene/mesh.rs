@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glam::{DVec2, DVec3, Vec2, Vec3};
+use glam::{DVec2, DVec3, Vec2, Vec3, Vec4};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
 
@@ -15,6 +15,9 @@ pub struct MeshData {
     pub normals: Vec<Vec3>,
     pub uvs: Vec<Vec2>,
     pub triangles: Vec<[u32; 3]>,
+    /// Each triangle's corner tangents (xyz) and bitangent signs (w), for normal maps:
+    /// empty, or one per triangle.
+    pub tangents: Vec<[Vec4; 3]>,
 }
 
 /// Largest OBJ file read (2 GiB): the whole file is parsed in memory.
@@ -33,15 +36,18 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, String> {
             "is {bytes} bytes, more than the {MAX_MESH_FILE_BYTES} read for a mesh"
         ));
     }
-    let ply = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("ply"));
-    let mesh = if ply {
+    let mesh = if is_ply(path) {
         load_ply(path)?
     } else {
         load_obj(path)?
     };
     check(mesh)
+}
+
+/// Whether `path` names a PLY file (`.ply`, any case).
+pub fn is_ply(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ply"))
 }
 
 /// Every object of an OBJ file as one mesh (polygons are triangulated).
@@ -294,7 +300,7 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
 
 /// What every mesh file must give: faces, within the caps, indices inside the vertex list,
 /// attributes that match the positions, finite coordinates.
-fn check(mesh: MeshData) -> Result<MeshData, String> {
+pub fn check(mesh: MeshData) -> Result<MeshData, String> {
     if mesh.triangles.is_empty() {
         return Err("has no faces".into());
     }
@@ -319,4 +325,62 @@ fn check(mesh: MeshData) -> Result<MeshData, String> {
         return Err("has a non-finite coordinate".into());
     }
     Ok(mesh)
+}
+
+/// The mesh's corner tangents by MikkTSpace (the `bevy_mikktspace` crate), as glTF asks
+/// for a normal-mapped mesh without tangents: over its uvs (v up) and normals (each face's
+/// own where the mesh has none). Without uvs there is no tangent frame: nothing is set.
+pub fn generate_tangents(mesh: &mut MeshData) {
+    if mesh.uvs.is_empty() {
+        return;
+    }
+    struct Geometry<'a> {
+        mesh: &'a MeshData,
+        out: Vec<[Vec4; 3]>,
+    }
+    impl Geometry<'_> {
+        fn vertex(&self, face: usize, vert: usize) -> usize {
+            self.mesh.triangles[face][vert] as usize
+        }
+    }
+    impl bevy_mikktspace::Geometry for Geometry<'_> {
+        fn num_faces(&self) -> usize {
+            self.mesh.triangles.len()
+        }
+        fn num_vertices_of_face(&self, _face: usize) -> usize {
+            3
+        }
+        fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+            self.mesh.positions[self.vertex(face, vert)].into()
+        }
+        fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+            if self.mesh.normals.is_empty() {
+                let p = self.mesh.triangles[face].map(|i| self.mesh.positions[i as usize]);
+                (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero().into()
+            } else {
+                self.mesh.normals[self.vertex(face, vert)].into()
+            }
+        }
+        fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+            self.mesh.uvs[self.vertex(face, vert)].into()
+        }
+        fn set_tangent(
+            &mut self,
+            tangent_space: Option<bevy_mikktspace::TangentSpace>,
+            face: usize,
+            vert: usize,
+        ) {
+            self.out[face][vert] =
+                tangent_space.map_or(Vec4::ZERO, |t| Vec4::from(t.tangent_encoded()));
+        }
+    }
+    let mut g = Geometry {
+        mesh,
+        out: vec![[Vec4::ZERO; 3]; mesh.triangles.len()],
+    };
+    // a mesh it cannot give a frame to keeps zero tangents: its normal map is not applied
+    if bevy_mikktspace::generate_tangents(&mut g).is_ok() {
+        let out = g.out;
+        mesh.tangents = out;
+    }
 }

@@ -54,6 +54,13 @@ shared_constants! {
     PRIM_FLAG_SHADING_NORMALS: u32 = 4;
     /// Primitive flag (cylinders): closed by two cap disks.
     PRIM_FLAG_CAPS: u32 = 8;
+    /// Primitive flag (triangles with attributes): `TANGENT_ENTRIES` more entries after
+    /// the attributes hold each corner's tangent (xyz) and bitangent sign (w), for normal
+    /// maps.
+    PRIM_FLAG_TANGENTS: u32 = 16;
+    /// Most surfaces a ray passes through where they are transparent (alpha) before it
+    /// stops at the next one, whatever it is: a bound on the loop, never met in practice.
+    MAX_ALPHA_SKIPS: u32 = 16;
 
     /// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
     /// within this depth.
@@ -79,6 +86,12 @@ shared_constants! {
     MAT_PBR: u32 = 5;
     /// Material flag: emits from both sides.
     MAT_FLAG_TWO_SIDED: u32 = 1;
+    /// Material flag (pbr): cut out where alpha (`albedo.w` times the base colour
+    /// texture's alpha) is below the cutoff (`emission.w`), for every ray.
+    MAT_FLAG_ALPHA_MASK: u32 = 2;
+    /// Material flag (pbr): opaque with probability alpha, else passed through, for every
+    /// ray (stochastic transparency).
+    MAT_FLAG_ALPHA_BLEND: u32 = 4;
 
     /// Texture tags: the cases of the `switch` in `textures.wgsl`.
     TEX_CONSTANT: u32 = 0;
@@ -148,6 +161,9 @@ shared_constants! {
     DIM_RR: u32 = 5;
     /// `.x` chooses the light without a surface.
     DIM_PUNCTUAL: u32 = 6;
+    /// `.x` decides which transparent (alpha blend) surfaces the bounce's ray passes
+    /// through, `.y` those of its shadow rays.
+    DIM_ALPHA: u32 = 7;
 
     /// The f32 nearest to pi.
     PI: f32 = std::f32::consts::PI;
@@ -168,6 +184,9 @@ pub const TRANSFORM_ENTRIES: u32 = 6;
 /// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
 /// (v0, v1, v2, 0).
 pub const ATTRIBUTE_ENTRIES: u32 = 4;
+/// `shape_data` entries of one triangle's tangents (after its attributes): (t0, w0),
+/// (t1, w1), (t2, w2).
+pub const TANGENT_ENTRIES: u32 = 3;
 /// `Primitive::data` of a primitive with no extra data.
 pub const NO_DATA: u32 = u32::MAX;
 /// `texels` entries of the Perlin tables: 256 random unit vectors, then 256 rows of the
@@ -216,9 +235,13 @@ pub struct Material {
     pub extra: [f32; 4],
     /// Texture of `extra` (microfacet specular colour, or `NO_TEXTURE`).
     pub tex_extra: u32,
+    /// pbr: texture whose green channel multiplies the roughness and blue the metallic
+    /// factor (glTF's metallicRoughnessTexture), or `NO_TEXTURE`.
+    pub tex_params: u32,
+    /// pbr: tangent-space normal map (linear, +y along the uv's v), its xy scaled by
+    /// `extra.w`; or `NO_TEXTURE`.
+    pub tex_normal: u32,
     pub pad0: u32,
-    pub pad1: u32,
-    pub pad2: u32,
 }
 
 impl Default for Material {
@@ -233,9 +256,9 @@ impl Default for Material {
             params: [0.0; 4],
             extra: [0.0; 4],
             tex_extra: NO_TEXTURE,
+            tex_params: NO_TEXTURE,
+            tex_normal: NO_TEXTURE,
             pad0: 0,
-            pad1: 0,
-            pad2: 0,
         }
     }
 }
@@ -367,7 +390,9 @@ pub struct Params {
     /// Lights without a surface: emitters `num_emitters .. num_emitters + num_punctual`,
     /// chosen among themselves (their `cdf` and `prob` are over them alone).
     pub num_punctual: u32,
-    pub pad0: u32,
+    /// 1: an orthographic camera (parallel rays along `cam_forward` from the view
+    /// rectangle), 0: a perspective one.
+    pub orthographic: u32,
     pub pad1: u32,
     pub pad2: u32,
 }
@@ -510,9 +535,9 @@ shared_record!(Material {
     params,
     extra,
     tex_extra,
-    pad0,
-    pad1,
-    pad2
+    tex_params,
+    tex_normal,
+    pad0
 });
 shared_record!(Texture {
     tag,
@@ -573,7 +598,7 @@ shared_record!(Params {
     rr_depth,
     sample_count,
     num_punctual,
-    pad0,
+    orthographic,
     pad1,
     pad2
 });

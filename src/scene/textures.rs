@@ -1,10 +1,7 @@
 //! Textures: image files decoded to linear RGB, the Perlin noise tables, and the texture
 //! records both backends read.
 
-use std::collections::BTreeMap;
 use std::path::Path;
-
-use toml::Spanned;
 
 use super::format::{CheckerMapping, ColorDesc, NoiseKind, TextureDesc, WrapMode};
 use super::records::{self, Texture, NOISE_TABLE_ENTRIES, NO_TEXTURE, TEX_FLAG_SOLID};
@@ -32,16 +29,33 @@ pub const MAX_TEXTURE_SIDE: u32 = 16384;
 /// Most texels of all a scene's images together (2^26: 1 GiB as linear RGBA floats).
 pub const MAX_TEXELS: u64 = 1 << 26;
 
-/// Reads an image with the `image` crate: float formats (HDR, EXR) are linear already,
-/// 8- and 16-bit ones are sRGB-decoded. Its size is read from the header first: a side
-/// over [`MAX_TEXTURE_SIDE`] or more than [`MAX_TEXELS`] texels is refused before
-/// decoding.
-pub fn load_image(path: &Path) -> Result<ImageData, String> {
+/// Reads an image file with the `image` crate: float formats (HDR, EXR) are linear
+/// already, 8- and 16-bit ones are sRGB-decoded when `srgb` is set. Its size is read
+/// from the header first: a side over [`MAX_TEXTURE_SIDE`] or more than [`MAX_TEXELS`]
+/// texels is refused before decoding. Texels hold (r, g, b, alpha).
+pub fn load_image(path: &Path, srgb: bool) -> Result<ImageData, String> {
     let reader = || {
         image::ImageReader::open(path)
             .and_then(|r| r.with_guessed_format())
             .map_err(|e| e.to_string())
     };
+    decode(reader, srgb)
+}
+
+/// [`load_image`] of an image held in memory (a glTF buffer view or data URI).
+pub fn decode_image(bytes: &[u8], srgb: bool) -> Result<ImageData, String> {
+    let reader = || {
+        image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| e.to_string())
+    };
+    decode(reader, srgb)
+}
+
+fn decode<R: std::io::BufRead + std::io::Seek>(
+    reader: impl Fn() -> Result<image::ImageReader<R>, String>,
+    srgb: bool,
+) -> Result<ImageData, String> {
     let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
     if w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE || w as u64 * h as u64 > MAX_TEXELS {
         return Err(format!(
@@ -50,10 +64,11 @@ pub fn load_image(path: &Path) -> Result<ImageData, String> {
         ));
     }
     let img = reader()?.decode().map_err(|e| e.to_string())?;
-    let linear = matches!(
-        img.color(),
-        image::ColorType::Rgb32F | image::ColorType::Rgba32F
-    );
+    let linear = !srgb
+        || matches!(
+            img.color(),
+            image::ColorType::Rgb32F | image::ColorType::Rgba32F
+        );
     let rgba = img.to_rgba32f();
     let (width, height) = rgba.dimensions();
     if width == 0 || height == 0 {
@@ -63,7 +78,7 @@ pub fn load_image(path: &Path) -> Result<ImageData, String> {
         .pixels()
         .map(|p| {
             let c = |v: f32| if linear { v } else { srgb_to_linear(v) };
-            [c(p[0]), c(p[1]), c(p[2]), 0.0]
+            [c(p[0]), c(p[1]), c(p[2]), p[3]]
         })
         .collect::<Vec<_>>();
     if !texels.iter().flatten().all(|x| x.is_finite() && *x >= 0.0) {
@@ -125,20 +140,18 @@ pub fn color_slot(c: &ColorDesc, names: &[String]) -> ([f32; 4], u32) {
     }
 }
 
-/// Texture records and texels, in the order of `textures` (by name); `images[i]` holds
-/// texture i's image when it is one.
+/// Texture records and texels, in the order of `textures`: (name, texture, its image when
+/// it is one).
 pub fn texture_records(
-    textures: &BTreeMap<String, Spanned<TextureDesc>>,
-    images: &[Option<ImageData>],
+    textures: &[(String, &TextureDesc, Option<&ImageData>)],
 ) -> (Vec<Texture>, Vec<[f32; 4]>) {
-    let names: Vec<String> = textures.keys().cloned().collect();
+    let names: Vec<String> = textures.iter().map(|t| t.0.clone()).collect();
     let mut texels: Vec<[f32; 4]> = Vec::new();
     let mut noise_offset = None;
     let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
     let records = textures
-        .values()
-        .zip(images)
-        .map(|(t, image)| match t.get_ref() {
+        .iter()
+        .map(|&(_, t, image)| match t {
             TextureDesc::Constant { color } => Texture {
                 tag: records::TEX_CONSTANT,
                 color0: rgb(*color),
@@ -167,11 +180,21 @@ pub fn texture_records(
                     ..Default::default()
                 }
             }
-            TextureDesc::Image { wrap, .. } => {
-                let image = image.as_ref().expect("images are loaded before flattening");
+            TextureDesc::Image {
+                wrap,
+                factor,
+                transform,
+                ..
+            } => {
+                let image = image.expect("images are loaded before flattening");
                 let offset = texels.len() as u32;
                 texels.extend_from_slice(&image.texels);
+                let [row0, row1] =
+                    transform.map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |t| t.rows());
                 Texture {
+                    color0: rgb(*factor),
+                    color1: [row0[0], row0[1], row0[2], 0.0],
+                    params: [row1[0], row1[1], row1[2], 0.0],
                     tag: records::TEX_IMAGE,
                     flags: match wrap {
                         WrapMode::Repeat => 0,

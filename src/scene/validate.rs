@@ -6,8 +6,8 @@ use super::error::Problem;
 use toml::Spanned;
 
 use super::format::{
-    CameraDesc, ColorDesc, LightDesc, MaterialDesc, ObjectDesc, RenderDesc, SceneFile, TextureDesc,
-    TransformDesc,
+    CameraDesc, ColorDesc, LightDesc, MaterialDesc, ObjectDesc, Projection, RenderDesc, SceneFile,
+    TextureDesc, TransformDesc,
 };
 use super::shapes::polygon_normal;
 
@@ -114,6 +114,20 @@ impl Validator<'_> {
                 self.push(0, "camera.focus_distance", format!("must be > 0, got {fd}"));
             }
         }
+        match (c.projection, c.height) {
+            (Projection::Orthographic, None) => self.push(
+                0,
+                "camera.height",
+                "an orthographic camera needs the view's height".into(),
+            ),
+            (Projection::Orthographic, Some(h)) => self.positive("camera.height", h, 0),
+            (Projection::Perspective, Some(_)) => self.push(
+                0,
+                "camera.height",
+                "applies to an orthographic camera only (projection = \"orthographic\")".into(),
+            ),
+            (Projection::Perspective, None) => {}
+        }
     }
 
     /// `[background]`: one kind of background, its colours, texture, rotation and strength.
@@ -212,9 +226,24 @@ impl Validator<'_> {
                 }
                 self.positive(&format!("{key}.scale"), *scale, at);
             }
-            TextureDesc::Image { path, .. } => {
+            TextureDesc::Image {
+                path,
+                factor,
+                transform,
+                ..
+            } => {
                 if path.is_empty() {
                     self.push(at, &format!("{key}.path"), "must name an image file".into());
+                }
+                self.nonnegative3(&format!("{key}.factor"), *factor, at);
+                if let Some(t) = transform {
+                    let [a, b] = t.scale;
+                    if ![a, b, t.rotation, t.offset[0], t.offset[1]]
+                        .iter()
+                        .all(|x| x.is_finite())
+                    {
+                        self.push(at, &format!("{key}.transform"), "must be finite".into());
+                    }
                 }
             }
             TextureDesc::Noise { scale, color, .. } => {
@@ -297,14 +326,41 @@ impl Validator<'_> {
                 specular,
                 specular_color,
                 emission,
+                metallic_roughness,
+                normal_map,
+                normal_scale,
+                alpha,
+                alpha_cutoff,
                 ..
             } => {
                 self.color(&format!("{key}.base_color"), base_color, true, at);
                 self.color(&format!("{key}.specular_color"), specular_color, false, at);
+                for (name, t) in [
+                    ("metallic_roughness", metallic_roughness),
+                    ("normal_map", normal_map),
+                ] {
+                    if let Some(t) = t {
+                        self.color(
+                            &format!("{key}.{name}"),
+                            &ColorDesc::Texture(t.clone()),
+                            false,
+                            at,
+                        );
+                    }
+                }
+                if !normal_scale.is_finite() {
+                    self.push(
+                        at,
+                        &format!("{key}.normal_scale"),
+                        format!("must be finite, got {normal_scale}"),
+                    );
+                }
                 for (name, v) in [
                     ("metallic", metallic),
                     ("roughness", roughness),
                     ("specular", specular),
+                    ("alpha", alpha),
+                    ("alpha_cutoff", alpha_cutoff),
                 ] {
                     if !(0.0..=1.0).contains(v) {
                         self.push(
@@ -334,14 +390,13 @@ impl Validator<'_> {
         let at = obj.span().start;
         let key = format!("objects[{i}]");
         let o = obj.get_ref();
-        if !file.materials.contains_key(o.material()) {
+        if let Some(material) = o.material().filter(|m| !file.materials.contains_key(*m)) {
             let known: Vec<&str> = file.materials.keys().map(String::as_str).collect();
             self.push(
                 at,
                 &format!("{key}.material"),
                 format!(
-                    "unknown material \"{}\" (defined: {})",
-                    o.material(),
+                    "unknown material \"{material}\" (defined: {})",
                     if known.is_empty() {
                         "none".to_string()
                     } else {
@@ -504,6 +559,11 @@ impl Validator<'_> {
             ObjectDesc::Mesh { path, .. } => {
                 if path.is_empty() {
                     self.push(at, &format!("{key}.path"), "must name an OBJ file".into());
+                }
+            }
+            ObjectDesc::Gltf { path, .. } => {
+                if path.is_empty() {
+                    self.push(at, &format!("{key}.path"), "must name a glTF file".into());
                 }
             }
         }

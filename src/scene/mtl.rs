@@ -1,0 +1,277 @@
+//! OBJ files with their .mtl materials, read with `tobj`: the objects of the file as
+//! meshes, the materials mapped onto wgtrace's, their images read relative to the file.
+
+use std::path::Path;
+
+use glam::{Affine3A, Vec2, Vec3};
+
+use super::format::{AlphaMode, ColorDesc, ColorSpace, MaterialDesc, TextureDesc, WrapMode};
+use super::imported::{ImportedScene, ImportedTexture, Instance};
+use super::mesh::{check, generate_tangents, MeshData, MAX_MESH_FILE_BYTES};
+
+/// An OBJ file with the materials of its .mtl, as an imported scene: one mesh per object
+/// of the file (each has one material), placed where the file puts it, and the materials
+/// mapped onto wgtrace's (`mtl_material`), their textures read relative to the OBJ file.
+/// A file without materials is refused: the scene must then name one. Names begin with
+/// `prefix`.
+pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String> {
+    let bytes = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
+    if bytes > MAX_MESH_FILE_BYTES {
+        return Err(format!(
+            "is {bytes} bytes, more than the {MAX_MESH_FILE_BYTES} read for a mesh"
+        ));
+    }
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let (models, materials) = tobj::load_obj(path, &options).map_err(|e| e.to_string())?;
+    let materials = materials.map_err(|e| format!("its .mtl file: {e}"))?;
+    if materials.is_empty() {
+        return Err(
+            "has no materials (no mtllib, or an empty .mtl): give the object a `material`".into(),
+        );
+    }
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let mut out = ImportedScene::default();
+    let mut textures = MtlTextures {
+        dir,
+        prefix,
+        out: Vec::new(),
+    };
+    for (i, m) in materials.iter().enumerate() {
+        let desc = mtl_material(m, &mut textures, &mut out.warnings)
+            .map_err(|e| format!("material \"{}\": {e}", m.name))?;
+        out.materials
+            .push((format!("{prefix}{} (mtl)", m.name), desc));
+        debug_assert_eq!(out.materials.len(), i + 1);
+    }
+    out.textures = textures.out;
+    let mut default_material = None;
+    for model in &models {
+        let m = &model.mesh;
+        if m.indices.is_empty() {
+            continue;
+        }
+        let mut mesh = MeshData {
+            positions: m.positions.chunks_exact(3).map(Vec3::from_slice).collect(),
+            normals: m.normals.chunks_exact(3).map(Vec3::from_slice).collect(),
+            uvs: m.texcoords.chunks_exact(2).map(Vec2::from_slice).collect(),
+            triangles: m
+                .indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect(),
+            tangents: Vec::new(),
+        };
+        let material = match m.material_id.filter(|&id| id < materials.len()) {
+            Some(id) => id,
+            None => *default_material.get_or_insert_with(|| {
+                out.warnings.push(format!(
+                    "object \"{}\" names no material of the .mtl: a grey Lambertian one",
+                    model.name
+                ));
+                out.materials.push((
+                    format!("{prefix}default material"),
+                    MaterialDesc::Lambertian {
+                        albedo: ColorDesc::Rgb([0.8; 3]),
+                        emission: ColorDesc::Rgb([0.0; 3]),
+                        two_sided: false,
+                    },
+                ));
+                out.materials.len() - 1
+            }),
+        };
+        mesh = check(mesh).map_err(|e| format!("object \"{}\" {e}", model.name))?;
+        if matches!(
+            &out.materials[material].1,
+            MaterialDesc::Pbr {
+                normal_map: Some(_),
+                ..
+            }
+        ) {
+            generate_tangents(&mut mesh);
+        }
+        out.meshes.push(mesh);
+        out.instances.push(Instance {
+            mesh: out.meshes.len() - 1,
+            material,
+            transform: Affine3A::IDENTITY,
+        });
+    }
+    if out.instances.is_empty() {
+        return Err("has no faces".into());
+    }
+    Ok(out)
+}
+
+/// The images a .mtl names, each read once per colour space and factor.
+struct MtlTextures<'a> {
+    dir: &'a Path,
+    prefix: &'a str,
+    out: Vec<ImportedTexture>,
+}
+
+impl MtlTextures<'_> {
+    /// The texture of a `map_*` statement (its options, e.g. `-bm 0.5`, apart), and the
+    /// value of its `-bm` option.
+    fn texture(
+        &mut self,
+        statement: &str,
+        srgb: bool,
+        factor: [f32; 3],
+    ) -> Result<(String, f32), String> {
+        let (file, bump) = map_statement(statement);
+        let name = format!("{}{file}#{}", self.prefix, self.out.len());
+        let full = self.dir.join(&file);
+        let image = super::textures::load_image(&full, srgb)
+            .map_err(|e| format!("{}: {e}", full.display()))?;
+        self.out.push(ImportedTexture {
+            name: name.clone(),
+            desc: TextureDesc::Image {
+                path: file,
+                wrap: WrapMode::Repeat,
+                factor,
+                color_space: if srgb {
+                    ColorSpace::Srgb
+                } else {
+                    ColorSpace::Linear
+                },
+                transform: None,
+            },
+            image,
+        });
+        Ok((name, bump))
+    }
+}
+
+/// The file name of a .mtl `map_*` statement and its `-bm` value (1 without one): the
+/// options (a dash, then their numbers or on/off words) come before the name, which may
+/// hold spaces.
+fn map_statement(s: &str) -> (String, f32) {
+    let words: Vec<&str> = s.split_whitespace().collect();
+    let mut i = 0;
+    let mut bump = 1.0;
+    while i < words.len() && words[i].starts_with('-') && words[i].len() > 1 {
+        let option = words[i];
+        i += 1;
+        // an option's arguments: the numbers (and on/off, or a channel letter) after it
+        while i + 1 < words.len()
+            && (words[i].parse::<f32>().is_ok()
+                || matches!(words[i], "on" | "off" | "r" | "g" | "b" | "m" | "l" | "z"))
+        {
+            if option == "-bm" {
+                bump = words[i].parse().unwrap_or(1.0);
+            }
+            i += 1;
+        }
+    }
+    (words[i.min(words.len())..].join(" "), bump)
+}
+
+/// A .mtl material on wgtrace's (documented in the README's scene format):
+/// - illum 4, 6, 7 or 9 (refraction): `dielectric` of ior Ni (1.5), tinted by Tf
+///   (white);
+/// - otherwise `pbr` with metallic 0: base colour Kd (times map_Kd), specular colour Ks
+///   (no specular lobe without Ks), roughness (2 / (Ns + 2))^(1/4) (GGX alpha =
+///   sqrt(2 / (Ns + 2)), Blinn-Phong's exponent matched, as in pbrt's conversion), ior Ni,
+///   opacity d (blend below 1), the normal map of map_Bump / bump / norm (its -bm scales
+///   it);
+/// - Ke emits, from the front side.
+fn mtl_material(
+    m: &tobj::Material,
+    textures: &mut MtlTextures,
+    warnings: &mut Vec<String>,
+) -> Result<MaterialDesc, String> {
+    let finite3 = |what: &str, c: [f32; 3]| -> Result<[f32; 3], String> {
+        if c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+            Ok(c)
+        } else {
+            Err(format!("{what} must be >= 0, got {c:?}"))
+        }
+    };
+    let kd = finite3("Kd", m.diffuse.unwrap_or([0.8; 3]))?;
+    let ks = finite3("Ks", m.specular.unwrap_or([0.0; 3]))?;
+    let ke = finite3("Ke", m.emissive.unwrap_or([0.0; 3]))?;
+    let ior = m.optical_density.unwrap_or(1.5);
+    if !(ior.is_finite() && ior >= 1.0) {
+        return Err(format!("Ni must be >= 1, got {ior}"));
+    }
+    let emission = ColorDesc::Rgb(ke);
+    if matches!(m.illumination_model, Some(4 | 6 | 7 | 9)) {
+        let tint = match m.unknown_param.get("Tf").map(|s| parse3(s)) {
+            Some(Some(c)) => finite3("Tf", c)?.map(|x| x.min(1.0)),
+            _ => [1.0; 3],
+        };
+        return Ok(MaterialDesc::Dielectric {
+            ior,
+            tint: ColorDesc::Rgb(tint),
+            absorption: [0.0; 3],
+            emission,
+            two_sided: false,
+        });
+    }
+    let base_color = match &m.diffuse_texture {
+        Some(t) => ColorDesc::Texture(textures.texture(t, true, kd)?.0),
+        None => ColorDesc::Rgb(kd.map(|x| x.min(1.0))),
+    };
+    let (normal_map, normal_scale) = match m
+        .normal_texture
+        .as_deref()
+        .or(m.unknown_param.get("norm").map(String::as_str))
+    {
+        Some(t) => {
+            let (name, bump) = textures.texture(t, false, [1.0; 3])?;
+            (Some(name), bump)
+        }
+        None => (None, 1.0),
+    };
+    let ns = m.shininess.unwrap_or(0.0).max(0.0);
+    let roughness = (2.0 / (ns + 2.0)).powf(0.25);
+    let dissolve = m.dissolve.unwrap_or(1.0);
+    if !(0.0..=1.0).contains(&dissolve) {
+        return Err(format!("d must be in [0, 1], got {dissolve}"));
+    }
+    if m.specular_texture.is_some() || m.shininess_texture.is_some() || m.dissolve_texture.is_some()
+    {
+        warnings.push(format!(
+            "material \"{}\": map_Ks, map_Ns and map_d are left out (their factors apply)",
+            m.name
+        ));
+    }
+    let has_specular = ks.iter().any(|&x| x > 0.0);
+    Ok(MaterialDesc::Pbr {
+        base_color,
+        metallic: 0.0,
+        roughness,
+        ior,
+        specular: if has_specular { 1.0 } else { 0.0 },
+        specular_color: ColorDesc::Rgb(if has_specular { ks } else { [1.0; 3] }),
+        metallic_roughness: None,
+        normal_map,
+        normal_scale,
+        alpha: dissolve,
+        alpha_mode: if dissolve < 1.0 {
+            AlphaMode::Blend
+        } else {
+            AlphaMode::Opaque
+        },
+        alpha_cutoff: 0.5,
+        emission,
+        two_sided: false,
+    })
+}
+
+fn parse3(s: &str) -> Option<[f32; 3]> {
+    let v: Vec<f32> = s
+        .split_whitespace()
+        .map(|w| w.parse().ok())
+        .collect::<Option<_>>()?;
+    match v[..] {
+        [x] => Some([x; 3]),
+        [r, g, b] => Some([r, g, b]),
+        _ => None,
+    }
+}

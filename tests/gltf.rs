@@ -1,0 +1,861 @@
+//! glTF 2.0 files: every asset is written here by `common/gltf_writer.rs` (no third-party
+//! file). What the loader reads (node hierarchy, instancing, sparse accessors, data URIs,
+//! GLB, cameras, lights, materials and their extensions), what it refuses (with the JSON
+//! path), and renders against closed forms on both backends.
+
+mod common;
+#[path = "common/gltf_writer.rs"]
+mod gltf_writer;
+
+use std::path::{Path, PathBuf};
+
+use glam::Vec3;
+use gltf_writer::{light_ref, quad, GltfWriter};
+use serde_json::json;
+use wgtrace::scene::records::{self, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAT_PBR};
+use wgtrace::{FlatScene, Overrides};
+
+fn load(path: &Path) -> FlatScene {
+    wgtrace::load_scene(path, &Overrides::default()).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn load_err(path: &Path) -> String {
+    match wgtrace::load_scene(path, &Overrides::default()) {
+        Ok(_) => panic!("{} loaded", path.display()),
+        Err(e) => e.to_string(),
+    }
+}
+
+/// A 2 x 2 quad in the z = 0 plane facing +z (uv over it), with `material`.
+fn quad_mesh(w: &mut GltfWriter, material: Option<usize>) -> usize {
+    let q = quad([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    w.add_mesh_arrays(&q, material, true)
+}
+
+/// A one-quad file: the quad, a camera "front" at z = 3, a point light.
+fn quad_file(material: serde_json::Value) -> GltfWriter {
+    let mut w = GltfWriter::new();
+    let m = w.material(material);
+    let mesh = quad_mesh(&mut w, Some(m));
+    let n = w.node(json!({ "mesh": mesh }));
+    let c =
+        w.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.5, "znear": 0.1 } }));
+    let cam = w.node(json!({ "camera": c, "name": "front", "translation": [0.0, 0.0, 3.0] }));
+    let l = w.light(json!({ "type": "point", "intensity": 4.0, "color": [1.0, 0.5, 0.25] }));
+    let mut ln = json!({ "translation": [0.0, 0.0, 2.0] });
+    ln.as_object_mut()
+        .unwrap()
+        .extend(light_ref(l).as_object().unwrap().clone());
+    let ln = w.node(ln);
+    w.scene(&[n, cam, ln]);
+    w
+}
+
+fn pbr(factor: [f32; 4], metallic: f32, roughness: f32) -> serde_json::Value {
+    json!({ "pbrMetallicRoughness": {
+        "baseColorFactor": factor, "metallicFactor": metallic, "roughnessFactor": roughness } })
+}
+
+fn dir(name: &str) -> PathBuf {
+    common::tmp_dir(&format!("gltf-{name}"))
+}
+
+#[test]
+fn gltf_embedded_external_and_glb_give_the_same_records() {
+    let w = quad_file(pbr([0.8, 0.4, 0.2, 1.0], 0.25, 0.5));
+    let d = dir("forms");
+    let external = w.to_gltf_external(&d, "external").unwrap();
+    let embedded = d.join("embedded.gltf");
+    w.to_gltf_embedded(&embedded).unwrap();
+    let glb = d.join("binary.glb");
+    w.to_glb(&glb).unwrap();
+    let a = load(&external);
+    for other in [&embedded, &glb] {
+        let b = load(other);
+        assert_eq!(a.primitives, b.primitives, "{}", other.display());
+        assert_eq!(a.materials, b.materials);
+        assert_eq!(a.emitters, b.emitters);
+        assert_eq!(a.shape_data, b.shape_data);
+    }
+    // the quad's two triangles, one pbr material: alpha = roughness^2, metallic, ior 1.5
+    assert_eq!(a.primitives.len(), 2);
+    let m = a.materials[0];
+    assert_eq!(m.tag, MAT_PBR);
+    assert_eq!(&m.albedo[..3], &[0.8, 0.4, 0.2]);
+    assert_eq!(m.params, [0.25, 1.5, 0.25, 1.0]);
+    // the camera of node "front": at z = 3, looking down -z, yfov 0.5 rad
+    assert_eq!(a.camera.origin, Vec3::new(0.0, 0.0, 3.0));
+    assert!((a.camera.forward - Vec3::NEG_Z).length() < 1e-6);
+    let half = (0.25f32).tan() * a.camera.focus_distance;
+    assert!((a.camera.half_height - half).abs() < 1e-5);
+    // KHR_lights_punctual's point light: intensity x colour as W/sr, at its node
+    let p = a.punctual();
+    assert_eq!(p.len(), 1);
+    assert_eq!(p[0].kind, LIGHT_POINT);
+    assert_eq!(&p[0].a[..3], &[0.0, 0.0, 2.0]);
+    assert_eq!(&p[0].b[..3], &[4.0, 2.0, 1.0]);
+    // it has a light: no background is added, and nothing to warn of
+    assert_eq!(a.background, [0.0; 3]);
+    assert!(a.warnings.is_empty(), "{:?}", a.warnings);
+}
+
+#[test]
+fn the_node_hierarchy_places_meshes_by_matrix_and_trs_and_instances_each_use() {
+    let mut w = GltfWriter::new();
+    let mesh = quad_mesh(&mut w, None);
+    // child: scale 2 about x, then the parent's translation and 90 degrees about z
+    let child = w.node(json!({ "mesh": mesh, "scale": [2.0, 1.0, 1.0] }));
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let parent = w.node(
+        json!({ "children": [child], "translation": [10.0, 0.0, 0.0],
+        "rotation": [0.0, 0.0, s, s] }),
+    );
+    // the same mesh again by a matrix (column-major): translate (0, 0, -5)
+    let other = w.node(json!({ "mesh": mesh,
+        "matrix": [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, -5.0, 1.0] }));
+    w.scene(&[parent, other]);
+    let d = dir("nodes");
+    let scene = load(&w.to_gltf_external(&d, "nodes").unwrap());
+    assert_eq!(
+        scene.primitives.len(),
+        4,
+        "two instances of a two-triangle mesh"
+    );
+    let corners: Vec<Vec3> = scene
+        .primitives
+        .iter()
+        .flat_map(|p| [p.a, p.b, p.c])
+        .map(|v| Vec3::new(v[0], v[1], v[2]))
+        .collect();
+    // the quad's corner (1, 1, 0): scaled to (2, 1, 0), turned to (-1, 2, 0), moved
+    let placed = Vec3::new(9.0, 2.0, 0.0);
+    assert!(
+        corners.iter().any(|c| (*c - placed).length() < 1e-5),
+        "{corners:?}"
+    );
+    assert!(corners
+        .iter()
+        .any(|c| (*c - Vec3::new(1.0, 1.0, -5.0)).length() < 1e-6));
+    // no camera: a view that frames the scene, said on stderr; no light: background 1
+    assert!(
+        scene.warnings.iter().any(|w| w.contains("frames")),
+        "{:?}",
+        scene.warnings
+    );
+    assert!(scene.warnings.iter().any(|w| w.contains("radiance 1")));
+    assert_eq!(scene.background, [1.0; 3]);
+    let o = Overrides {
+        background: Some([0.25, 0.5, 1.0]),
+        ..Default::default()
+    };
+    let path = d.join("nodes.gltf");
+    let s = wgtrace::load_scene(&path, &o).unwrap();
+    assert_eq!(s.background, [0.25, 0.5, 1.0]);
+}
+
+#[test]
+fn a_sparse_accessor_overrides_the_positions_it_names() {
+    let mut w = GltfWriter::new();
+    let q = quad([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let pos = w.positions(&q.positions);
+    let idx = w.indices_u32(&q.indices);
+    // vertex 3 ((1, 1, 0)) moved to (1, 3, 0) by a sparse part
+    let iv = w.view(&3u32.to_le_bytes(), None);
+    let values: Vec<u8> = [1.0f32, 3.0, 0.0]
+        .iter()
+        .flat_map(|f| f.to_le_bytes())
+        .collect();
+    let vv = w.view(&values, None);
+    w.json["accessors"][pos]["sparse"] = json!({ "count": 1,
+        "indices": { "bufferView": iv, "componentType": 5125 },
+        "values": { "bufferView": vv } });
+    w.json["accessors"][pos]["max"] = json!([1.0, 3.0, 0.0]);
+    let mesh = w.mesh(vec![GltfWriter::primitive(
+        &[("POSITION", pos)],
+        Some(idx),
+        None,
+    )]);
+    let n = w.node(json!({ "mesh": mesh }));
+    w.scene(&[n]);
+    let scene = load(&w.to_gltf_external(&dir("sparse"), "sparse").unwrap());
+    let corners: Vec<[f32; 2]> = scene
+        .primitives
+        .iter()
+        .flat_map(|p| [p.a, p.b, p.c])
+        .map(|v| [v[0], v[1]])
+        .collect();
+    assert!(
+        corners.contains(&[1.0, 3.0]) && !corners.contains(&[1.0, 1.0]),
+        "{corners:?}"
+    );
+}
+
+#[test]
+fn cameras_are_chosen_by_name_and_orthographic_ones_are_parallel() {
+    let mut w = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    let c = w.camera(json!({ "type": "orthographic", "name": "top",
+        "orthographic": { "xmag": 2.0, "ymag": 1.5, "znear": 0.1, "zfar": 10.0 } }));
+    // looking down -y from above: rotated -90 degrees about x
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    let n = w.node(
+        json!({ "camera": c, "translation": [0.0, 4.0, 0.0], "rotation": [-s, 0.0, 0.0, s] }),
+    );
+    let mut nodes: Vec<usize> = w.json["scenes"][0]["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap() as usize)
+        .collect();
+    nodes.push(n);
+    w.json["scenes"][0]["nodes"] = json!(nodes);
+    let path = w.to_gltf_external(&dir("cameras"), "cameras").unwrap();
+    // the first camera by default
+    assert!(!load(&path).camera.orthographic);
+    let top = Overrides {
+        camera: Some("top".into()),
+        ..Default::default()
+    };
+    let s = wgtrace::load_scene(&path, &top).unwrap();
+    assert!(s.camera.orthographic);
+    assert_eq!(s.camera.half_height, 1.5);
+    assert!((s.camera.forward - Vec3::NEG_Y).length() < 1e-6);
+    // orthographic rays all go along the view direction, from the view rectangle
+    let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_tile()));
+    let r0 = wgtrace::cpu::trace::camera_ray(&b, 0, 0, [0.5; 2], [0.5; 2]);
+    let r1 = wgtrace::cpu::trace::camera_ray(&b, s.width - 1, s.height - 1, [0.5; 2], [0.5; 2]);
+    assert_eq!(r0.dir, r1.dir);
+    assert!((r0.origin - r1.origin).length() > 2.0);
+    let nope = Overrides {
+        camera: Some("side".into()),
+        ..Default::default()
+    };
+    let e = wgtrace::load_scene(&path, &nope).unwrap_err().to_string();
+    assert!(
+        e.contains("no camera named \"side\"") && e.contains("front, top"),
+        "{e}"
+    );
+}
+
+#[test]
+fn lights_punctual_map_onto_point_spot_and_directional_lights() {
+    let mut w = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    let spot = w.light(json!({ "type": "spot", "intensity": 2.0, "range": 5.0,
+        "spot": { "innerConeAngle": 0.2, "outerConeAngle": 0.5 } }));
+    let sun = w.light(json!({ "type": "directional", "intensity": 3.0 }));
+    let mut nodes = vec![];
+    for (l, t) in [(spot, [1.0, 2.0, 3.0]), (sun, [0.0; 3])] {
+        let mut n = json!({ "translation": t });
+        n.as_object_mut()
+            .unwrap()
+            .extend(light_ref(l).as_object().unwrap().clone());
+        nodes.push(w.node(n));
+    }
+    let mut all: Vec<usize> = (0..w.json["nodes"].as_array().unwrap().len() - 2).collect();
+    all.extend(nodes);
+    w.json["scenes"][0]["nodes"] = json!(all);
+    let s = load(&w.to_gltf_external(&dir("lights"), "lights").unwrap());
+    let kinds: Vec<u32> = s.punctual().iter().map(|e| e.kind).collect();
+    assert_eq!(kinds, [LIGHT_POINT, LIGHT_SPOT, LIGHT_DIRECTIONAL]);
+    let spot = s.punctual()[1];
+    assert_eq!(&spot.a[..3], &[1.0, 2.0, 3.0]);
+    assert!((spot.a[3] - 0.5f32.cos()).abs() < 1e-6 && (spot.b[3] - 0.2f32.cos()).abs() < 1e-6);
+    assert_eq!(&spot.c[..3], &[0.0, 0.0, -1.0]);
+    // a directional light's record holds the direction toward it: +z for one along -z
+    let sun = s.punctual()[2];
+    assert_eq!(&sun.a[..3], &[0.0, 0.0, 1.0]);
+    assert_eq!(&sun.b[..3], &[3.0; 3]);
+    assert!(
+        s.warnings.iter().any(|w| w.contains("range is ignored")),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
+fn material_extensions_map_onto_pbr_and_dielectric() {
+    let mut w = GltfWriter::new();
+    let a = w.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [1.0, 1.0, 1.0, 0.5], "metallicFactor": 0.0 },
+        "emissiveFactor": [1.0, 0.5, 0.0], "doubleSided": true,
+        "alphaMode": "MASK", "alphaCutoff": 0.25,
+        "extensions": {
+            "KHR_materials_emissive_strength": { "emissiveStrength": 4.0 },
+            "KHR_materials_ior": { "ior": 1.8 },
+            "KHR_materials_specular": { "specularFactor": 0.5, "specularColorFactor": [1.0, 0.5, 0.25] } } }));
+    let glass = w.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [0.9, 1.0, 0.9, 1.0], "roughnessFactor": 0.0 },
+        "alphaMode": "BLEND",
+        "extensions": {
+            "KHR_materials_transmission": { "transmissionFactor": 1.0 },
+            "KHR_materials_ior": { "ior": 1.33 },
+            "KHR_materials_volume": { "attenuationDistance": 2.0, "attenuationColor": [0.5, 1.0, 0.25] } } }));
+    for e in [
+        "KHR_materials_emissive_strength",
+        "KHR_materials_ior",
+        "KHR_materials_specular",
+        "KHR_materials_transmission",
+        "KHR_materials_volume",
+    ] {
+        w.use_extension(e, true);
+    }
+    let m0 = quad_mesh(&mut w, Some(a));
+    let m1 = quad_mesh(&mut w, Some(glass));
+    let n0 = w.node(json!({ "mesh": m0 }));
+    let n1 = w.node(json!({ "mesh": m1, "translation": [0.0, 0.0, -1.0] }));
+    w.scene(&[n0, n1]);
+    let s = load(&w.to_gltf_external(&dir("ext"), "ext").unwrap());
+    let (m, g) = (s.materials[0], s.materials[1]);
+    assert_eq!(m.tag, MAT_PBR);
+    assert_eq!(&m.emission[..3], &[4.0, 2.0, 0.0]);
+    assert_eq!(m.params, [1.0, 1.8, 0.0, 0.5]);
+    assert_eq!(&m.extra[..3], &[1.0, 0.5, 0.25]);
+    assert_eq!(
+        m.flags,
+        records::MAT_FLAG_TWO_SIDED | records::MAT_FLAG_ALPHA_MASK
+    );
+    assert_eq!((m.albedo[3], m.emission[3]), (0.5, 0.25));
+    assert_eq!(g.tag, records::MAT_DIELECTRIC);
+    assert_eq!(g.params[0], 1.33);
+    assert_eq!(&g.albedo[..3], &[0.9, 1.0, 0.9]);
+    // sigma_a = -ln(colour) / distance
+    let want = [0.5f32.ln() / -2.0, 0.0, 0.25f32.ln() / -2.0];
+    for (got, want) in g.extra.iter().zip(want) {
+        assert!((got - want).abs() < 1e-6, "{:?}", g.extra);
+    }
+    // it emits: no background is added
+    assert_eq!(s.background, [0.0; 3]);
+}
+
+#[test]
+fn textures_keep_their_colour_space_factor_and_transform() {
+    let mut w = GltfWriter::new();
+    let img = image::RgbaImage::from_fn(4, 2, |x, y| {
+        image::Rgba([(x * 60) as u8, 128, (y * 200) as u8, 255])
+    });
+    let t = w.png_texture(&img, None).unwrap();
+    let m = w.material(json!({
+        "pbrMetallicRoughness": {
+            "baseColorTexture": { "index": t, "extensions": { "KHR_texture_transform":
+                { "offset": [0.5, 0.0], "rotation": 0.0, "scale": [2.0, 1.0] } } },
+            "baseColorFactor": [0.5, 1.0, 1.0, 1.0],
+            "metallicRoughnessTexture": { "index": t } },
+        "normalTexture": { "index": t, "scale": 0.5 } }));
+    w.use_extension("KHR_texture_transform", false);
+    let mesh = quad_mesh(&mut w, Some(m));
+    let n = w.node(json!({ "mesh": mesh }));
+    w.scene(&[n]);
+    let s = load(&w.to_gltf_external(&dir("tex"), "tex").unwrap());
+    let mat = s.materials[0];
+    assert_eq!(
+        s.textures.len(),
+        2,
+        "base colour (sRGB); metallic-roughness and normal (linear, one look-up)"
+    );
+    let base = s.textures[mat.tex_albedo as usize];
+    assert_eq!(&base.color0[..3], &[0.5, 1.0, 1.0]);
+    // glTF's u' = 2u + 0.5; v' = v (v down) -> wgtrace's v' = 1 - (1 - v) = v
+    assert_eq!(&base.color1[..3], &[2.0, 0.0, 0.5]);
+    assert_eq!(&base.params[..3], &[0.0, 1.0, 0.0]);
+    let texel = |t: u32, i: usize| s.texels[s.textures[t as usize].offset as usize + i];
+    // 128 / 255: decoded from sRGB for the colour, taken as it is for the data
+    assert!((texel(mat.tex_albedo, 0)[1] - 0.2158605).abs() < 1e-5);
+    assert!((texel(mat.tex_params, 0)[1] - 128.0 / 255.0).abs() < 1e-6);
+    assert_eq!(mat.tex_normal, mat.tex_params, "the same linear look-up");
+    assert_eq!(mat.extra[3], 0.5, "normal scale");
+    // a normal-mapped mesh without tangents gets MikkTSpace's: +x along u on this quad
+    let p = s.primitives[0];
+    assert_ne!(p.flags & records::PRIM_FLAG_TANGENTS, 0);
+    let t0 = s.shape_data[p.data as usize + 4];
+    assert!(
+        (Vec3::new(t0[0], t0[1], t0[2]) - Vec3::X).length() < 1e-5,
+        "{t0:?}"
+    );
+    assert_eq!(t0[3], 1.0);
+}
+
+#[test]
+fn extensions_it_cannot_honour_are_errors_when_required_and_notes_when_used() {
+    let mut w = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    w.use_extension("KHR_materials_clearcoat", false);
+    let d = dir("required");
+    let s = load(&w.to_gltf_external(&d, "used").unwrap());
+    assert!(
+        s.warnings
+            .iter()
+            .any(|m| m.contains("KHR_materials_clearcoat")),
+        "{:?}",
+        s.warnings
+    );
+    w.use_extension("EXT_meshopt_compression", true);
+    let e = load_err(&w.to_gltf_external(&d, "required").unwrap());
+    assert!(
+        e.contains("required.gltf: extensionsRequired[0]: ")
+            && e.contains("EXT_meshopt_compression"),
+        "{e}"
+    );
+}
+
+/// A broken file: `edit` changes the writer or the bytes; the error names the file and `key`.
+fn assert_refused(name: &str, w: &GltfWriter, key: &str, why: &str) {
+    let d = dir(name);
+    let path = w.to_gltf_external(&d, name).unwrap();
+    let e = load_err(&path);
+    assert!(e.contains(&format!("{name}.gltf: {key}")), "{name}: {e}");
+    assert!(e.contains(why), "{name}: {e}");
+}
+
+#[test]
+fn broken_files_are_refused_with_the_json_path() {
+    let base = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    // POSITION is accessor 0, NORMAL 1, TEXCOORD_0 2, indices 3 (add_mesh_arrays' order)
+    let mut w = base.clone();
+    w.json["accessors"][0]["count"] = json!(1u64 << 40);
+    assert_refused(
+        "huge",
+        &w,
+        "meshes[0].primitives[0].attributes.POSITION (accessors[0].count)",
+        "wgtrace reads 1 to",
+    );
+    let mut w = base.clone();
+    w.json["accessors"][0]["byteOffset"] = json!(1000);
+    assert_refused(
+        "outside",
+        &w,
+        "meshes[0].primitives[0].attributes.POSITION",
+        "reads up to byte",
+    );
+    let mut w = base.clone();
+    w.json["bufferViews"][0]["byteLength"] = json!(1 << 20);
+    assert_refused("view", &w, "bufferViews[0]", "past the end of buffers[0]");
+    let mut w = base.clone();
+    w.json["accessors"][0]["componentType"] = json!(5121);
+    assert_refused(
+        "type",
+        &w,
+        "meshes[0].primitives[0].attributes.POSITION (accessors[0])",
+        "expected Vec3 of [F32]",
+    );
+    let mut w = base.clone();
+    w.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(99);
+    assert_refused(
+        "dangling",
+        &w,
+        "meshes[0].primitives[0].attributes.POSITION",
+        "names accessors[99]",
+    );
+    let mut w = base.clone();
+    w.json["meshes"][0]["primitives"][0]["attributes"]["NORMAL"] = json!(99);
+    assert_refused(
+        "dangling2",
+        &w,
+        "meshes[0].primitives[0].attributes[\"NORMAL\"]",
+        "Index",
+    );
+    // NaN positions
+    let mut w = base.clone();
+    w.bin[0..4].copy_from_slice(&f32::NAN.to_le_bytes());
+    assert_refused("nan", &w, "meshes[0].primitives[0]", "non-finite");
+    // an index past the vertices
+    let mut w = base.clone();
+    let at = w.json["bufferViews"][3]["byteOffset"].as_u64().unwrap_or(0) as usize;
+    w.bin[at..at + 4].copy_from_slice(&77u32.to_le_bytes());
+    assert_refused(
+        "index",
+        &w,
+        "meshes[0].primitives[0]",
+        "beyond its vertex list",
+    );
+    // the buffer shorter than its byteLength, and a missing buffer file
+    let d = dir("short");
+    let path = base.to_gltf_external(&d, "short").unwrap();
+    let bin = d.join("short.bin");
+    let bytes = std::fs::read(&bin).unwrap();
+    std::fs::write(&bin, &bytes[..bytes.len() / 2]).unwrap();
+    let e = load_err(&path);
+    assert!(e.contains("short.gltf: buffers[0].byteLength: is "), "{e}");
+    std::fs::remove_file(&bin).unwrap();
+    let e = load_err(&path);
+    assert!(
+        e.contains("short.gltf: buffers[0]: \"short.bin\" cannot be read"),
+        "{e}"
+    );
+    // a missing and an undecodable image
+    let mut w = base.clone();
+    let t = w.png_texture_uri("missing.png", None);
+    w.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": t });
+    assert_refused(
+        "noimage",
+        &w,
+        "images[0].uri",
+        "\"missing.png\" cannot be read",
+    );
+    let d = dir("badimage");
+    std::fs::write(d.join("missing.png"), b"not a png").unwrap();
+    let path = w.to_gltf_external(&d, "badimage").unwrap();
+    let e = load_err(&path);
+    assert!(e.contains("badimage.gltf: images[0]: "), "{e}");
+    // not JSON, a truncated GLB
+    let d = dir("truncated");
+    std::fs::write(d.join("text.gltf"), "{ \"asset\": ").unwrap();
+    assert!(load_err(&d.join("text.gltf")).contains("text.gltf: is not glTF 2.0"));
+    let glb = base.glb_bytes();
+    std::fs::write(d.join("cut.glb"), &glb[..glb.len() - 10]).unwrap();
+    let e = load_err(&d.join("cut.glb"));
+    assert!(
+        e.contains("cut.glb: is a GLB file whose header declares"),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_cycle_in_the_node_hierarchy_is_refused_not_walked_forever() {
+    let mut w = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    w.json["nodes"][0]["children"] = json!([0]);
+    let d = dir("cycle");
+    let e = load_err(&w.to_gltf_external(&d, "cycle").unwrap());
+    assert!(e.contains("nodes[0]"), "{e}");
+}
+
+/// A GLB with bytes changed, cut or appended loads or is refused with an error, never
+/// panics; so does its JSON with characters changed.
+mod fuzz {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn try_load(bytes: &[u8], ext: &str, tag: u64) {
+        let d = std::env::temp_dir().join(format!("wgtrace-gltf-fuzz-{}", std::process::id()));
+        std::fs::create_dir_all(&d).unwrap();
+        let path = d.join(format!("f{tag}.{ext}"));
+        std::fs::write(&path, bytes).unwrap();
+        let _ = wgtrace::load_scene(&path, &Overrides::default());
+        let _ = std::fs::remove_file(&path);
+    }
+
+    fn asset() -> GltfWriter {
+        let mut w = quad_file(pbr([0.5; 4], 0.5, 0.5));
+        let img = image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 100, 50, 255]));
+        let t = w.png_texture(&img, None).unwrap();
+        w.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": t });
+        w
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 96, ..ProptestConfig::default() })]
+
+        #[test]
+        fn mutated_glb_files_load_or_are_refused(
+            edits in proptest::collection::vec((any::<prop::sample::Index>(), any::<u8>()), 1..8),
+            cut in any::<prop::sample::Index>(),
+            tag in any::<u64>(),
+        ) {
+            let mut bytes = asset().glb_bytes();
+            for (at, b) in &edits {
+                let i = at.index(bytes.len());
+                bytes[i] = *b;
+            }
+            try_load(&bytes, "glb", tag);
+            let n = cut.index(bytes.len());
+            try_load(&bytes[..n], "glb", tag);
+        }
+
+        #[test]
+        fn mutated_gltf_json_loads_or_is_refused(
+            edits in proptest::collection::vec((any::<prop::sample::Index>(), prop::sample::select(vec![b'0', b'9', b'-', b'1', b'"', b'}', b'[', b'e'])), 1..6),
+            tag in any::<u64>(),
+        ) {
+            let w = asset();
+            let d = std::env::temp_dir().join(format!("wgtrace-gltf-fuzzj-{}-{tag}", std::process::id()));
+            std::fs::create_dir_all(&d).unwrap();
+            let path = w.to_gltf_external(&d, "f").unwrap();
+            let mut text = std::fs::read(&path).unwrap();
+            for (at, b) in &edits {
+                let i = at.index(text.len());
+                text[i] = *b;
+            }
+            std::fs::write(&path, &text).unwrap();
+            let _ = wgtrace::load_scene(&path, &Overrides::default());
+            let _ = std::fs::remove_dir_all(&d);
+        }
+    }
+}
+
+#[test]
+fn a_scene_file_places_a_gltf_object_under_its_own_camera_and_lights() {
+    let w = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    let d = dir("object");
+    w.to_gltf_external(&d, "model").unwrap();
+    let src = r#"
+[camera]
+look_from = [0, 0, 10]
+look_at = [0, 0, 0]
+[background]
+color = [0.5, 0.5, 0.5]
+[materials.white]
+type = "lambertian"
+albedo = [0.8, 0.8, 0.8]
+[[objects]]
+type = "gltf"
+path = "model.gltf"
+transform = { translate = [5, 0, 0], scale = 2 }
+[[objects]]
+type = "sphere"
+center = [0, 0, -3]
+radius = 1
+material = "white"
+"#;
+    let s = wgtrace::load_scene_str(src, &d.join("scene.toml"), &Overrides::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.camera.origin, Vec3::new(0.0, 0.0, 10.0));
+    assert_eq!(s.background, [0.5; 3]);
+    // the scene's material first, then the file's
+    assert_eq!(s.material_names[0], "white");
+    assert!(
+        s.material_names[1].starts_with("objects[0]/"),
+        "{:?}",
+        s.material_names
+    );
+    let xs: Vec<f32> = s
+        .primitives
+        .iter()
+        .filter(|p| p.tag == records::PRIM_TRIANGLE)
+        .flat_map(|p| [p.a[0], p.b[0], p.c[0]])
+        .collect();
+    assert!(
+        xs.iter().all(|&x| (3.0..=7.0).contains(&x)) && xs.contains(&7.0),
+        "{xs:?}"
+    );
+    // the file's light comes along, placed by the object's transform
+    assert_eq!(&s.punctual()[0].a[..3], &[5.0, 0.0, 4.0]);
+    // a file that is missing: the object's line and key
+    let e = wgtrace::load_scene_str(
+        &src.replace("model.gltf", "nope.gltf"),
+        &d.join("scene.toml"),
+        &Overrides::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("scene.toml:10:1: objects[0].path: ") && e.contains("nope.gltf"),
+        "{e}"
+    );
+}
+
+/// A directional light straight down on a white Lambertian quad seen from above: the
+/// radiance is E / pi everywhere (E = 3); with a normal map tilting every normal by theta
+/// about the quad's tangent it is E cos(theta) / pi. Both backends.
+#[test]
+fn a_normal_map_tilts_the_shading_normal_by_its_angle() {
+    let theta = 0.5f32;
+    let mut w = GltfWriter::new();
+    // n = (0, sin, cos) in tangent space: tilted toward the bitangent (+v, +y)
+    let c = |x: f32| ((x * 0.5 + 0.5) * 255.0).round() as u8;
+    let img = image::RgbaImage::from_pixel(
+        4,
+        4,
+        image::Rgba([c(0.0), c(theta.sin()), c(theta.cos()), 255]),
+    );
+    let t = w.png_texture(&img, None).unwrap();
+    let flat = w.material(json!({ "pbrMetallicRoughness": { "metallicFactor": 0.0 },
+        "extensions": { "KHR_materials_specular": { "specularFactor": 0.0 } } }));
+    let mapped = w.material(json!({ "pbrMetallicRoughness": { "metallicFactor": 0.0 },
+        "normalTexture": { "index": t },
+        "extensions": { "KHR_materials_specular": { "specularFactor": 0.0 } } }));
+    let q = |x: f32| quad([x, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let (a, b) = (q(-1.0), q(1.0));
+    let ma = w.add_mesh_arrays(&a, Some(flat), true);
+    let mb = w.add_mesh_arrays(&b, Some(mapped), true);
+    let na = w.node(json!({ "mesh": ma }));
+    let nb = w.node(json!({ "mesh": mb }));
+    let l = w.light(json!({ "type": "directional", "intensity": 3.0 }));
+    let ln = w.node(light_ref(l));
+    let cam = w.camera(json!({ "type": "orthographic", "orthographic": { "xmag": 2.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0 } }));
+    let cn = w.node(json!({ "camera": cam, "translation": [0.0, 0.0, 5.0] }));
+    w.scene(&[na, nb, ln, cn]);
+    let path = w.to_gltf_external(&dir("normal"), "normal").unwrap();
+    let o = Overrides {
+        width: Some(32),
+        height: Some(16),
+        spp: Some(4),
+        max_depth: Some(2),
+        ..Default::default()
+    };
+    let s = wgtrace::load_scene(&path, &o).unwrap();
+    let cos = c(theta.cos()) as f32 / 255.0 * 2.0 - 1.0;
+    let sin = c(theta.sin()) as f32 / 255.0 * 2.0 - 1.0;
+    let expect_mapped = 3.0 / std::f32::consts::PI * cos / (cos * cos + sin * sin).sqrt();
+    for (name, img) in [
+        ("cpu", common::render_cpu(&s)),
+        ("gpu", common::render_gpu(&s)),
+    ] {
+        let rgb = img.to_rgb();
+        let px = |x: u32, y: u32| rgb[3 * (y * img.width + x) as usize];
+        for y in 2..14 {
+            for x in 2..14 {
+                let (l, r) = (px(x, y), px(x + 16, y));
+                assert!(
+                    (l - 3.0 / std::f32::consts::PI).abs() < 1e-3,
+                    "{name} flat {l}"
+                );
+                assert!(
+                    (r - expect_mapped).abs() < 1e-3,
+                    "{name} mapped {r} vs {expect_mapped}"
+                );
+            }
+        }
+    }
+}
+
+/// alphaMode MASK cuts a quad out where its texture's alpha is below the cutoff, and
+/// BLEND lets 1 - alpha through on average: a white quad in front of an emitter of
+/// radiance 1 (the background), seen head on, shows 1 through the holes; on both backends,
+/// for camera rays and shadow rays (a second test below).
+#[test]
+fn alpha_mask_and_blend_let_the_background_through() {
+    // left half of the texture alpha 0, right half alpha 1 (MASK); BLEND at alpha 0.25
+    let mut w = GltfWriter::new();
+    let img = image::RgbaImage::from_fn(8, 8, |x, _| {
+        image::Rgba([255, 255, 255, if x < 4 { 0 } else { 255 }])
+    });
+    let t = w
+        .png_texture(
+            &img,
+            Some(json!({ "magFilter": 9728, "minFilter": 9728, "wrapS": 33071, "wrapT": 33071 })),
+        )
+        .unwrap();
+    let mask = w.material(
+        json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": t },
+        "baseColorFactor": [0.0, 0.0, 0.0, 1.0], "metallicFactor": 0.0 },
+        "alphaMode": "MASK", "alphaCutoff": 0.5 }),
+    );
+    let blend = w.material(json!({ "pbrMetallicRoughness": {
+        "baseColorFactor": [0.0, 0.0, 0.0, 0.25], "metallicFactor": 0.0 },
+        "alphaMode": "BLEND" }));
+    let q = |x: f32| quad([x, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let ma = w.add_mesh_arrays(&q(-1.0), Some(mask), true);
+    let mb = w.add_mesh_arrays(&q(1.0), Some(blend), true);
+    let na = w.node(json!({ "mesh": ma }));
+    let nb = w.node(json!({ "mesh": mb }));
+    let cam = w.camera(json!({ "type": "orthographic", "orthographic": { "xmag": 2.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0 } }));
+    let cn = w.node(json!({ "camera": cam, "translation": [0.0, 0.0, 5.0] }));
+    w.scene(&[na, nb, cn]);
+    let path = w.to_gltf_external(&dir("alpha"), "alpha").unwrap();
+    let spp = 256;
+    let o = Overrides {
+        width: Some(32),
+        height: Some(16),
+        spp: Some(spp),
+        max_depth: Some(1),
+        ..Default::default()
+    };
+    let s = wgtrace::load_scene(&path, &o).unwrap();
+    assert_eq!(s.background, [1.0; 3], "no light: the uniform background");
+    for (name, img) in [
+        ("cpu", common::render_cpu(&s)),
+        ("gpu", common::render_gpu(&s)),
+    ] {
+        let rgb = img.to_rgb();
+        let px = |x: u32, y: u32| rgb[3 * (y * img.width + x) as usize] as f64;
+        for y in 2..14 {
+            // the mask: the background through its left half (pixels 0..8), black right
+            assert_eq!(px(2, y), 1.0, "{name}");
+            assert_eq!(px(13, y), 0.0, "{name}");
+        }
+        // blend: each camera ray passes with probability 0.75; over 12 x 12 pixels of
+        // `spp` samples the mean is within 4 standard errors of 0.75
+        let mut sum = 0.0;
+        for y in 2..14 {
+            for x in 18..30 {
+                sum += px(x, y);
+            }
+        }
+        let n = 144.0 * spp as f64;
+        let mean: f64 = sum / 144.0;
+        let se = (0.75f64 * 0.25 / n).sqrt();
+        assert!(
+            (mean - 0.75).abs() < 4.0 * se,
+            "{name}: {mean} vs 0.75 +- {se}"
+        );
+    }
+}
+
+/// A shadow ray passes a blended surface with probability 1 - alpha: a white Lambertian
+/// floor under a directional light, with a BLEND quad of alpha 0.25 between them, has
+/// 0.75 of the unshadowed radiance on average.
+#[test]
+fn shadow_rays_pass_blended_surfaces_in_proportion() {
+    let mut w = GltfWriter::new();
+    let white = w.material(json!({ "pbrMetallicRoughness": { "metallicFactor": 0.0 },
+        "extensions": { "KHR_materials_specular": { "specularFactor": 0.0 } } }));
+    let veil = w.material(json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.0, 0.0, 0.0, 0.25], "metallicFactor": 0.0 },
+        "alphaMode": "BLEND" }));
+    let floor = w.add_mesh_arrays(
+        &quad([0.0; 3], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]),
+        Some(white),
+        true,
+    );
+    let above = w.add_mesh_arrays(
+        &quad([0.0, 0.0, 1.0], [4.0, 0.0, 0.0], [0.0, 4.0, 0.0]),
+        Some(veil),
+        true,
+    );
+    let nf = w.node(json!({ "mesh": floor }));
+    let nv = w.node(json!({ "mesh": above }));
+    let l = w.light(json!({ "type": "directional", "intensity": 3.0 }));
+    let ln = w.node(light_ref(l));
+    let cam = w.camera(json!({ "type": "orthographic", "orthographic": { "xmag": 1.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0 } }));
+    // the camera under the veil, looking down at the floor
+    let cn = w.node(json!({ "camera": cam, "translation": [0.0, 0.0, 0.5] }));
+    w.scene(&[nf, nv, ln, cn]);
+    let path = w.to_gltf_external(&dir("veil"), "veil").unwrap();
+    let spp = 64;
+    let o = Overrides {
+        width: Some(16),
+        height: Some(16),
+        spp: Some(spp),
+        max_depth: Some(2),
+        ..Default::default()
+    };
+    let s = wgtrace::load_scene(&path, &o).unwrap();
+    let lit = 3.0 / std::f64::consts::PI;
+    for (name, img) in [
+        ("cpu", common::render_cpu(&s)),
+        ("gpu", common::render_gpu(&s)),
+    ] {
+        let mean: f64 = img
+            .to_rgb()
+            .iter()
+            .step_by(3)
+            .map(|&p| p as f64)
+            .sum::<f64>()
+            / 256.0;
+        let n = 256.0 * spp as f64;
+        let se = lit * (0.75f64 * 0.25 / n).sqrt();
+        assert!(
+            (mean - 0.75 * lit).abs() < 4.0 * se,
+            "{name}: {mean} vs {} +- {se}",
+            0.75 * lit
+        );
+    }
+}
+
+/// The gallery's glTF files (written by `cargo run --example gen_gltf`) load, and the GPU
+/// agrees with the CPU reference on them.
+#[test]
+fn the_shipped_gltf_files_render_alike_on_both_backends() {
+    for rel in ["scenes/gltf/spheres.gltf", "scenes/gltf/brick.glb"] {
+        let o = Overrides {
+            width: Some(48),
+            height: Some(32),
+            spp: Some(16),
+            ..Default::default()
+        };
+        let s = wgtrace::load_scene(&common::repo_path(rel), &o).unwrap_or_else(|e| panic!("{e}"));
+        let c = common::compare(&common::render_gpu(&s), &common::render_cpu(&s), 8);
+        assert!(
+            c.failed_tiles.is_empty(),
+            "{rel}: {}",
+            c.failed_tiles.join("\n")
+        );
+        assert!(c.agree_fraction >= 0.98, "{rel}: {}", c.agree_fraction);
+    }
+}
