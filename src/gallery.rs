@@ -80,6 +80,16 @@ pub const ENTRIES: &[Entry] = &[
         "glTF metallic-roughness: metallic 0, 0.5, 1 by roughness 0 to 1",
     ),
     entry(
+        "gltf-spheres",
+        "scenes/gltf-spheres.toml",
+        "A glTF file in a scene: metallic 0 to 1 by roughness 0 to 1, its own lights",
+    ),
+    entry(
+        "gltf-brick",
+        "scenes/gltf/brick.glb",
+        "A .glb on its own: base colour, normal and metallic-roughness textures",
+    ),
+    entry(
         "punctual",
         "scenes/punctual.toml",
         "Point, spot and directional lights: sharp shadows, glTF's spot falloff",

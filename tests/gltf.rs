@@ -859,3 +859,96 @@ fn the_shipped_gltf_files_render_alike_on_both_backends() {
         assert!(c.agree_fraction >= 0.98, "{rel}: {}", c.agree_fraction);
     }
 }
+
+/// Instances are flattened: a mesh used by n nodes is read once, and its triangles are
+/// written n times into the records. This measures what that costs (printed; the
+/// README quotes it) and holds the records to n times one instance's.
+#[test]
+fn instances_cost_their_triangles_each_in_the_records() {
+    let sphere = gltf_writer::uv_sphere([0.0; 3], 0.4, 32, 64);
+    let bytes =
+        |s: &FlatScene| s.primitives.len() * 64 + s.shape_data.len() * 16 + s.bvh.len() * 32;
+    let mut sizes = Vec::new();
+    for n in [1usize, 10, 100] {
+        let mut w = GltfWriter::new();
+        let mesh = w.add_mesh_arrays(&sphere, None, true);
+        let nodes: Vec<usize> = (0..n)
+            .map(|i| w.node(json!({ "mesh": mesh, "translation": [i as f32, 0.0, 0.0] })))
+            .collect();
+        w.scene(&nodes);
+        let d = dir(&format!("instances{n}"));
+        let file = w.to_gltf_external(&d, "i").unwrap();
+        let file_bytes = std::fs::metadata(d.join("i.bin")).unwrap().len();
+        let s = load(&file);
+        assert_eq!(s.primitives.len(), n * sphere.indices.len() / 3);
+        eprintln!(
+            "{n} instances of {} triangles: file {file_bytes} B, records {} B ({:.1} B per placed triangle)",
+            sphere.indices.len() / 3,
+            bytes(&s),
+            bytes(&s) as f64 / s.primitives.len() as f64
+        );
+        sizes.push(bytes(&s));
+    }
+    // linear in the instances, within the BVH's shape
+    let per = sizes[0] as f64;
+    assert!((sizes[2] as f64 / per - 100.0).abs() < 5.0, "{sizes:?}");
+}
+
+/// A primitive gets the uv set its material's textures read: TEXCOORD_1 here; and
+/// KHR_materials_specular's specularTexture scales the specular factor by its alpha.
+#[test]
+fn textures_on_a_second_uv_set_and_the_specular_texture_are_read() {
+    let mut w = GltfWriter::new();
+    let img = image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 255, 255, 64]));
+    let t = w.png_texture(&img, None).unwrap();
+    let m = w.material(json!({ "pbrMetallicRoughness": {
+            "baseColorTexture": { "index": t, "texCoord": 1 }, "metallicFactor": 0.0 },
+        "extensions": { "KHR_materials_specular": {
+            "specularTexture": { "index": t, "texCoord": 1 }, "specularFactor": 0.5 } } }));
+    w.use_extension("KHR_materials_specular", false);
+    let q = quad([0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    let pos = w.positions(&q.positions);
+    let uv0 = w.vec2(&q.uvs);
+    // the second set: every corner at (0.25, 0.75) (glTF's v down: wgtrace's v = 0.25)
+    let uv1 = w.vec2(&[[0.25, 0.75]; 4]);
+    let idx = w.indices_u32(&q.indices);
+    let prim = GltfWriter::primitive(
+        &[("POSITION", pos), ("TEXCOORD_0", uv0), ("TEXCOORD_1", uv1)],
+        Some(idx),
+        Some(m),
+    );
+    let mesh = w.mesh(vec![prim]);
+    let n = w.node(json!({ "mesh": mesh }));
+    w.scene(&[n]);
+    let s = load(&w.to_gltf_external(&dir("uv1"), "uv1").unwrap());
+    let p = s.primitives[0];
+    let a = &s.shape_data[p.data as usize..p.data as usize + 4];
+    // (n_k, u_k) then (v0, v1, v2, 0)
+    assert_eq!([a[0][3], a[1][3], a[2][3]], [0.25; 3]);
+    assert_eq!(&a[3][..3], &[0.25; 3]);
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("TEXCOORD")),
+        "{:?}",
+        s.warnings
+    );
+    let mat = s.materials[0];
+    assert_ne!(mat.tex_specular, records::NO_TEXTURE);
+    // on the CPU: specular 0.5 x alpha 64/255 at the hit
+    let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_tile()));
+    let hit = wgtrace::cpu::types::Hit {
+        p: Vec3::ZERO,
+        ng: Vec3::Z,
+        ns: Vec3::Z,
+        uv: glam::Vec2::splat(0.5),
+        front_face: true,
+        material: 0,
+        err: 0.0,
+        tangent: glam::Vec4::ZERO,
+    };
+    let at = wgtrace::cpu::textures::material_at(&b, &mat, &hit);
+    assert!(
+        (at.params[3] - 0.5 * 64.0 / 255.0).abs() < 1e-6,
+        "{:?}",
+        at.params
+    );
+}

@@ -365,3 +365,39 @@ fn obj_materials_come_from_the_mtl_unless_the_scene_names_one() {
         "{e}"
     );
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+    /// An OBJ file and its .mtl with characters changed, inserted or cut load or are
+    /// refused, never a panic.
+    #[test]
+    fn mutated_obj_and_mtl_files_are_loaded_or_refused(
+        edits in proptest::collection::vec(
+            (any::<bool>(), any::<proptest::sample::Index>(),
+             proptest::sample::select(vec![b'0', b'9', b'-', b'.', b' ', b'\n', b'e', b'/', b'#']), 0u8..3),
+            1..6),
+    ) {
+        let mut obj = b"mtllib f.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n\
+                        usemtl a\nf 1/1/1 2/2/1 3/3/1\n".to_vec();
+        let mut mtl = b"newmtl a\nKd 0.5 0.5 0.5\nKs 1 1 1\nNs 50\nNi 1.5\nd 0.5\nKe 1 0 0\nillum 2\n".to_vec();
+        for (in_mtl, at, byte, kind) in edits {
+            let text = if in_mtl { &mut mtl } else { &mut obj };
+            let i = at.index(text.len());
+            match kind {
+                0 => text[i] = byte,
+                1 => text.insert(i, byte),
+                _ => text.truncate(i),
+            }
+            if text.is_empty() {
+                text.push(b'\n');
+            }
+        }
+        static DIR: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+        let dir = DIR.get_or_init(|| dir("fuzz-mtl"));
+        std::fs::write(dir.join("f.obj"), &obj).unwrap();
+        std::fs::write(dir.join("f.mtl"), &mtl).unwrap();
+        let src = format!("{HEAD}[[objects]]\ntype = \"mesh\"\npath = \"f.obj\"\n");
+        let _ = wgtrace::load_scene_str(&src, &dir.join("s.toml"), &Overrides::default());
+    }
+}

@@ -199,6 +199,10 @@ fn material_at(m: Material, hit: Hit) -> Material {
         mat.params.x = max(mat.params.x * mr.y * mr.y, ALPHA_SMOOTH);
         mat.params.z *= mr.z;
     }
+    if (mat.tex_specular != NO_TEXTURE) {
+        // KHR_materials_specular's specularTexture: its alpha scales the specular factor
+        mat.params.w *= min(texture_alpha(mat.tex_specular, hit.uv), 1.0);
+    }
 #endif
 #endif
     return mat;
@@ -232,7 +236,6 @@ fn normal_mapped(mat: Material, hit: Hit) -> Hit {
 }
 #endif
 
-#ifdef HAS_ALPHA
 // A texture's alpha at uv: an image's own, else 1.
 fn texture_alpha(index: u32, uv: vec2<f32>) -> f32 {
     let tex = textures[index];
@@ -242,6 +245,7 @@ fn texture_alpha(index: u32, uv: vec2<f32>) -> f32 {
     return 1.0;
 }
 
+#ifdef HAS_ALPHA
 // Whether a ray passes through a hit: a pbr surface with alpha (albedo.w times its base
 // colour texture's alpha) cut out below the cutoff (emission.w) with MAT_FLAG_ALPHA_MASK,
 // or transparent when u >= alpha with MAT_FLAG_ALPHA_BLEND (u uniform in [0, 1)).

@@ -52,7 +52,7 @@ struct Material {
     tex_extra: u32,
     tex_params: u32,
     tex_normal: u32,
-    pad0: u32,
+    tex_specular: u32,
 }
 
 // Constant: color0 | checker: cells of textures even / odd (color0 / color1 where

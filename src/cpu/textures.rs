@@ -188,6 +188,10 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
         mat.params[0] = (mat.params[0] * mr.y * mr.y).max(ALPHA_SMOOTH);
         mat.params[2] *= mr.z;
     }
+    if mat.tag == MAT_PBR && mat.tex_specular != NO_TEXTURE {
+        // KHR_materials_specular's specularTexture: its alpha scales the specular factor
+        mat.params[3] *= texture_alpha(b, mat.tex_specular, hit.uv).min(1.0);
+    }
     mat
 }
 

@@ -85,6 +85,7 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             specular_color,
             emission,
             metallic_roughness,
+            specular_texture,
             normal_map,
             normal_scale,
             alpha,
@@ -93,7 +94,7 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
             ..
         } => {
             pbr_extras = Some((
-                named(metallic_roughness),
+                (named(metallic_roughness), named(specular_texture)),
                 named(normal_map),
                 *normal_scale,
                 *alpha,
@@ -140,8 +141,9 @@ fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
         tex_extra: extra.1,
         ..Default::default()
     };
-    if let Some((mr, normal, scale, alpha, mode, cutoff)) = pbr_extras {
+    if let Some(((mr, specular), normal, scale, alpha, mode, cutoff)) = pbr_extras {
         record.tex_params = mr;
+        record.tex_specular = specular;
         record.tex_normal = normal;
         record.extra[3] = scale;
         record.albedo[3] = alpha;

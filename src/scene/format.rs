@@ -430,6 +430,10 @@ pub enum MaterialDesc {
         /// (glTF's metallicRoughnessTexture; give it `color_space = "linear"`).
         #[serde(default)]
         metallic_roughness: Option<String>,
+        /// A texture whose alpha channel multiplies `specular` (KHR_materials_specular's
+        /// specularTexture).
+        #[serde(default)]
+        specular_texture: Option<String>,
         /// A tangent-space normal map (`color_space = "linear"`, +y toward growing v),
         /// its x and y scaled by `normal_scale`; it needs a mesh with normals and uvs.
         #[serde(default)]

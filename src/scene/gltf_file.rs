@@ -217,6 +217,21 @@ fn open(data: &[u8], dir: &Path) -> Result<(gltf::Document, Vec<Vec<u8>>, Vec<St
                 }
             }
         }
+        // an image's source() unwraps these
+        for (i, img) in root.images.iter().enumerate() {
+            if img.buffer_view.is_some() && img.mime_type.is_none() {
+                return Err(GltfError::new(
+                    format!("images[{i}].mimeType"),
+                    "is missing (an image in a bufferView must give its mimeType)",
+                ));
+            }
+            if img.buffer_view.is_none() && img.uri.is_none() {
+                return Err(GltfError::new(
+                    format!("images[{i}]"),
+                    "has neither a uri nor a bufferView",
+                ));
+            }
+        }
         let mut problems = Vec::new();
         root.validate(root, gltf::json::Path::new, &mut |path, error| {
             let path = path().to_string();
@@ -348,7 +363,17 @@ impl<'a> Loader<'a> {
             let id = match self.mesh_ids.get(&(mesh.index(), prim.index())) {
                 Some(&id) => id,
                 None => {
-                    let data = self.primitive(&prim, &key)?;
+                    // each primitive has one uv set: the one its material's textures read
+                    // (a material that reads two gets the first, with a note)
+                    let sets = uv_sets(&prim.material());
+                    let uv_set = sets.first().copied().unwrap_or(0);
+                    if sets.iter().any(|&s| s != uv_set) {
+                        self.out.warnings.push(format!(
+                            "{key}: its material's textures read TEXCOORD_{uv_set} and \
+                             another set; wgtrace gives a primitive one: TEXCOORD_{uv_set}"
+                        ));
+                    }
+                    let data = self.primitive(&prim, &key, uv_set)?;
                     self.out.meshes.push(data);
                     let id = self.out.meshes.len() - 1;
                     self.mesh_ids.insert((mesh.index(), prim.index()), id);
@@ -365,9 +390,11 @@ impl<'a> Loader<'a> {
         Ok(())
     }
 
-    /// A triangle primitive's vertices, normals and first uv set, indexed or not.
-    fn primitive(&self, prim: &gltf::Primitive, key: &str) -> Result<MeshData> {
+    /// A triangle primitive's vertices, normals and uv set `uv_set` (the one its
+    /// material's textures read), indexed or not.
+    fn primitive(&self, prim: &gltf::Primitive, key: &str, uv_set: u32) -> Result<MeshData> {
         use gltf::Semantic;
+        let uv_name = format!("TEXCOORD_{uv_set}");
         let attr = |name: &str| format!("{key}.attributes.{name}");
         let positions = prim.get(&Semantic::Positions).ok_or_else(|| {
             GltfError::new(attr("POSITION"), "is missing (a primitive needs positions)")
@@ -382,8 +409,8 @@ impl<'a> Loader<'a> {
             self.check_count(&a, n, &attr("NORMAL"), Dimensions::Vec3, &[DataType::F32])?;
         }
         let uv_types = [DataType::F32, DataType::U8, DataType::U16];
-        if let Some(a) = prim.get(&Semantic::TexCoords(0)) {
-            self.check_count(&a, n, &attr("TEXCOORD_0"), Dimensions::Vec2, &uv_types)?;
+        if let Some(a) = prim.get(&Semantic::TexCoords(uv_set)) {
+            self.check_count(&a, n, &attr(&uv_name), Dimensions::Vec2, &uv_types)?;
         }
         let tangents = prim.get(&Semantic::Tangents);
         if let Some(a) = &tangents {
@@ -415,10 +442,10 @@ impl<'a> Loader<'a> {
                 .map(Vec3::from)
                 .collect();
         }
-        if prim.get(&Semantic::TexCoords(0)).is_some() {
+        if prim.get(&Semantic::TexCoords(uv_set)).is_some() {
             mesh.uvs = reader
-                .read_tex_coords(0)
-                .ok_or_else(|| unreadable(attr("TEXCOORD_0")))?
+                .read_tex_coords(uv_set)
+                .ok_or_else(|| unreadable(attr(&uv_name)))?
                 .into_f32()
                 // glTF's v runs down the image, wgtrace's up
                 .map(|[u, v]| Vec2::new(u, 1.0 - v))
@@ -609,6 +636,7 @@ impl<'a> Loader<'a> {
                     specular: 1.0,
                     specular_color: ColorDesc::Rgb([1.0; 3]),
                     metallic_roughness: None,
+                    specular_texture: None,
                     normal_map: None,
                     normal_scale: 1.0,
                     alpha: 1.0,
@@ -734,6 +762,7 @@ impl<'a> Loader<'a> {
             }
         }
         let (mut specular, mut specular_color) = (1.0, ColorDesc::Rgb([1.0; 3]));
+        let mut specular_texture = None;
         if let Some(s) = m.specular() {
             let sk = "extensions.KHR_materials_specular";
             specular = unit(&format!("{sk}.specularFactor"), s.specular_factor())?;
@@ -750,10 +779,10 @@ impl<'a> Loader<'a> {
                 &key,
                 &format!("{sk}.specularColorTexture"),
             )?;
-            if s.specular_texture().is_some() {
-                self.out.warnings.push(format!(
-                    "{key}.{sk}.specularTexture: left out (specularFactor applies)"
-                ));
+            if let Some(info) = s.specular_texture() {
+                // its alpha channel (linear) scales specularFactor
+                let k = format!("{key}.{sk}.specularTexture");
+                specular_texture = Some(self.texture(&info, false, [1.0; 3], &k)?);
             }
         }
         Ok(MaterialDesc::Pbr {
@@ -764,6 +793,7 @@ impl<'a> Loader<'a> {
             specular,
             specular_color,
             metallic_roughness,
+            specular_texture,
             normal_map,
             normal_scale,
             alpha: factor4[3],
@@ -855,7 +885,8 @@ impl<'a> Loader<'a> {
             .as_ref()
             .map(|t| UvTransformDesc::from_v_down(t.offset(), t.rotation(), t.scale()));
         let uv_set = t.and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
-        self.texture_lookup(info.texture(), uv_set, transform, srgb, factor, key)
+        self.texture_lookup(info.texture(), uv_set, transform, srgb, factor)
+            .map_err(|e| GltfError::new(e.key, format!("{} (the image of {key})", e.message)))
     }
 
     /// A normal texture's look-up: the crate gives its KHR_texture_transform only as JSON.
@@ -902,7 +933,7 @@ impl<'a> Loader<'a> {
             .and_then(|e| e.get("texCoord"))
             .and_then(|c| c.as_u64())
             .map_or(n.tex_coord(), |c| c as u32);
-        self.texture_lookup(n.texture(), uv_set, transform, false, [1.0; 3], key)
+        self.texture_lookup(n.texture(), uv_set, transform, false, [1.0; 3])
     }
 
     fn texture_lookup(
@@ -912,13 +943,7 @@ impl<'a> Loader<'a> {
         transform: Option<UvTransformDesc>,
         srgb: bool,
         factor: [f32; 3],
-        key: &str,
     ) -> Result<String> {
-        if uv_set != 0 {
-            self.out.warnings.push(format!(
-                "{key}.texCoord: is {uv_set}; wgtrace reads TEXCOORD_0 for it"
-            ));
-        }
         let k = TextureKey {
             texture: tex.index(),
             srgb,
@@ -1109,6 +1134,35 @@ impl<'a> Loader<'a> {
         });
         Ok(())
     }
+}
+
+/// The uv sets a material's textures read (occlusion's apart: it is not used), in the
+/// order base colour, metallic-roughness, normal, emissive, specular colour.
+fn uv_sets(m: &gltf::Material) -> Vec<u32> {
+    let set = |info: gltf::texture::Info| {
+        info.texture_transform()
+            .and_then(|t| t.tex_coord())
+            .unwrap_or(info.tex_coord())
+    };
+    let pbr = m.pbr_metallic_roughness();
+    let mut sets: Vec<u32> = [
+        pbr.base_color_texture(),
+        pbr.metallic_roughness_texture(),
+        m.emissive_texture(),
+        m.specular().and_then(|s| s.specular_color_texture()),
+    ]
+    .into_iter()
+    .flatten()
+    .map(set)
+    .collect();
+    if let Some(n) = m.normal_texture() {
+        let ext = n
+            .extension_value("KHR_texture_transform")
+            .and_then(|e| e.get("texCoord"))
+            .and_then(|c| c.as_u64());
+        sets.insert(sets.len().min(2), ext.map_or(n.tex_coord(), |c| c as u32));
+    }
+    sets
 }
 
 /// Refuses a URI whose %-escapes do not decode to UTF-8 (the crate would panic on it).

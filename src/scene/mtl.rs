@@ -250,6 +250,7 @@ fn mtl_material(
         specular: if has_specular { 1.0 } else { 0.0 },
         specular_color: ColorDesc::Rgb(if has_specular { ks } else { [1.0; 3] }),
         metallic_roughness: None,
+        specular_texture: None,
         normal_map,
         normal_scale,
         alpha: dissolve,

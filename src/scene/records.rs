@@ -241,7 +241,9 @@ pub struct Material {
     /// pbr: tangent-space normal map (linear, +y along the uv's v), its xy scaled by
     /// `extra.w`; or `NO_TEXTURE`.
     pub tex_normal: u32,
-    pub pad0: u32,
+    /// pbr: texture whose alpha multiplies `specular` (`params.w`; KHR_materials_specular's
+    /// specularTexture), or `NO_TEXTURE`.
+    pub tex_specular: u32,
 }
 
 impl Default for Material {
@@ -258,7 +260,7 @@ impl Default for Material {
             tex_extra: NO_TEXTURE,
             tex_params: NO_TEXTURE,
             tex_normal: NO_TEXTURE,
-            pad0: 0,
+            tex_specular: NO_TEXTURE,
         }
     }
 }
@@ -537,7 +539,7 @@ shared_record!(Material {
     tex_extra,
     tex_params,
     tex_normal,
-    pad0
+    tex_specular
 });
 shared_record!(Texture {
     tag,

@@ -327,6 +327,7 @@ impl Validator<'_> {
                 specular_color,
                 emission,
                 metallic_roughness,
+                specular_texture,
                 normal_map,
                 normal_scale,
                 alpha,
@@ -337,6 +338,7 @@ impl Validator<'_> {
                 self.color(&format!("{key}.specular_color"), specular_color, false, at);
                 for (name, t) in [
                     ("metallic_roughness", metallic_roughness),
+                    ("specular_texture", specular_texture),
                     ("normal_map", normal_map),
                 ] {
                     if let Some(t) = t {
