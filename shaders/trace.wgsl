@@ -90,6 +90,13 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>, u
     } else {
         let lh = surface_at(Ray(hit.p, ls.dir), Candidate(ls.dist, e.primitive, ls.uv.x, ls.uv.y));
         le = emitted(material_at(material_record(lh.material), lh), lh);
+#ifdef HAS_ALPHA
+        // a light point where the emitter is cut out or passed through emits nothing
+        // there, as a bounce ray finds it
+        if (transparent_at(lh, alpha_u(u_alpha, MAX_ALPHA_SKIPS))) {
+            le = vec3<f32>(0.0);
+        }
+#endif
         pdf_dir = normalize(lh.p - shadow.origin);
         let end = offset_ray(lh.p, select(-lh.ng, lh.ng, dot(ls.dir, lh.ng) < 0.0), lh.err);
         let v = end - shadow.origin;
@@ -185,8 +192,8 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         cand = intersect_scene((*path).ray, FAR);
         // a surface transparent where the ray meets it is passed through: the ray goes on
         // from just beyond, its origin moved but its direction's pdf and the vertex it
-        // left (prev_p) kept, and the bounce not counted
-        if (cand.prim != NO_HIT) {
+        // left (prev_p) kept, and the bounce not counted; the last surface is kept whatever
+        if (cand.prim != NO_HIT && k + 1u < MAX_ALPHA_SKIPS) {
             let h = surface_at((*path).ray, cand);
             if (transparent_at(h, alpha_u(u_alpha.x, k))) {
                 (*path).ray = spawn_ray(h, (*path).ray.dir);

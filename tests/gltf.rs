@@ -640,9 +640,10 @@ material = "white"
     );
 }
 
-/// A directional light straight down on a white Lambertian quad seen from above: the
-/// radiance is E / pi everywhere (E = 3); with a normal map tilting every normal by theta
-/// about the quad's tangent it is E cos(theta) / pi. Both backends.
+/// A directional light on a white Lambertian quad seen from above, tilted by phi toward
+/// +y: the radiance is E cos(phi) / pi everywhere (E = 3); with a normal map tilting every
+/// normal by theta toward the bitangent (+v, here +y) it is E cos(theta - phi) / pi (a
+/// bitangent the wrong way round would give cos(theta + phi)). Both backends.
 #[test]
 fn a_normal_map_tilts_the_shading_normal_by_its_angle() {
     let theta = 0.5f32;
@@ -666,8 +667,14 @@ fn a_normal_map_tilts_the_shading_normal_by_its_angle() {
     let mb = w.add_mesh_arrays(&b, Some(mapped), true);
     let na = w.node(json!({ "mesh": ma }));
     let nb = w.node(json!({ "mesh": mb }));
+    let phi = 0.3f32;
     let l = w.light(json!({ "type": "directional", "intensity": 3.0 }));
-    let ln = w.node(light_ref(l));
+    // -z turned about x by -phi: travelling along (0, -sin phi, -cos phi)
+    let mut ln = json!({ "rotation": [(-phi / 2.0).sin(), 0.0, 0.0, (phi / 2.0).cos()] });
+    ln.as_object_mut()
+        .unwrap()
+        .extend(light_ref(l).as_object().unwrap().clone());
+    let ln = w.node(ln);
     let cam = w.camera(json!({ "type": "orthographic", "orthographic": { "xmag": 2.0, "ymag": 1.0, "znear": 0.1, "zfar": 10.0 } }));
     let cn = w.node(json!({ "camera": cam, "translation": [0.0, 0.0, 5.0] }));
     w.scene(&[na, nb, ln, cn]);
@@ -682,7 +689,10 @@ fn a_normal_map_tilts_the_shading_normal_by_its_angle() {
     let s = wgtrace::load_scene(&path, &o).unwrap();
     let cos = c(theta.cos()) as f32 / 255.0 * 2.0 - 1.0;
     let sin = c(theta.sin()) as f32 / 255.0 * 2.0 - 1.0;
-    let expect_mapped = 3.0 / std::f32::consts::PI * cos / (cos * cos + sin * sin).sqrt();
+    let to_light = Vec3::new(0.0, phi.sin(), phi.cos());
+    let expect_flat = 3.0 / std::f32::consts::PI * phi.cos();
+    let expect_mapped =
+        3.0 / std::f32::consts::PI * Vec3::new(0.0, sin, cos).normalize().dot(to_light);
     for (name, img) in [
         ("cpu", common::render_cpu(&s)),
         ("gpu", common::render_gpu(&s)),
@@ -693,8 +703,8 @@ fn a_normal_map_tilts_the_shading_normal_by_its_angle() {
             for x in 2..14 {
                 let (l, r) = (px(x, y), px(x + 16, y));
                 assert!(
-                    (l - 3.0 / std::f32::consts::PI).abs() < 1e-3,
-                    "{name} flat {l}"
+                    (l - expect_flat).abs() < 1e-3,
+                    "{name} flat {l} vs {expect_flat}"
                 );
                 assert!(
                     (r - expect_mapped).abs() < 1e-3,

@@ -623,7 +623,10 @@ fn pipelines_are_compiled_once_per_feature_set_and_process() {
     let plan = GpuPlan::new(&scene, &ctx.fit(), &wgtrace::Tuning::default());
     let a = ctx.trace_pipeline(&plan.shader).unwrap();
     let b = ctx.trace_pipeline(&plan.shader).unwrap();
-    let full = ctx.trace_pipeline(&ShaderSpec::full()).unwrap();
+    let no_specialize = wgtrace::Tuning::parse("no-specialize").unwrap();
+    let full_plan = GpuPlan::new(&scene, &ctx.fit(), &no_specialize);
+    assert_eq!(full_plan.shader, ShaderSpec::full_for(plan.shader.features));
+    let full = ctx.trace_pipeline(&full_plan.shader).unwrap();
     assert!(Arc::ptr_eq(&a, &b));
     assert!(!Arc::ptr_eq(&a, &full));
     assert!(a.shader_bytes < full.shader_bytes && a.slots.len() < full.slots.len());

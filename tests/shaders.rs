@@ -543,7 +543,14 @@ fn uniform_record_arrays_have_the_fixed_lengths_and_bindings() {
         &DeviceFit::portable(),
         &Tuning::parse("no-specialize").unwrap(),
     );
-    assert_eq!(full.shader, ShaderSpec::full());
+    assert_eq!(full.shader, ShaderSpec::full_for(plan.shader.features));
+    // the full shader leaves out alpha and normal maps for a scene without them, and
+    // holds them for one with them
+    assert!(ShaderSpec::OPTIONAL_IN_FULL
+        .iter()
+        .all(|&f| !full.shader.features.contains(f) && ShaderSpec::full().features.contains(f)));
+    let all = ShaderSpec::full_for(ShaderSpec::full().features);
+    assert_eq!(all, ShaderSpec::full());
 }
 
 /// The plan follows the tuning: the sample group, the full shader, the records.

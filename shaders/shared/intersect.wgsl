@@ -691,7 +691,10 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
                     let t0 = shape_data[prim.data + 4u];
                     let t1 = shape_data[prim.data + 5u];
                     let t2 = shape_data[prim.data + 6u];
-                    s.tangent = vec4<f32>(w.x * t0.xyz + w.y * t1.xyz + w.z * t2.xyz, t0.w);
+                    // normals turned to ng's side turn the bitangent with them
+                    let nv = w.x * a0.xyz + w.y * a1.xyz + w.z * a2.xyz;
+                    let turned = (prim.flags & PRIM_FLAG_SHADING_NORMALS) != 0u && dot(nv, s.ng) < 0.0;
+                    s.tangent = vec4<f32>(w.x * t0.xyz + w.y * t1.xyz + w.z * t2.xyz, select(t0.w, -t0.w, turned));
                 }
 #endif
             }

@@ -606,7 +606,10 @@ pub fn surface_local(b: &Bindings, prim: &Primitive, ray: &Ray, cand: &Candidate
                     let (t0, t1) = (row(b, prim.data + 4), row(b, prim.data + 5));
                     let t2 = row(b, prim.data + 6);
                     let t = w.x * t0.truncate() + w.y * t1.truncate() + w.z * t2.truncate();
-                    s.tangent = t.extend(t0.w);
+                    // normals turned to ng's side turn the bitangent with them
+                    let nv = w.x * a0.truncate() + w.y * a1.truncate() + w.z * a2.truncate();
+                    let turned = prim.flags & PRIM_FLAG_SHADING_NORMALS != 0 && nv.dot(s.ng) < 0.0;
+                    s.tangent = t.extend(if turned { -t0.w } else { t0.w });
                 }
             }
         }

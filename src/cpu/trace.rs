@@ -127,10 +127,15 @@ pub fn direct_light(
             v: ls.uv.y,
         };
         let lh = surface_at(b, &to_light, &cand);
-        let le = emitted(
+        let mut le = emitted(
             &material_at(b, &b.materials[lh.material as usize], &lh),
             &lh,
         );
+        // a light point where the emitter is cut out or passed through emits nothing
+        // there, as a bounce ray finds it
+        if b.has_alpha && transparent_at(b, &lh, alpha_u(u_alpha, MAX_ALPHA_SKIPS)) {
+            le = Vec3::ZERO;
+        }
         if le == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -234,13 +239,13 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         }
         path.throughput /= survive;
     }
-    let mut cand = intersect_scene(b, &path.ray, FAR);
     let mut u_alpha = [0.0; 2];
+    let mut cand = intersect_scene(b, &path.ray, FAR);
     if b.has_alpha {
         // surfaces transparent where the ray meets them are passed through, as the
-        // shader does
+        // shader does; the last surface is kept whatever
         u_alpha = bounce_2d(b, pixel, sample, path.depth, DIM_ALPHA);
-        for k in 0..MAX_ALPHA_SKIPS {
+        for k in 0..MAX_ALPHA_SKIPS - 1 {
             if cand.prim == NO_HIT {
                 break;
             }

@@ -283,9 +283,26 @@ impl ShaderSpec {
         }
     }
 
-    /// The full shader (`--tune no-specialize`): every feature, storage buffers only.
+    /// Every feature, storage buffers only: what the shader files can hold at most.
     pub fn full() -> Self {
         Self::of(FeatureSet::all())
+    }
+
+    /// Features the full shader of `--tune no-specialize` holds only for a scene that
+    /// uses them: alpha adds two closest-hit searches (the shadow rays' `shadowed`,
+    /// which llvmpipe inlines at each call) to a shader that serves every other scene,
+    /// and llvmpipe's compile of it went from 153 s to 232 s with them.
+    pub const OPTIONAL_IN_FULL: [Feature; 2] = [Feature::Alpha, Feature::NormalMap];
+
+    /// The full shader for a scene with `scene` features (`--tune no-specialize`):
+    /// every feature but the optional ones the scene does not use; storage buffers
+    /// only. Every scene without them shares it.
+    pub fn full_for(scene: FeatureSet) -> Self {
+        let features = Feature::ALL
+            .into_iter()
+            .filter(|f| !Self::OPTIONAL_IN_FULL.contains(f) || scene.contains(*f))
+            .collect();
+        Self::of(features)
     }
 
     /// The preprocessor's defines: a `HAS_*` per feature, a `BAKED_*` per record array
@@ -405,7 +422,7 @@ impl GpuPlan {
         let mut shader = if tuning.specialize {
             ShaderSpec::of(scene_features(scene))
         } else {
-            ShaderSpec::full()
+            ShaderSpec::full_for(scene_features(scene))
         };
         // the full shader reads every array from a storage buffer
         if tuning.specialize {

@@ -583,7 +583,7 @@ pub fn flatten(
         .chain(gltfs().flat_map(|g| {
             g.textures
                 .iter()
-                .map(|t| (t.name.clone(), &t.desc, Some(&t.image)))
+                .map(|t| (t.name.clone(), &t.desc, Some(&*t.image)))
         }))
         .collect();
     let texture_names: Vec<String> = texture_list.iter().map(|t| t.0.clone()).collect();

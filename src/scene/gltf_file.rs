@@ -10,6 +10,7 @@
 
 use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::{Affine3A, Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::{DataType, Dimensions};
@@ -165,7 +166,7 @@ struct Loader<'a> {
     material_ids: HashMap<Option<usize>, usize>,
     texture_keys: Vec<TextureKey>,
     /// (image, sRGB) -> decoded image.
-    images: HashMap<(usize, bool), ImageData>,
+    images: HashMap<(usize, bool), Arc<ImageData>>,
     /// Total texels decoded.
     texels: u64,
 }
@@ -267,8 +268,9 @@ fn open(data: &[u8], dir: &Path) -> Result<(gltf::Document, Vec<Vec<u8>>, Vec<St
             buffers.push(data.0);
         }
         for view in doc.views() {
-            let len = buffers[view.buffer().index()].len() as u64;
-            let end = view.offset() as u64 + view.length() as u64;
+            let len = buffers[view.buffer().index()].len() as u128;
+            // u128: a byteOffset near 2^64 must not wrap past the check
+            let end = view.offset() as u128 + view.length() as u128;
             if end > len {
                 return Err(GltfError::new(
                     format!("bufferViews[{}]", view.index()),
@@ -554,10 +556,10 @@ impl<'a> Loader<'a> {
             None => {}
         }
         if let Some(s) = a.sparse() {
-            if s.count() > count {
+            if s.count() == 0 || s.count() > count {
                 return Err(GltfError::new(
                     at(".sparse.count"),
-                    format!("is {}, more than the accessor's {count}", s.count()),
+                    format!("is {}; it must be 1 to the accessor's {count}", s.count()),
                 ));
             }
             let index_size = match s.indices().index_type() {
@@ -598,15 +600,16 @@ impl<'a> Loader<'a> {
         stride: Option<usize>,
         key: &str,
     ) -> Result<()> {
-        let stride = stride.unwrap_or(size) as u64;
-        if stride < size as u64 {
+        let stride = stride.unwrap_or(size) as u128;
+        if stride < size as u128 {
             return Err(GltfError::new(
                 format!("bufferViews[{}].byteStride", view.index()),
                 format!("is {stride}, less than the {size}-byte elements read through it"),
             ));
         }
-        let end = offset as u64 + stride * (count as u64 - 1) + size as u64;
-        if end > view.length() as u64 {
+        // count >= 1 (checked by the callers); u128 never wraps here
+        let end = offset as u128 + stride * (count as u128 - 1) + size as u128;
+        if end > view.length() as u128 {
             return Err(GltfError::new(
                 key,
                 format!(
@@ -701,8 +704,11 @@ impl<'a> Loader<'a> {
         for (c, x) in emissive.iter().enumerate() {
             unit(&format!("emissiveFactor[{c}]"), *x)?;
         }
+        // an emissive texture times 0 (glTF's default emissiveFactor) emits nothing: no
+        // texture, so that the material is not taken for a light
         let emission = self.color(
-            m.emissive_texture(),
+            m.emissive_texture()
+                .filter(|_| emissive != [0.0; 3] && strength > 0.0),
             emissive.map(|c| c * strength),
             &key,
             "emissiveTexture",
@@ -884,6 +890,16 @@ impl<'a> Loader<'a> {
         let transform = t
             .as_ref()
             .map(|t| UvTransformDesc::from_v_down(t.offset(), t.rotation(), t.scale()));
+        if let Some(tr) = &t {
+            let [a, b] = tr.offset();
+            let [c, d] = tr.scale();
+            if ![a, b, c, d, tr.rotation()].iter().all(|x| x.is_finite()) {
+                return Err(GltfError::new(
+                    format!("{key}.extensions.KHR_texture_transform"),
+                    "must hold finite numbers",
+                ));
+            }
+        }
         let uv_set = t.and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
         self.texture_lookup(info.texture(), uv_set, transform, srgb, factor)
             .map_err(|e| GltfError::new(e.key, format!("{} (the image of {key})", e.message)))
@@ -956,6 +972,14 @@ impl<'a> Loader<'a> {
         }
         let source = tex.source();
         let image = self.image(&source, srgb)?;
+        if tex.sampler().wrap_t() != tex.sampler().wrap_s() {
+            self.out.warnings.push(format!(
+                "samplers[{}]: wrapT {:?} differs from wrapS {:?}; wgtrace wraps both as wrapS",
+                tex.sampler().index().unwrap_or(0),
+                tex.sampler().wrap_t(),
+                tex.sampler().wrap_s()
+            ));
+        }
         let wrap = match tex.sampler().wrap_s() {
             gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
             gltf::texture::WrappingMode::MirroredRepeat => WrapMode::Mirror,
@@ -987,7 +1011,7 @@ impl<'a> Loader<'a> {
     }
 
     /// glTF image `source` decoded (sRGB or linear), once per colour space.
-    fn image(&mut self, source: &gltf::Image, srgb: bool) -> Result<ImageData> {
+    fn image(&mut self, source: &gltf::Image, srgb: bool) -> Result<Arc<ImageData>> {
         if let Some(img) = self.images.get(&(source.index(), srgb)) {
             return Ok(img.clone());
         }
@@ -1022,6 +1046,7 @@ impl<'a> Loader<'a> {
                 ),
             ));
         }
+        let img = Arc::new(img);
         self.images.insert((source.index(), srgb), img.clone());
         Ok(img)
     }
@@ -1137,7 +1162,7 @@ impl<'a> Loader<'a> {
 }
 
 /// The uv sets a material's textures read (occlusion's apart: it is not used), in the
-/// order base colour, metallic-roughness, normal, emissive, specular colour.
+/// order base colour, metallic-roughness, emissive, specular colour, specular, normal.
 fn uv_sets(m: &gltf::Material) -> Vec<u32> {
     let set = |info: gltf::texture::Info| {
         info.texture_transform()
@@ -1150,6 +1175,7 @@ fn uv_sets(m: &gltf::Material) -> Vec<u32> {
         pbr.metallic_roughness_texture(),
         m.emissive_texture(),
         m.specular().and_then(|s| s.specular_color_texture()),
+        m.specular().and_then(|s| s.specular_texture()),
     ]
     .into_iter()
     .flatten()
@@ -1160,7 +1186,7 @@ fn uv_sets(m: &gltf::Material) -> Vec<u32> {
             .extension_value("KHR_texture_transform")
             .and_then(|e| e.get("texCoord"))
             .and_then(|c| c.as_u64());
-        sets.insert(sets.len().min(2), ext.map_or(n.tex_coord(), |c| c as u32));
+        sets.push(ext.map_or(n.tex_coord(), |c| c as u32));
     }
     sets
 }

@@ -4,6 +4,8 @@
 //! writes each instance's triangles under its own transform and appends the materials and
 //! textures after the scene file's own.
 
+use std::sync::Arc;
+
 use glam::{Affine3A, Vec3};
 
 use super::bvh::Aabb;
@@ -34,7 +36,9 @@ pub struct NamedCamera {
 pub struct ImportedTexture {
     pub name: String,
     pub desc: TextureDesc,
-    pub image: ImageData,
+    /// Shared by every texture of the file that looks the same image up (in the same
+    /// colour space): its texels are written once.
+    pub image: Arc<ImageData>,
 }
 
 /// What an imported file's scene brings. Texture and material names begin with the prefix
@@ -56,6 +60,16 @@ pub struct ImportedScene {
 }
 
 impl ImportedScene {
+    /// Texels of its images, each shared image counted once.
+    pub fn unique_texels(&self) -> u64 {
+        let mut seen = std::collections::HashSet::new();
+        self.textures
+            .iter()
+            .filter(|t| seen.insert(Arc::as_ptr(&t.image)))
+            .map(|t| t.image.texels.len() as u64)
+            .sum()
+    }
+
     /// Triangles over all instances: what the flattened scene holds.
     pub fn instanced_triangles(&self) -> u64 {
         self.instances

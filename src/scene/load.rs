@@ -13,8 +13,8 @@ use super::error::{self, Problem, SceneError};
 use super::flat::FlatScene;
 use super::flatten::{self, Build, SceneFiles};
 use super::format::{
-    BackgroundDesc, CameraDesc, ColorSpace, LightSampling, ObjectDesc, Projection, RenderDesc,
-    SamplerKind, SceneFile, TextureDesc,
+    BackgroundDesc, CameraDesc, ColorSpace, LightSampling, MaterialDesc, ObjectDesc, Projection,
+    RenderDesc, SamplerKind, SceneFile, TextureDesc,
 };
 use super::gltf_file::{self, GltfError};
 use super::imported::ImportedScene;
@@ -318,7 +318,7 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                         mesh::MAX_TRIANGLES as u64,
                         "mesh triangles",
                     )?;
-                    let n = g.textures.iter().map(|t| t.image.texels.len() as u64).sum();
+                    let n = g.unique_texels();
                     count_toward(&texels, n, textures::MAX_TEXELS, "image texels")?;
                     Ok(g)
                 },
@@ -334,14 +334,27 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
         .map(|(i, obj)| match obj.get_ref() {
             ObjectDesc::Mesh {
                 path,
-                material: Some(_),
+                material: Some(material),
                 ..
             } => read_relative(
                 (src, dir, path),
                 obj.span().start,
                 format!("objects[{i}].path"),
                 |p| {
-                    let m = mesh::load_mesh(p)?;
+                    let mut m = mesh::load_mesh(p)?;
+                    // a normal map needs tangents: MikkTSpace's, over the mesh's uvs
+                    let mapped = file.materials.get(material).is_some_and(|d| {
+                        matches!(
+                            d.get_ref(),
+                            MaterialDesc::Pbr {
+                                normal_map: Some(_),
+                                ..
+                            }
+                        )
+                    });
+                    if mapped {
+                        mesh::generate_tangents(&mut m);
+                    }
                     count_toward(
                         &triangles,
                         m.triangles.len() as u64,

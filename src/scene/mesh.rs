@@ -44,6 +44,45 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, String> {
     check(mesh)
 }
 
+/// An OBJ file's models and its .mtl's materials (or why they could not be read).
+pub type ObjFile = (
+    Vec<tobj::Model>,
+    Result<Vec<tobj::Material>, tobj::LoadError>,
+);
+
+/// An OBJ file and its .mtl through tobj. The .mtl is read here and its colour
+/// statements (`Ka`, `Kd`, `Ks`, `Ke`, `Tf`) written out to three numbers first: the
+/// format allows one (g = b = r), and tobj panics on fewer than three.
+pub fn read_obj(path: &Path, options: &tobj::LoadOptions) -> Result<ObjFile, String> {
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let mut reader = std::io::BufReader::new(file);
+    let result = tobj::load_obj_buf(&mut reader, options, |mtl| {
+        let text = std::fs::read(dir.join(mtl)).map_err(|_| tobj::LoadError::OpenFileFailed)?;
+        let text = String::from_utf8_lossy(&text);
+        let mut fixed = String::with_capacity(text.len());
+        for line in text.lines() {
+            let mut words = line.split_whitespace();
+            let colour = matches!(words.next(), Some("Ka" | "Kd" | "Ks" | "Ke" | "Tf"));
+            let values: Vec<&str> = words.collect();
+            match values.len() {
+                0 if colour => return Err(tobj::LoadError::MaterialParseError),
+                1 | 2 if colour => {
+                    let key = line.split_whitespace().next().unwrap_or("");
+                    let v = values[0];
+                    fixed.push_str(&format!("{key} {v} {v} {v}\n"));
+                }
+                _ => {
+                    fixed.push_str(line);
+                    fixed.push('\n');
+                }
+            }
+        }
+        tobj::load_mtl_buf(&mut fixed.as_bytes())
+    });
+    result.map_err(|e| e.to_string())
+}
+
 /// Whether `path` names a PLY file (`.ply`, any case).
 pub fn is_ply(path: &Path) -> bool {
     path.extension()
@@ -58,7 +97,7 @@ fn load_obj(path: &Path) -> Result<MeshData, String> {
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, _materials) = tobj::load_obj(path, &options).map_err(|e| e.to_string())?;
+    let (models, _materials) = read_obj(path, &options)?;
     let with_normals = models.iter().all(|m| !m.mesh.normals.is_empty());
     let with_uvs = models.iter().all(|m| !m.mesh.texcoords.is_empty());
     let mut mesh = MeshData::default();

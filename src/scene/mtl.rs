@@ -1,13 +1,16 @@
 //! OBJ files with their .mtl materials, read with `tobj`: the objects of the file as
 //! meshes, the materials mapped onto wgtrace's, their images read relative to the file.
 
+use std::collections::HashMap;
 use std::path::Path;
+use std::sync::Arc;
 
 use glam::{Affine3A, Vec2, Vec3};
 
 use super::format::{AlphaMode, ColorDesc, ColorSpace, MaterialDesc, TextureDesc, WrapMode};
 use super::imported::{ImportedScene, ImportedTexture, Instance};
-use super::mesh::{check, generate_tangents, MeshData, MAX_MESH_FILE_BYTES};
+use super::mesh::{check, generate_tangents, read_obj, MeshData, MAX_MESH_FILE_BYTES};
+use super::textures::{ImageData, MAX_TEXELS};
 
 /// An OBJ file with the materials of its .mtl, as an imported scene: one mesh per object
 /// of the file (each has one material), placed where the file puts it, and the materials
@@ -27,7 +30,7 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) = tobj::load_obj(path, &options).map_err(|e| e.to_string())?;
+    let (models, materials) = read_obj(path, &options)?;
     let materials = materials.map_err(|e| format!("its .mtl file: {e}"))?;
     if materials.is_empty() {
         return Err(
@@ -40,6 +43,8 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
         dir,
         prefix,
         out: Vec::new(),
+        images: HashMap::new(),
+        texels: 0,
     };
     for (i, m) in materials.iter().enumerate() {
         let desc = mtl_material(m, &mut textures, &mut out.warnings)
@@ -107,11 +112,13 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
     Ok(out)
 }
 
-/// The images a .mtl names, each read once per colour space and factor.
+/// The images a .mtl names, each read once per colour space, within the texel cap.
 struct MtlTextures<'a> {
     dir: &'a Path,
     prefix: &'a str,
     out: Vec<ImportedTexture>,
+    images: HashMap<(String, bool), Arc<ImageData>>,
+    texels: u64,
 }
 
 impl MtlTextures<'_> {
@@ -126,8 +133,23 @@ impl MtlTextures<'_> {
         let (file, bump) = map_statement(statement);
         let name = format!("{}{file}#{}", self.prefix, self.out.len());
         let full = self.dir.join(&file);
-        let image = super::textures::load_image(&full, srgb)
-            .map_err(|e| format!("{}: {e}", full.display()))?;
+        let image = match self.images.get(&(file.clone(), srgb)) {
+            Some(image) => image.clone(),
+            None => {
+                let image = super::textures::load_image(&full, srgb)
+                    .map_err(|e| format!("{}: {e}", full.display()))?;
+                self.texels += image.texels.len() as u64;
+                if self.texels > MAX_TEXELS {
+                    return Err(format!(
+                        "{}: brings the file's texels past the {MAX_TEXELS} accepted",
+                        full.display()
+                    ));
+                }
+                let image = Arc::new(image);
+                self.images.insert((file.clone(), srgb), image.clone());
+                image
+            }
+        };
         self.out.push(ImportedTexture {
             name: name.clone(),
             desc: TextureDesc::Image {

@@ -147,6 +147,9 @@ pub fn texture_records(
 ) -> (Vec<Texture>, Vec<[f32; 4]>) {
     let names: Vec<String> = textures.iter().map(|t| t.0.clone()).collect();
     let mut texels: Vec<[f32; 4]> = Vec::new();
+    // an image several textures look up (a glTF file's, with other factors or
+    // transforms) is written once
+    let mut written: std::collections::HashMap<*const ImageData, u32> = Default::default();
     let mut noise_offset = None;
     let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
     let records = textures
@@ -187,8 +190,11 @@ pub fn texture_records(
                 ..
             } => {
                 let image = image.expect("images are loaded before flattening");
-                let offset = texels.len() as u32;
-                texels.extend_from_slice(&image.texels);
+                let offset = *written.entry(image as *const ImageData).or_insert_with(|| {
+                    let offset = texels.len() as u32;
+                    texels.extend_from_slice(&image.texels);
+                    offset
+                });
                 let [row0, row1] =
                     transform.map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |t| t.rows());
                 Texture {

@@ -156,7 +156,22 @@ impl Validator<'_> {
         }
         if let Some(name) = &bg.texture {
             match file.textures.get(name).map(|t| t.get_ref()) {
-                Some(TextureDesc::Image { .. }) => {}
+                Some(TextureDesc::Image {
+                    factor, transform, ..
+                }) => {
+                    // the background's sampling distribution is built from the texels
+                    // as they are
+                    if *factor != [1.0; 3] || transform.is_some() {
+                        self.push(
+                            0,
+                            "background.texture",
+                            format!(
+                                "\"{name}\" has a factor or transform; a background image \
+                                 takes none (use strength and rotation)"
+                            ),
+                        );
+                    }
+                }
                 Some(_) => self.push(
                     0,
                     "background.texture",
