@@ -175,114 +175,111 @@ struct Loader<'a> {
 /// its buffers, each as long as it says and every buffer view within its buffer; with the
 /// warnings about extensions it uses that wgtrace ignores.
 fn open(data: &[u8], dir: &Path) -> Result<(gltf::Document, Vec<Vec<u8>>, Vec<String>)> {
-    {
-        check_glb_header(data)?;
-        let gltf = gltf::Gltf::from_slice_without_validation(data)
-            .map_err(|e| GltfError::new("", format!("is not glTF 2.0: {e}")))?;
-        let mut warnings = Vec::new();
-        let root = gltf.document.as_json();
-        for (i, ext) in root.extensions_required.iter().enumerate() {
-            if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
-                return Err(GltfError::new(
-                    format!("extensionsRequired[{i}]"),
-                    format!(
-                        "the file requires the extension {ext}, which wgtrace cannot honour \
-                         (it reads {})",
-                        SUPPORTED_EXTENSIONS.join(", ")
-                    ),
-                ));
-            }
+    check_glb_header(data)?;
+    let gltf = gltf::Gltf::from_slice_without_validation(data)
+        .map_err(|e| GltfError::new("", format!("is not glTF 2.0: {e}")))?;
+    let mut warnings = Vec::new();
+    let root = gltf.document.as_json();
+    for (i, ext) in root.extensions_required.iter().enumerate() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+            return Err(GltfError::new(
+                format!("extensionsRequired[{i}]"),
+                format!(
+                    "the file requires the extension {ext}, which wgtrace cannot honour \
+                     (it reads {})",
+                    SUPPORTED_EXTENSIONS.join(", ")
+                ),
+            ));
         }
-        for ext in &root.extensions_used {
-            if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
-                warnings.push(format!(
-                    "the file uses the extension {ext}, which wgtrace ignores"
-                ));
-            }
+    }
+    for ext in &root.extensions_used {
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+            warnings.push(format!(
+                "the file uses the extension {ext}, which wgtrace ignores"
+            ));
         }
-        // the crate's validation reads POSITION's accessor unchecked: check it first
-        for (mi, m) in root.meshes.iter().enumerate() {
-            for (pi, p) in m.primitives.iter().enumerate() {
-                let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
-                if let Some(a) = p.attributes.get(&position) {
-                    if a.value() >= root.accessors.len() {
-                        return Err(GltfError::new(
-                            format!("meshes[{mi}].primitives[{pi}].attributes.POSITION"),
-                            format!(
-                                "names accessors[{}], but the file has {} accessors",
-                                a.value(),
-                                root.accessors.len()
-                            ),
-                        ));
-                    }
+    }
+    // the crate's validation reads POSITION's accessor unchecked: check it first
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(a) = p.attributes.get(&position) {
+                if a.value() >= root.accessors.len() {
+                    return Err(GltfError::new(
+                        format!("meshes[{mi}].primitives[{pi}].attributes.POSITION"),
+                        format!(
+                            "names accessors[{}], but the file has {} accessors",
+                            a.value(),
+                            root.accessors.len()
+                        ),
+                    ));
                 }
             }
         }
-        // an image's source() unwraps these
-        for (i, img) in root.images.iter().enumerate() {
-            if img.buffer_view.is_some() && img.mime_type.is_none() {
-                return Err(GltfError::new(
-                    format!("images[{i}].mimeType"),
-                    "is missing (an image in a bufferView must give its mimeType)",
-                ));
-            }
-            if img.buffer_view.is_none() && img.uri.is_none() {
-                return Err(GltfError::new(
-                    format!("images[{i}]"),
-                    "has neither a uri nor a bufferView",
-                ));
-            }
-        }
-        let mut problems = Vec::new();
-        root.validate(root, gltf::json::Path::new, &mut |path, error| {
-            let path = path().to_string();
-            // required extensions are checked above against wgtrace's own list
-            if !path.starts_with("extensionsRequired") {
-                problems.push(GltfError::new(path, error.to_string()));
-            }
-        });
-        if let Some(p) = problems.into_iter().next() {
-            return Err(p);
-        }
-        let mut blob = gltf.blob;
-        let doc = gltf.document;
-        let mut buffers = Vec::new();
-        for buffer in doc.buffers() {
-            let key = format!("buffers[{}]", buffer.index());
-            if let gltf::buffer::Source::Uri(uri) = buffer.source() {
-                check_uri(uri, &format!("{key}.uri"))?;
-            }
-            let data =
-                gltf::buffer::Data::from_source_and_blob(buffer.source(), Some(dir), &mut blob)
-                    .map_err(|e| GltfError::new(key.clone(), source_error(e, &buffer.source())))?;
-            if data.len() < buffer.length() {
-                return Err(GltfError::new(
-                    format!("{key}.byteLength"),
-                    format!(
-                        "is {}, but the buffer holds {} bytes",
-                        buffer.length(),
-                        data.len()
-                    ),
-                ));
-            }
-            buffers.push(data.0);
-        }
-        for view in doc.views() {
-            let len = buffers[view.buffer().index()].len() as u128;
-            // u128: a byteOffset near 2^64 must not wrap past the check
-            let end = view.offset() as u128 + view.length() as u128;
-            if end > len {
-                return Err(GltfError::new(
-                    format!("bufferViews[{}]", view.index()),
-                    format!(
-                        "ends at byte {end}, past the end of buffers[{}] ({len} bytes)",
-                        view.buffer().index()
-                    ),
-                ));
-            }
-        }
-        Ok((doc, buffers, warnings))
     }
+    // an image's source() unwraps these
+    for (i, img) in root.images.iter().enumerate() {
+        if img.buffer_view.is_some() && img.mime_type.is_none() {
+            return Err(GltfError::new(
+                format!("images[{i}].mimeType"),
+                "is missing (an image in a bufferView must give its mimeType)",
+            ));
+        }
+        if img.buffer_view.is_none() && img.uri.is_none() {
+            return Err(GltfError::new(
+                format!("images[{i}]"),
+                "has neither a uri nor a bufferView",
+            ));
+        }
+    }
+    let mut problems = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path().to_string();
+        // required extensions are checked above against wgtrace's own list
+        if !path.starts_with("extensionsRequired") {
+            problems.push(GltfError::new(path, error.to_string()));
+        }
+    });
+    if let Some(p) = problems.into_iter().next() {
+        return Err(p);
+    }
+    let mut blob = gltf.blob;
+    let doc = gltf.document;
+    let mut buffers = Vec::new();
+    for buffer in doc.buffers() {
+        let key = format!("buffers[{}]", buffer.index());
+        if let gltf::buffer::Source::Uri(uri) = buffer.source() {
+            check_uri(uri, &format!("{key}.uri"))?;
+        }
+        let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), Some(dir), &mut blob)
+            .map_err(|e| GltfError::new(key.clone(), source_error(e, &buffer.source())))?;
+        if data.len() < buffer.length() {
+            return Err(GltfError::new(
+                format!("{key}.byteLength"),
+                format!(
+                    "is {}, but the buffer holds {} bytes",
+                    buffer.length(),
+                    data.len()
+                ),
+            ));
+        }
+        buffers.push(data.0);
+    }
+    for view in doc.views() {
+        let len = buffers[view.buffer().index()].len() as u128;
+        // u128: a byteOffset near 2^64 must not wrap past the check
+        let end = view.offset() as u128 + view.length() as u128;
+        if end > len {
+            return Err(GltfError::new(
+                format!("bufferViews[{}]", view.index()),
+                format!(
+                    "ends at byte {end}, past the end of buffers[{}] ({len} bytes)",
+                    view.buffer().index()
+                ),
+            ));
+        }
+    }
+    Ok((doc, buffers, warnings))
 }
 
 impl<'a> Loader<'a> {

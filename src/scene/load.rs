@@ -78,10 +78,7 @@ pub fn load_scene_str(
     overrides: &Overrides,
     build: Build,
 ) -> Result<FlatScene, SceneError> {
-    let invalid = |problems| SceneError::Invalid {
-        path: path.to_path_buf(),
-        problems,
-    };
+    let invalid = invalid_in(path);
     let mut file: SceneFile = toml::from_str(src).map_err(|e| {
         let offset = e.span().map_or(0, |s| s.start);
         let message = e.message().trim();
@@ -141,6 +138,14 @@ pub fn load_scene_str(
     Ok(scene)
 }
 
+/// The error of a scene at `path` with `problems`.
+fn invalid_in(path: &Path) -> impl Fn(Vec<Problem>) -> SceneError + Copy + '_ {
+    move |problems| SceneError::Invalid {
+        path: path.to_path_buf(),
+        problems,
+    }
+}
+
 /// A glTF file rendered on its own: its first scene, under its first camera (or the one
 /// `overrides.camera` names; without any, one that frames the scene), the render
 /// settings' defaults and overrides, and a uniform background of radiance 1 when it has
@@ -150,10 +155,7 @@ fn load_gltf_scene(
     overrides: &Overrides,
     build: Build,
 ) -> Result<FlatScene, SceneError> {
-    let invalid = |problems| SceneError::Invalid {
-        path: path.to_path_buf(),
-        problems,
-    };
+    let invalid = invalid_in(path);
     let gltf_problem = |e: GltfError| Problem::at("", 0, e.key, e.message);
     let g = gltf_file::load_gltf(path, "").map_err(|e| invalid(vec![gltf_problem(e)]))?;
     let mut warnings = g.warnings.clone();
@@ -168,16 +170,8 @@ fn load_gltf_scene(
     }
     let mut file = SceneFile {
         render: RenderDesc::default(),
-        camera: CameraDesc {
-            look_from: [0.0, 0.0, 1.0],
-            look_at: [0.0; 3],
-            up: [0.0, 1.0, 0.0],
-            vfov: 40.0,
-            aperture: 0.0,
-            focus_distance: None,
-            projection: Projection::Perspective,
-            height: None,
-        },
+        // replaced below, once the overrides give the image's aspect
+        camera: framing_camera(bounds.lo, bounds.hi, 1.0),
         background: BackgroundDesc::default(),
         textures: Default::default(),
         materials: Default::default(),

@@ -46,12 +46,11 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
         images: HashMap::new(),
         texels: 0,
     };
-    for (i, m) in materials.iter().enumerate() {
+    for m in &materials {
         let desc = mtl_material(m, &mut textures, &mut out.warnings)
             .map_err(|e| format!("material \"{}\": {e}", m.name))?;
         out.materials
             .push((format!("{prefix}{} (mtl)", m.name), desc));
-        debug_assert_eq!(out.materials.len(), i + 1);
     }
     out.textures = textures.out;
     let mut default_material = None;
