@@ -26,10 +26,13 @@ fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
     // code for the rest of the shader 1.0x to 3.2x slower (docs/specialization.md)
     let d = sample_disk(lens) * params.cam_origin.w;
     let lens_offset = right * d.x + up * d.y;
-    if (params.orthographic != 0u) {
-        return Ray(params.cam_origin.xyz + target_offset - forward * params.cam_forward.w, forward);
-    }
-    return Ray(params.cam_origin.xyz + lens_offset, normalize(target_offset - lens_offset));
+    // an orthographic camera's rays leave the view rectangle along forward; chosen by
+    // select, not a branch: an early return here made llvmpipe's code for the Cornell box
+    // at 64 x 64 1.7x slower (0.616 s against 0.36 s for 256 spp)
+    let ortho = params.orthographic != 0u;
+    let origin = select(params.cam_origin.xyz + lens_offset, params.cam_origin.xyz + target_offset - forward * params.cam_forward.w, ortho);
+    let dir = select(normalize(target_offset - lens_offset), forward, ortho);
+    return Ray(origin, dir);
 }
 
 // A ray leaving a hit in direction dir, from just off the surface on dir's side.
