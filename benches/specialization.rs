@@ -297,7 +297,7 @@ fn report(rows: &[Row], full_cold: &Measure, first: &Path, device: &str, disk: b
          image: pipeline, upload, one sample per pixel, readback. Samples/s: the passes after \
          the first, for at least {:.1} s, one submission per pass. One run on one shared \
          machine: compare ratios within a table.\n",
-        Feature::ALL.len(),
+        Feature::all().count(),
         MIN_TIME.as_secs_f64()
     );
     let _ = writeln!(

@@ -475,7 +475,7 @@ fn features(path: &Path) -> anyhow::Result<()> {
     let plan = GpuPlan::new(&scene, &DeviceFit::portable(), &Tuning::default());
     let spec = &plan.shader;
     println!("{}: features", path.display());
-    for f in Feature::ALL {
+    for f in Feature::all() {
         let on = if spec.features.contains(f) {
             "yes"
         } else {

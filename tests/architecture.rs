@@ -404,3 +404,145 @@ fn every_test_in_the_repository_runs_under_cargo_test() {
         "tests that `cargo test` never runs: {missed:?}"
     );
 }
+
+/// The material record's places have meanings only in the material layer: outside the
+/// views (`src/scene/materials/`, written into WGSL by `gpu::codegen`), the record's own
+/// file and its rules (`material_at` and the alpha of `transparent_at`, in
+/// `shaders/shared/materials.wgsl` and its twin `src/cpu/materials/mod.rs`), no code of
+/// the repository, tests included, reads or writes the places that mean one thing for one
+/// material and another for the next. A record built by hand, or a `scalars.x` read as a
+/// roughness, fails here: use the material's `Params` or `common::material`.
+#[test]
+fn material_places_are_named_only_by_the_material_layer() {
+    const PLACES: [&str; 8] = [
+        "scalars",
+        "color2",
+        "tex_color",
+        "tex_color2",
+        "tex_data0",
+        "tex_data1",
+        "tex_normal",
+        "tex_emission",
+    ];
+    const LAYER: [&str; 6] = [
+        "src/scene/records.rs",
+        "src/scene/materials/",
+        "src/cpu/materials/mod.rs",
+        "shaders/shared/materials.wgsl",
+        "shaders/shared/types.wgsl",
+        "tests/architecture.rs",
+    ];
+    let mut files = Vec::new();
+    fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(&p, out);
+            } else if p.extension().is_some_and(|x| x == "rs" || x == "wgsl") {
+                out.push(p);
+            }
+        }
+    }
+    for dir in ["src", "shaders", "tests", "benches", "examples"] {
+        walk(&root().join(dir), &mut files);
+    }
+    let mut found = Vec::new();
+    let mut scanned = 0;
+    for file in &files {
+        let rel = file
+            .strip_prefix(root())
+            .unwrap()
+            .to_string_lossy()
+            .replace('\\', "/");
+        if LAYER.iter().any(|l| rel.starts_with(l)) {
+            continue;
+        }
+        scanned += 1;
+        let code = code_only(&std::fs::read_to_string(file).unwrap());
+        for (i, line) in code.lines().enumerate() {
+            // a field read or written (`m.scalars`), or set in a struct literal
+            // (`scalars: [...]`, not a `let scalars: ...` of its own)
+            let named = PLACES.iter().find(|place| {
+                line.match_indices(*place).any(|(at, _)| {
+                    let before = line[..at].trim_end();
+                    let after = line[at + place.len()..].trim_start();
+                    let whole = !line[..at]
+                        .ends_with(|c: char| c.is_ascii_alphanumeric() || c == '_')
+                        && !after.starts_with(|c: char| c.is_ascii_alphanumeric() || c == '_');
+                    let field = before.ends_with('.')
+                        || (after.starts_with(':')
+                            && !after.starts_with("::")
+                            && !before.ends_with("let")
+                            && !before.ends_with("mut"));
+                    whole && field
+                })
+            });
+            if let Some(place) = named {
+                found.push(format!("{rel}:{}: {place}: {}", i + 1, line.trim()));
+            }
+        }
+    }
+    assert!(scanned > 50, "scanned {scanned} files");
+    assert!(
+        found.is_empty(),
+        "material places named outside the material layer:\n{}",
+        found.join("\n")
+    );
+}
+
+/// Each material's shading has one shape in both languages: `shaders/materials/NAME.wgsl`
+/// defines only functions named `NAME_...`, and exactly the dispatched ones its type has
+/// (`NAME_scatter` with a lobe, `NAME_eval` and `NAME_pdf` with a density,
+/// `NAME_textures` with textures of its own); its twin `src/cpu/materials/NAME.rs`
+/// implements those (`fn scatter`, ...) and every helper of the same name
+/// (`NAME_spec_prob` is `fn spec_prob`).
+#[test]
+fn every_material_has_its_wgsl_and_its_cpu_twin_in_the_same_shape() {
+    use wgtrace::scene::materials::MaterialKind;
+    let fns = |src: &str| -> Vec<String> {
+        code_only(src)
+            .split("fn ")
+            .skip(1)
+            .filter_map(|rest| {
+                let name: String = rest
+                    .chars()
+                    .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+                    .collect();
+                (!name.is_empty()).then_some(name)
+            })
+            .collect()
+    };
+    for &kind in MaterialKind::ALL {
+        let name = kind.name();
+        let wgsl = std::fs::read_to_string(root().join(format!("shaders/materials/{name}.wgsl")))
+            .unwrap_or_else(|e| panic!("shaders/materials/{name}.wgsl: {e}"));
+        let cpu = std::fs::read_to_string(root().join(format!("src/cpu/materials/{name}.rs")))
+            .unwrap_or_else(|e| panic!("src/cpu/materials/{name}.rs: {e}"));
+        let (gpu_fns, cpu_fns) = (fns(&wgsl), fns(&cpu));
+        let lobes = kind.lobes();
+        let dispatched = [
+            ("scatter", lobes.any()),
+            ("eval", lobes.density),
+            ("pdf", lobes.density),
+            ("textures", kind.view().own_textures()),
+        ];
+        for f in &gpu_fns {
+            let own = f
+                .strip_prefix(&format!("{name}_"))
+                .unwrap_or_else(|| panic!("{name}.wgsl: fn {f} is not named {name}_..."));
+            assert!(
+                cpu_fns.iter().any(|c| c == own),
+                "{name}: fn {f} has no twin fn {own} in src/cpu/materials/{name}.rs"
+            );
+        }
+        for (f, has) in dispatched {
+            let defined = gpu_fns.contains(&format!("{name}_{f}"));
+            assert_eq!(
+                defined,
+                has,
+                "{name}.wgsl: fn {name}_{f} {} by its type's lobes and view",
+                if has { "is needed" } else { "is never called" }
+            );
+        }
+    }
+}

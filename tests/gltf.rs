@@ -12,7 +12,9 @@ use std::path::{Path, PathBuf};
 use glam::Vec3;
 use gltf_writer::{light_ref, quad, GltfWriter};
 use serde_json::json;
-use wgtrace::scene::records::{self, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT, MAT_PBR};
+use wgtrace::scene::materials::common::Surface;
+use wgtrace::scene::materials::{dielectric, pbr, MaterialKind};
+use wgtrace::scene::records::{self, LIGHT_DIRECTIONAL, LIGHT_POINT, LIGHT_SPOT};
 use wgtrace::{FlatScene, Overrides};
 
 fn load(path: &Path) -> FlatScene {
@@ -80,9 +82,13 @@ fn gltf_embedded_external_and_glb_give_the_same_records() {
     // the quad's two triangles, one pbr material: alpha = roughness^2, metallic, ior 1.5
     assert_eq!(a.primitives.len(), 2);
     let m = a.materials[0];
-    assert_eq!(m.tag, MAT_PBR);
-    assert_eq!(&m.albedo[..3], &[0.8, 0.4, 0.2]);
-    assert_eq!(m.params, [0.25, 1.5, 0.25, 1.0]);
+    assert_eq!(m.tag, MaterialKind::Pbr.tag());
+    let p = pbr::Params::read(&m);
+    assert_eq!(p.base_color, Vec3::new(0.8, 0.4, 0.2));
+    assert_eq!(
+        (p.alpha, p.ior, p.metallic, p.specular),
+        (0.25, 1.5, 0.25, 1.0)
+    );
     // the camera of node "front": at z = 3, looking down -z, yfov 0.5 rad
     assert_eq!(a.camera.origin, Vec3::new(0.0, 0.0, 3.0));
     assert!((a.camera.forward - Vec3::NEG_Z).length() < 1e-6);
@@ -305,23 +311,30 @@ fn material_extensions_map_onto_pbr_and_dielectric() {
     w.scene(&[n0, n1]);
     let s = load(&w.to_gltf_external(&dir("ext"), "ext").unwrap());
     let (m, g) = (s.materials[0], s.materials[1]);
-    assert_eq!(m.tag, MAT_PBR);
-    assert_eq!(&m.emission[..3], &[4.0, 2.0, 0.0]);
-    assert_eq!(m.params, [1.0, 1.8, 0.0, 0.5]);
-    assert_eq!(&m.extra[..3], &[1.0, 0.5, 0.25]);
+    assert_eq!(m.tag, MaterialKind::Pbr.tag());
+    let (p, surface) = (pbr::Params::read(&m), Surface::read(&m));
+    assert_eq!(surface.emission, Vec3::new(4.0, 2.0, 0.0));
+    assert_eq!(
+        (p.alpha, p.ior, p.metallic, p.specular),
+        (1.0, 1.8, 0.0, 0.5)
+    );
+    assert_eq!(p.specular_color, Vec3::new(1.0, 0.5, 0.25));
     assert_eq!(
         m.flags,
-        records::MAT_FLAG_TWO_SIDED | records::MAT_FLAG_ALPHA_MASK
+        records::MAT_FLAG_TWO_SIDED | records::MAT_FLAG_ALPHA_MASK | records::MAT_FLAG_NEE
     );
-    assert_eq!((m.albedo[3], m.emission[3]), (0.5, 0.25));
-    assert_eq!(g.tag, records::MAT_DIELECTRIC);
-    assert_eq!(g.params[0], 1.33);
-    assert_eq!(&g.albedo[..3], &[0.9, 1.0, 0.9]);
+    assert_eq!((surface.opacity, surface.alpha_cutoff), (0.5, 0.25));
+    assert_eq!(g.tag, MaterialKind::Dielectric.tag());
+    let glass = dielectric::Params::read(&g);
+    assert_eq!(glass.ior, 1.33);
+    assert_eq!(glass.tint, Vec3::new(0.9, 1.0, 0.9));
     // sigma_a = -ln(colour) / distance
-    let want = [0.5f32.ln() / -2.0, 0.0, 0.25f32.ln() / -2.0];
-    for (got, want) in g.extra.iter().zip(want) {
-        assert!((got - want).abs() < 1e-6, "{:?}", g.extra);
-    }
+    let want = Vec3::new(0.5f32.ln() / -2.0, 0.0, 0.25f32.ln() / -2.0);
+    assert!(
+        (glass.absorption - want).abs().max_element() < 1e-6,
+        "{}",
+        glass.absorption
+    );
     // it emits: no background is added
     assert_eq!(s.background, [0.0; 3]);
 }
@@ -351,17 +364,21 @@ fn textures_keep_their_colour_space_factor_and_transform() {
         2,
         "base colour (sRGB); metallic-roughness and normal (linear, one look-up)"
     );
-    let base = s.textures[mat.tex_albedo as usize];
+    let (p, surface) = (pbr::Params::read(&mat), Surface::read(&mat));
+    let base = s.textures[p.base_color_texture as usize];
     assert_eq!(&base.color0[..3], &[0.5, 1.0, 1.0]);
     // glTF's u' = 2u + 0.5; v' = v (v down) -> wgtrace's v' = 1 - (1 - v) = v
     assert_eq!(&base.color1[..3], &[2.0, 0.0, 0.5]);
     assert_eq!(&base.params[..3], &[0.0, 1.0, 0.0]);
     let texel = |t: u32, i: usize| s.texels[s.textures[t as usize].offset as usize + i];
     // 128 / 255: decoded from sRGB for the colour, taken as it is for the data
-    assert!((texel(mat.tex_albedo, 0)[1] - 0.2158605).abs() < 1e-5);
-    assert!((texel(mat.tex_params, 0)[1] - 128.0 / 255.0).abs() < 1e-6);
-    assert_eq!(mat.tex_normal, mat.tex_params, "the same linear look-up");
-    assert_eq!(mat.extra[3], 0.5, "normal scale");
+    assert!((texel(p.base_color_texture, 0)[1] - 0.2158605).abs() < 1e-5);
+    assert!((texel(p.metallic_roughness_texture, 0)[1] - 128.0 / 255.0).abs() < 1e-6);
+    assert_eq!(
+        surface.normal_texture, p.metallic_roughness_texture,
+        "the same linear look-up"
+    );
+    assert_eq!(surface.normal_scale, 0.5, "normal scale");
     // a normal-mapped mesh without tangents gets MikkTSpace's: +x along u on this quad
     let p = s.primitives[0];
     assert_ne!(p.flags & records::PRIM_FLAG_TANGENTS, 0);
@@ -942,7 +959,10 @@ fn textures_on_a_second_uv_set_and_the_specular_texture_are_read() {
         s.warnings
     );
     let mat = s.materials[0];
-    assert_ne!(mat.tex_specular, records::NO_TEXTURE);
+    assert_ne!(
+        pbr::Params::read(&mat).specular_texture,
+        records::NO_TEXTURE
+    );
     // on the CPU: specular 0.5 x alpha 64/255 at the hit
     let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_tile()));
     let hit = wgtrace::cpu::types::Hit {
@@ -955,10 +975,6 @@ fn textures_on_a_second_uv_set_and_the_specular_texture_are_read() {
         err: 0.0,
         tangent: glam::Vec4::ZERO,
     };
-    let at = wgtrace::cpu::textures::material_at(&b, &mat, &hit);
-    assert!(
-        (at.params[3] - 0.5 * 64.0 / 255.0).abs() < 1e-6,
-        "{:?}",
-        at.params
-    );
+    let at = pbr::Params::read(&wgtrace::cpu::materials::material_at(&b, &mat, &hit));
+    assert!((at.specular - 0.5 * 64.0 / 255.0).abs() < 1e-6, "{:?}", at);
 }

@@ -1,21 +1,22 @@
-//! Materials on the CPU reference, against physics: mirror reflection, Snell's law, Fresnel's and Schlick's
-//! Fresnel, total internal reflection, absorption, and fuzz that never scatters under the
-//! surface. (tests/gpu.rs renders white furnaces of every material on both backends.)
+//! Materials on the CPU reference. One table ([`common::MATERIALS`]: each material as a
+//! scene file writes it, packed by the renderer's own code) drives the harnesses every
+//! material passes, as pbrt-v4's bsdfs_test.cpp does: the white furnace (never above 1,
+//! exactly 1 where the table says nothing is absorbed), the sampler against its pdf
+//! (chi-square, and the pdf's integral), the sampler's weight and pdf against `eval` and
+//! `pdf`, reciprocity, and no density for a delta. A new material adds rows there. Then
+//! the closed forms of each type: mirror, Snell, Fresnel's and Schlick's Fresnel, total
+//! internal reflection, Beer-Lambert, the microfacet's mirror limit and sphere integral,
+//! pbr's Lambertian limit. (tests/kernel.rs runs the same table on the GPU against these
+//! functions; tests/gpu.rs renders white furnaces of every material on both backends.)
 
+mod common;
+
+use common::{material, TestMaterial, MATERIALS};
 use glam::{Vec2, Vec3};
-use wgtrace::cpu::materials::{fresnel_dielectric, scatter, schlick};
+use wgtrace::cpu::bsdf::{fresnel_dielectric, ggx_d, schlick, smith_lambda};
+use wgtrace::cpu::materials::{bsdf_eval, bsdf_pdf, material_eval, scatter};
 use wgtrace::cpu::types::{Hit, Ray};
-use wgtrace::scene::records::{Material, MAT_DIELECTRIC, MAT_METAL};
-
-fn material(tag: u32, albedo: f32, param: f32, absorption: f32) -> Material {
-    Material {
-        tag,
-        albedo: [albedo, albedo, albedo, 0.0],
-        params: [param, 0.0, 0.0, 0.0],
-        extra: [absorption; 4],
-        ..Default::default()
-    }
-}
+use wgtrace::scene::records::{Material, MAT_FLAG_DELTA, MAT_FLAG_NEE};
 
 /// A hit on the plane z = 0 (front side +Z) at the origin, for a ray of direction d that
 /// started at `origin`.
@@ -37,10 +38,290 @@ fn hit_at_origin(d: Vec3, origin: Vec3) -> (Ray, Hit) {
     (ray, hit)
 }
 
+/// The outgoing (view) direction at `theta` degrees from the normal +Z, in the xz-plane, and
+/// the ray and hit that see the surface from it.
+fn view(theta: f32) -> (Vec3, Ray, Hit) {
+    let t = theta.to_radians();
+    let wo = Vec3::new(t.sin(), 0.0, t.cos());
+    let (ray, hit) = hit_at_origin(-wo, wo);
+    (wo, ray, hit)
+}
+
 /// u values covering [0, 1)^2.
 fn grid() -> impl Iterator<Item = [f32; 2]> {
     (0..32).flat_map(|i| (0..32).map(move |j| [(i as f32 + 0.5) / 32.0, (j as f32 + 0.5) / 32.0]))
 }
+
+/// View angles every harness looks from (degrees from the normal).
+const VIEWS: [f32; 5] = [0.0, 30.0, 60.0, 80.0, 89.0];
+
+/// Whether the material's record says it has a lobe with a density, and a delta one.
+fn lobes(m: &Material) -> (bool, bool) {
+    (m.flags & MAT_FLAG_NEE != 0, m.flags & MAT_FLAG_DELTA != 0)
+}
+
+// ------------------------------------------------------------- the table's harnesses
+
+/// The red channel's directional albedo of `m` seen from `theta` degrees: the mean of
+/// 40,000 sampler weights (absorbed ones 0) and its standard error; every weight must be
+/// finite and not negative.
+fn directional_albedo(m: &Material, theta: f32, seed: u32) -> (f64, f64) {
+    let (_, ray, hit) = view(theta);
+    let mut rng = seed;
+    let n = 40_000;
+    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+        let s = scatter(m, &ray, &hit, u);
+        let w = if s.ok { s.weight.x as f64 } else { 0.0 };
+        assert!(w.is_finite() && w >= 0.0, "{w}");
+        sum += w;
+        sum2 += w * w;
+    }
+    let mean = sum / n as f64;
+    (
+        mean,
+        ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
+    )
+}
+
+/// The white furnace, every material of the table from every view: the directional
+/// albedo never above 1 (to 4 standard errors); where the table says the material loses
+/// nothing there, every sample weighs exactly 1.
+#[test]
+fn every_material_stays_within_the_white_furnace() {
+    for t in MATERIALS {
+        let m = material(t.keys);
+        let mut worst = 0.0f64;
+        for theta in VIEWS {
+            let (mean, sigma) = directional_albedo(&m, theta, 17);
+            assert!(
+                mean <= 1.0 + 4.0 * sigma + 1e-6,
+                "{}, {theta} deg: albedo {mean} +- {sigma}",
+                t.name
+            );
+            worst = worst.max(mean);
+            if t.lossless {
+                let (_, ray, hit) = view(theta);
+                for u in grid() {
+                    let s = scatter(&m, &ray, &hit, u);
+                    assert!(s.ok, "{}, {theta} deg: absorbed", t.name);
+                    assert!(
+                        (s.weight - Vec3::ONE).abs().max_element() < 1e-5,
+                        "{}, {theta} deg: weight {}",
+                        t.name,
+                        s.weight
+                    );
+                }
+            }
+        }
+        eprintln!("{}: largest directional albedo {worst:.4}", t.name);
+    }
+}
+
+/// Chi-square test of the directions `m`'s sampler draws, seen from `theta` degrees,
+/// against its pdf (`bsdf_pdf`), as pbrt-v4 and Mitsuba 3 test their BSDFs: the upper
+/// hemisphere in 20 (cos theta) x 40 (phi) cells, expected counts by integrating the pdf
+/// over each cell, plus a cell for the directions the sampler absorbs (under the
+/// surface); cells expecting fewer than 5 are pooled. Returns the p-value's bound: the
+/// statistic against its critical value at significance 1e-3.
+fn assert_sampling_matches_pdf(m: &Material, theta: f32, label: &str) {
+    const N: usize = 200_000;
+    const NT: usize = 20;
+    const NP: usize = 40;
+    const SUB: usize = 16;
+    let (_, ray, hit) = view(theta);
+    let cell_of = |d: Vec3| {
+        let t = ((d.z * NT as f32) as usize).min(NT - 1);
+        let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
+        let p = ((phi / (2.0 * std::f32::consts::PI) * NP as f32) as usize).min(NP - 1);
+        t * NP + p
+    };
+    let mut observed = vec![0f64; NT * NP + 1];
+    let mut rng = 99u32;
+    for _ in 0..N {
+        let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+        let s = scatter(m, &ray, &hit, u);
+        let k = if s.ok { cell_of(s.dir) } else { NT * NP };
+        observed[k] += 1.0;
+    }
+    // expected: the midpoint rule on SUB x SUB points per cell, in theta and phi (d omega
+    // = sin theta d theta d phi), so that a lobe peaked at the pole (a near-mirror seen
+    // head-on) is sampled where it is, not only at the cell's cosines
+    let mut expected = vec![0f64; NT * NP + 1];
+    let dp = 2.0 * std::f64::consts::PI / NP as f64;
+    for t in 0..NT {
+        // the cell's cosines run from t / NT to (t + 1) / NT
+        let theta_hi = (t as f64 / NT as f64).acos();
+        let theta_lo = ((t + 1) as f64 / NT as f64).acos();
+        let dt = (theta_hi - theta_lo) / SUB as f64;
+        for p in 0..NP {
+            let mut integral = 0.0f64;
+            for i in 0..SUB {
+                let theta = theta_lo + (i as f64 + 0.5) * dt;
+                let (s, c) = theta.sin_cos();
+                for j in 0..SUB {
+                    let phi = (p as f64 + (j as f64 + 0.5) / SUB as f64) * dp;
+                    let wi = Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
+                    integral += bsdf_pdf(m, &ray, &hit, wi) as f64 * s * dt;
+                }
+            }
+            expected[t * NP + p] = integral * dp / SUB as f64 * N as f64;
+        }
+    }
+    let upper: f64 = expected[..NT * NP].iter().sum::<f64>() / N as f64;
+    assert!(
+        upper <= 1.0 + 2e-3,
+        "{label}, {theta} deg: the pdf integrates to {upper} > 1"
+    );
+    expected[NT * NP] = (1.0 - upper).max(0.0) * N as f64;
+    // pool the cells expecting fewer than 5
+    let (mut chi2, mut cells, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
+    for (e, o) in expected.iter().zip(&observed) {
+        if *e < 5.0 {
+            pool_e += e;
+            pool_o += o;
+        } else {
+            chi2 += (o - e) * (o - e) / e;
+            cells += 1;
+        }
+    }
+    if pool_e >= 5.0 {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        cells += 1;
+    } else {
+        assert!(
+            pool_o <= 5.0 + 4.0 * pool_e.sqrt() + 5.0,
+            "samples where the pdf is ~0: {pool_o}"
+        );
+    }
+    // critical value at significance 1e-3 (Wilson-Hilferty)
+    let k = (cells - 1) as f64;
+    let z = 3.09;
+    let critical = k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3);
+    assert!(
+        chi2 < critical,
+        "{label}, {theta} deg: chi2 {chi2:.1} over {cells} cells, critical {critical:.1}"
+    );
+    eprintln!("{label}, {theta} deg: chi2 {chi2:.1} / critical {critical:.1} ({cells} cells), pdf integral {upper:.4}");
+}
+
+/// Every material whose sampler draws only from lobes with a density: its directions
+/// against its pdf (chi-square), from every view but grazing.
+#[test]
+fn every_sampler_matches_its_pdf() {
+    let mut tested = 0;
+    for t in MATERIALS {
+        let m = material(t.keys);
+        if !t.chi2 {
+            continue;
+        }
+        assert_eq!(
+            lobes(&m),
+            (true, false),
+            "{}: chi-square needs a density only",
+            t.name
+        );
+        for theta in [0.0, 40.0, 75.0] {
+            assert_sampling_matches_pdf(&m, theta, t.name);
+        }
+        tested += 1;
+    }
+    assert!(
+        tested >= 8,
+        "the table has too few sampled materials: {tested}"
+    );
+}
+
+/// The weight and pdf a sampled direction comes with are `eval / pdf` and `pdf` of that
+/// direction, for every material with a density (its non-delta samples); a material
+/// without one weighs every direction 0.
+#[test]
+fn every_sample_agrees_with_eval_and_pdf() {
+    for t in MATERIALS {
+        let m = material(t.keys);
+        let (density, _) = lobes(&m);
+        for theta in VIEWS {
+            let (_, ray, hit) = view(theta);
+            for u in grid() {
+                let s = scatter(&m, &ray, &hit, u);
+                let f = bsdf_eval(&m, &ray, &hit, s.dir);
+                let pdf = bsdf_pdf(&m, &ray, &hit, s.dir);
+                if !density {
+                    assert_eq!(
+                        (f, pdf),
+                        (Vec3::ZERO, 0.0),
+                        "{}: a delta has no density",
+                        t.name
+                    );
+                    continue;
+                }
+                if !s.ok || s.delta {
+                    continue;
+                }
+                let rel = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b.abs().max(1e-3);
+                assert!(
+                    rel(s.pdf, pdf),
+                    "{}, {theta} deg: pdf {} vs {pdf}",
+                    t.name,
+                    s.pdf
+                );
+                let w = f / pdf;
+                assert!(
+                    (0..3).all(|c| rel(s.weight[c], w[c])),
+                    "{}, {theta} deg: weight {} vs eval / pdf {w}",
+                    t.name,
+                    s.weight
+                );
+            }
+        }
+    }
+}
+
+/// f = eval / cos_i is symmetric in its two directions, for every material with a
+/// density.
+#[test]
+fn every_bsdf_is_reciprocal() {
+    let mut rng = 5u32;
+    for t in MATERIALS {
+        let m = material(t.keys);
+        if !lobes(&m).0 {
+            continue;
+        }
+        for _ in 0..2000 {
+            let (a, b) = (common::random_unit(&mut rng), common::random_unit(&mut rng));
+            let (wo, wi) = (
+                Vec3::new(a.x, a.y, a.z.abs()),
+                Vec3::new(b.x, b.y, b.z.abs()),
+            );
+            let f1 = material_eval(&m, Vec3::Z, wo, wi) / wi.z;
+            let f2 = material_eval(&m, Vec3::Z, wi, wo) / wo.z;
+            assert!(
+                (f1 - f2).abs().max_element() <= 1e-4 * f1.max_element().max(1e-3),
+                "{}: {f1} vs {f2}",
+                t.name
+            );
+        }
+    }
+}
+
+/// The table covers every material type, and each row is what its name says: a row's
+/// `type` packs into that type's tag.
+#[test]
+fn the_table_covers_every_material_type() {
+    for k in wgtrace::scene::materials::MaterialKind::ALL {
+        assert!(
+            MATERIALS.iter().any(|t| material(t.keys).tag == k.tag()),
+            "no row of {}",
+            k.name()
+        );
+    }
+    let unique: std::collections::BTreeSet<&str> = MATERIALS.iter().map(|t| t.name).collect();
+    assert_eq!(unique.len(), MATERIALS.len(), "row names repeat");
+    let _: &[TestMaterial] = MATERIALS;
+}
+
+// ----------------------------------------------------------------- closed forms
 
 #[test]
 fn schlick_matches_its_closed_forms() {
@@ -53,7 +334,7 @@ fn schlick_matches_its_closed_forms() {
 
 #[test]
 fn metal_mirrors_exactly_and_fuzz_never_goes_under_the_surface() {
-    let mirror = material(MAT_METAL, 0.8, 0.0, 0.0);
+    let mirror = material("type = \"metal\"\nalbedo = [0.8, 0.8, 0.8]");
     let d = Vec3::new(1.0, 0.5, -2.0);
     let (ray, hit) = hit_at_origin(d, -d);
     for u in grid() {
@@ -63,7 +344,7 @@ fn metal_mirrors_exactly_and_fuzz_never_goes_under_the_surface() {
         assert_eq!(s.weight, Vec3::splat(0.8));
     }
     // grazing incidence with full fuzz: every scattered direction is above the surface
-    let fuzzy = material(MAT_METAL, 0.8, 1.0, 0.0);
+    let fuzzy = material("type = \"metal\"\nalbedo = [0.8, 0.8, 0.8]\nfuzz = 1");
     let d = Vec3::new(1.0, 0.0, -0.05);
     let (ray, hit) = hit_at_origin(d, -d);
     let mut absorbed = 0;
@@ -104,9 +385,11 @@ fn fresnel_matches_its_closed_forms() {
     assert!((fresnel_dielectric(1e-7, cos_t(1e-7, 1.0 / 1.5), 1.0 / 1.5) - 1.0).abs() < 1e-5);
 }
 
+const GLASS: &str = "type = \"dielectric\"\nior = 1.5";
+
 #[test]
 fn dielectric_refracts_by_snell_reflects_by_fresnel_and_conserves_energy() {
-    let glass = material(MAT_DIELECTRIC, 1.0, 1.5, 0.0);
+    let glass = material(GLASS);
     for angle in [0.0f32, 20.0, 45.0, 70.0, 89.0] {
         let t = angle.to_radians();
         let d = Vec3::new(t.sin(), 0.0, -t.cos());
@@ -140,7 +423,7 @@ fn dielectric_refracts_by_snell_reflects_by_fresnel_and_conserves_energy() {
 
 #[test]
 fn total_internal_reflection_inside_glass_at_grazing_angles() {
-    let glass = material(MAT_DIELECTRIC, 1.0, 1.5, 0.0);
+    let glass = material(GLASS);
     // leaving glass (the ray hits the back of the surface from below) beyond the critical
     // angle asin(1 / 1.5) = 41.8 degrees: always reflected back down, never NaN
     for angle in [42.0f32, 60.0, 89.0, 89.999] {
@@ -167,7 +450,7 @@ fn total_internal_reflection_inside_glass_at_grazing_angles() {
 
 #[test]
 fn absorption_follows_beer_lambert_over_the_distance_inside() {
-    let amber = material(MAT_DIELECTRIC, 1.0, 1.5, 0.5);
+    let amber = material("type = \"dielectric\"\nior = 1.5\nabsorption = [0.5, 0.5, 0.5]");
     // leaving the glass after 2 units inside: exp(-0.5 x 2)
     let (ray, hit) = hit_at_origin(Vec3::Z, Vec3::new(0.0, 0.0, -2.0));
     let s = scatter(&amber, &ray, &hit, [0.9, 0.5]);
@@ -184,100 +467,10 @@ fn absorption_follows_beer_lambert_over_the_distance_inside() {
     assert_eq!(scatter(&amber, &ray, &hit, [0.9, 0.5]).weight, Vec3::ONE);
 }
 
-// ------------------------------------------------------------------ microfacet (GGX)
-
-mod common;
-
-use wgtrace::cpu::materials::{microfacet_eval, microfacet_pdf};
-use wgtrace::scene::records::MAT_MICROFACET;
-
-fn microfacet(kd: f32, ks: f32, roughness: f32, ior: f32) -> Material {
-    Material {
-        tag: MAT_MICROFACET,
-        albedo: [kd, kd, kd, 0.0],
-        params: [roughness, ior, 0.0, 0.0],
-        extra: [ks, ks, ks, 0.0],
-        ..Default::default()
-    }
-}
-
-/// The outgoing (view) direction at `theta` degrees from the normal +Z, in the xz-plane, and
-/// the ray and hit that see the surface from it.
-fn view(theta: f32) -> (Vec3, Ray, Hit) {
-    let t = theta.to_radians();
-    let wo = Vec3::new(t.sin(), 0.0, t.cos());
-    let (ray, hit) = hit_at_origin(-wo, wo);
-    (wo, ray, hit)
-}
-
-#[test]
-fn microfacet_is_reciprocal() {
-    let mut rng = 3u32;
-    for roughness in [0.05f32, 0.3, 1.0] {
-        let m = microfacet(0.6, 0.9, roughness, 1.5);
-        for _ in 0..2000 {
-            let (a, b) = (common::random_unit(&mut rng), common::random_unit(&mut rng));
-            let (wo, wi) = (
-                Vec3::new(a.x, a.y, a.z.abs()),
-                Vec3::new(b.x, b.y, b.z.abs()),
-            );
-            // f = eval / cos_i must be symmetric
-            let f1 = microfacet_eval(&m, Vec3::Z, wo, wi) / wi.z;
-            let f2 = microfacet_eval(&m, Vec3::Z, wi, wo) / wo.z;
-            assert!(
-                (f1 - f2).abs().max_element() <= 1e-4 * f1.max_element().max(1e-3),
-                "{f1} vs {f2}"
-            );
-        }
-    }
-}
-
-/// The red channel's directional albedo of `m` seen from `theta` degrees: the mean of
-/// 40,000 sampler weights (absorbed ones 0) and its standard error; every weight must be
-/// finite and not negative.
-fn directional_albedo(m: &Material, theta: f32, seed: u32) -> (f64, f64) {
-    let (_, ray, hit) = view(theta);
-    let mut rng = seed;
-    let n = 40_000;
-    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-    for _ in 0..n {
-        let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
-        let s = scatter(m, &ray, &hit, u);
-        let w = if s.ok { s.weight.x as f64 } else { 0.0 };
-        assert!(w.is_finite() && w >= 0.0);
-        sum += w;
-        sum2 += w * w;
-    }
-    let mean = sum / n as f64;
-    (
-        mean,
-        ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
-    )
-}
-
-#[test]
-fn white_microfacet_never_reflects_more_than_arrives() {
-    // kd = ks = 1: the naive sum of the lobes would exceed 1; the Fresnel-weighted base must not
-    let mut worst = 0.0f64;
-    for ior in [1.5f32, 3.0] {
-        for roughness in [0.0f32, 0.05, 0.2, 0.5, 1.0] {
-            let m = microfacet(1.0, 1.0, roughness, ior);
-            for theta in [0.0f32, 30.0, 60.0, 80.0, 89.0] {
-                let (mean, sigma) = directional_albedo(&m, theta, 17);
-                assert!(
-                    mean <= 1.0 + 4.0 * sigma + 1e-6,
-                    "ior {ior}, roughness {roughness}, {theta} deg: albedo {mean} +- {sigma}"
-                );
-                worst = worst.max(mean);
-            }
-        }
-    }
-    eprintln!("largest directional albedo of a white microfacet: {worst:.4}");
-}
-
 #[test]
 fn roughness_zero_is_a_mirror_without_dividing_by_zero() {
-    let m = microfacet(0.0, 1.0, 0.0, 1.5);
+    let m =
+        material("type = \"microfacet\"\nalbedo = [0, 0, 0]\nspecular = [1, 1, 1]\nroughness = 0");
     let (wo, ray, hit) = view(40.0);
     let mirror = Vec3::new(-wo.x, -wo.y, wo.z);
     for u in grid() {
@@ -293,114 +486,25 @@ fn roughness_zero_is_a_mirror_without_dividing_by_zero() {
     }
 }
 
-/// Chi-square test of the directions `m`'s sampler draws, seen from `theta` degrees,
-/// against its pdf (`bsdf_pdf`), as pbrt-v4 and Mitsuba 3 test their BSDFs: the upper
-/// hemisphere in 20 (cos theta) x 40 (phi) cells, expected counts by integrating the pdf
-/// over each cell, plus a cell for the directions the sampler absorbs (under the
-/// surface); cells expecting fewer than 5 are pooled.
-fn assert_sampling_matches_pdf(m: &Material, theta: f32, label: &str) {
-    const N: usize = 200_000;
-    const NT: usize = 20;
-    const NP: usize = 40;
-    const SUB: usize = 10;
-    let (_, ray, hit) = view(theta);
-    let cell_of = |d: Vec3| {
-        let t = ((d.z * NT as f32) as usize).min(NT - 1);
-        let phi = d.y.atan2(d.x).rem_euclid(2.0 * std::f32::consts::PI);
-        let p = ((phi / (2.0 * std::f32::consts::PI) * NP as f32) as usize).min(NP - 1);
-        t * NP + p
-    };
-    let mut observed = vec![0f64; NT * NP + 1];
-    let mut rng = 99u32;
-    for _ in 0..N {
-        let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
-        let s = scatter(m, &ray, &hit, u);
-        let k = if s.ok { cell_of(s.dir) } else { NT * NP };
-        observed[k] += 1.0;
-    }
-    // expected: midpoint rule on SUB x SUB points per cell (d omega = d cos d phi)
-    let mut expected = vec![0f64; NT * NP + 1];
-    let (dc, dp) = (1.0 / NT as f64, 2.0 * std::f64::consts::PI / NP as f64);
-    for t in 0..NT {
-        for p in 0..NP {
-            let mut integral = 0.0f64;
-            for i in 0..SUB {
-                for j in 0..SUB {
-                    let c = (t as f64 + (i as f64 + 0.5) / SUB as f64) * dc;
-                    let phi = (p as f64 + (j as f64 + 0.5) / SUB as f64) * dp;
-                    let s = (1.0 - c * c).max(0.0).sqrt();
-                    let wi = Vec3::new((s * phi.cos()) as f32, (s * phi.sin()) as f32, c as f32);
-                    integral += bsdf_pdf(m, &ray, &hit, wi) as f64;
-                }
-            }
-            expected[t * NP + p] = integral * dc * dp / (SUB * SUB) as f64 * N as f64;
-        }
-    }
-    let upper: f64 = expected[..NT * NP].iter().sum::<f64>() / N as f64;
-    assert!(
-        upper <= 1.0 + 2e-3,
-        "{label}, {theta} deg: the pdf integrates to {upper} > 1"
-    );
-    expected[NT * NP] = (1.0 - upper).max(0.0) * N as f64;
-    // pool the cells expecting fewer than 5
-    let (mut chi2, mut cells, mut pool_e, mut pool_o) = (0.0f64, 0usize, 0.0f64, 0.0f64);
-    for (e, o) in expected.iter().zip(&observed) {
-        if *e < 5.0 {
-            pool_e += e;
-            pool_o += o;
-        } else {
-            chi2 += (o - e) * (o - e) / e;
-            cells += 1;
-        }
-    }
-    if pool_e >= 5.0 {
-        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
-        cells += 1;
-    } else {
-        assert!(
-            pool_o <= 5.0 + 4.0 * pool_e.sqrt() + 5.0,
-            "samples where the pdf is ~0: {pool_o}"
-        );
-    }
-    // critical value at significance 1e-3 (Wilson-Hilferty)
-    let k = (cells - 1) as f64;
-    let z = 3.09;
-    let critical = k * (1.0 - 2.0 / (9.0 * k) + z * (2.0 / (9.0 * k)).sqrt()).powi(3);
-    assert!(
-        chi2 < critical,
-        "{label}, {theta} deg: chi2 {chi2:.1} over {cells} cells, critical {critical:.1}"
-    );
-    eprintln!("{label}, {theta} deg: chi2 {chi2:.1} / critical {critical:.1} ({cells} cells), pdf integral {upper:.4}");
-}
-
-/// The microfacet's sampling against its pdf (`assert_sampling_matches_pdf`).
-#[test]
-fn microfacet_sampling_matches_its_pdf() {
-    for (roughness, theta) in [
-        (0.1f32, 0.0f32),
-        (0.1, 60.0),
-        (0.4, 30.0),
-        (0.4, 75.0),
-        (1.0, 45.0),
-    ] {
-        let m = microfacet(0.5, 1.0, roughness, 1.5);
-        assert_sampling_matches_pdf(&m, theta, &format!("microfacet, roughness {roughness}"));
-    }
-}
-
 /// The sampler's density over the whole sphere integrates to one: the specular lobe's
 /// visible-normal density mapped through the reflection, G1(wo) D(h) / (4 cos_o) wherever
 /// wo . h > 0 (including the directions under the surface, which the sampler draws and then
-/// absorbs), mixed with the cosine lobe. microfacet_pdf is this density above the surface.
+/// absorbs), mixed with the cosine lobe. The microfacet's pdf is this density above the
+/// surface.
 #[test]
 fn microfacet_sampling_density_integrates_to_one_over_the_sphere() {
-    use wgtrace::cpu::materials::{ggx_d, microfacet_spec_prob, smith_lambda};
+    use wgtrace::cpu::materials::material_pdf;
+    use wgtrace::cpu::materials::microfacet::spec_prob;
+    use wgtrace::scene::materials::microfacet::Params;
     const NT: usize = 400;
     const NP: usize = 400;
     for (roughness, theta) in [(0.3f32, 0.0f32), (0.3, 60.0), (0.6, 45.0), (1.0, 80.0)] {
-        let m = microfacet(0.5, 1.0, roughness, 1.5);
+        let m = material(&format!(
+            "type = \"microfacet\"\nalbedo = [0.5, 0.5, 0.5]\nspecular = [1, 1, 1]\n\
+             roughness = {roughness}"
+        ));
         let (wo, _, _) = view(theta);
-        let p_s = microfacet_spec_prob(&m, wo.z) as f64;
+        let p_s = spec_prob(&Params::read(&m), wo.z) as f64;
         let g1 = 1.0 / (1.0 + smith_lambda(wo.z, roughness)) as f64;
         let (mut total, mut upper) = (0.0f64, 0.0f64);
         for t in 0..NT {
@@ -421,7 +525,7 @@ fn microfacet_sampling_density_integrates_to_one_over_the_sphere() {
                 let cell = 4.0 * std::f64::consts::PI / (NT * NP) as f64;
                 total += d * cell;
                 if z > 0.0 {
-                    upper += microfacet_pdf(&m, Vec3::Z, wo, wi) as f64 * cell;
+                    upper += material_pdf(&m, Vec3::Z, wo, wi) as f64 * cell;
                 }
             }
         }
@@ -439,103 +543,22 @@ fn microfacet_sampling_density_integrates_to_one_over_the_sphere() {
     }
 }
 
-// ------------------------------------------------- glTF metallic-roughness (`pbr`)
-
-use wgtrace::cpu::materials::{bsdf_pdf, pbr_eval};
-use wgtrace::scene::records::{ALPHA_SMOOTH, MAT_PBR};
-
-/// The record `type = "pbr"` flattens to: alpha = roughness^2 (at least ALPHA_SMOOTH).
-fn pbr(base: [f32; 3], metallic: f32, roughness: f32, ior: f32, specular: f32) -> Material {
-    Material {
-        tag: MAT_PBR,
-        albedo: [base[0], base[1], base[2], 0.0],
-        params: [
-            (roughness * roughness).max(ALPHA_SMOOTH),
-            ior,
-            metallic,
-            specular,
-        ],
-        extra: [1.0, 1.0, 1.0, 0.0],
-        ..Default::default()
-    }
-}
-
-/// f = eval / cos_i is symmetric in its two directions: both Fresnels are taken at v . h
-/// and G2 is symmetric.
+/// Without its specular layer (specular = 0) pbr's dielectric is exactly Lambertian:
+/// every weight is 1 (the table's lossless row), and so is its BSDF: base / pi x cos.
 #[test]
-fn pbr_is_reciprocal() {
-    let mut rng = 5u32;
-    for (metallic, roughness) in [(0.0f32, 0.2f32), (0.5, 0.5), (1.0, 0.8), (0.3, 1.0)] {
-        let m = pbr([0.8, 0.5, 0.2], metallic, roughness, 1.5, 1.0);
-        for _ in 0..2000 {
-            let (a, b) = (common::random_unit(&mut rng), common::random_unit(&mut rng));
-            let (wo, wi) = (
-                Vec3::new(a.x, a.y, a.z.abs()),
-                Vec3::new(b.x, b.y, b.z.abs()),
-            );
-            let f1 = pbr_eval(&m, Vec3::Z, wo, wi) / wi.z;
-            let f2 = pbr_eval(&m, Vec3::Z, wi, wo) / wo.z;
-            assert!(
-                (f1 - f2).abs().max_element() <= 1e-4 * f1.max_element().max(1e-3),
-                "metallic {metallic}, roughness {roughness}: {f1} vs {f2}"
-            );
-        }
-    }
-}
-
-/// A white base never reflects more than arrives (directional albedo by the sampler's
-/// weights, to 4 standard errors), at every view angle, metallic and roughness; without
-/// its specular layer (specular = 0) the dielectric is exactly Lambertian: every weight is
-/// 1, so the furnace is 1.
-#[test]
-fn white_pbr_never_reflects_more_than_arrives_and_its_lambertian_limit_is_exact() {
-    let mut worst = 0.0f64;
-    for metallic in [0.0f32, 0.5, 1.0] {
-        for roughness in [0.0f32, 0.1, 0.3, 0.6, 1.0] {
-            for ior in [1.5f32, 3.0] {
-                let m = pbr([1.0; 3], metallic, roughness, ior, 1.0);
-                for theta in [0.0f32, 30.0, 60.0, 80.0, 89.0] {
-                    let (mean, sigma) = directional_albedo(&m, theta, 23);
-                    assert!(
-                        mean <= 1.0 + 4.0 * sigma + 1e-6,
-                        "metallic {metallic}, roughness {roughness}, ior {ior}, {theta} deg: albedo {mean} +- {sigma}"
-                    );
-                    worst = worst.max(mean);
-                }
-            }
-        }
-    }
-    eprintln!("largest directional albedo of a white pbr material: {worst:.4}");
-    let lambert = pbr([1.0; 3], 0.0, 0.5, 1.5, 0.0);
-    for theta in [0.0f32, 45.0, 85.0] {
-        let (_, ray, hit) = view(theta);
-        for u in grid() {
-            let s = scatter(&lambert, &ray, &hit, u);
-            assert!(s.ok, "{theta} deg: absorbed");
-            assert!(
-                (s.weight - Vec3::ONE).abs().max_element() < 1e-5,
-                "{theta} deg: weight {}",
-                s.weight
-            );
-        }
-    }
-}
-
-/// The metallic-roughness material's sampling against its pdf (chi-square).
-#[test]
-fn pbr_sampling_matches_its_pdf() {
-    for (metallic, roughness, theta) in [
-        (0.0f32, 0.3f32, 0.0f32),
-        (0.0, 0.5, 70.0),
-        (1.0, 0.3, 40.0),
-        (0.5, 0.7, 60.0),
-        (1.0, 1.0, 20.0),
-    ] {
-        let m = pbr([0.9, 0.6, 0.3], metallic, roughness, 1.5, 1.0);
-        assert_sampling_matches_pdf(
-            &m,
-            theta,
-            &format!("pbr, metallic {metallic}, roughness {roughness}"),
+fn pbr_without_a_specular_layer_is_lambertian() {
+    let m = material(
+        "type = \"pbr\"\nbase_color = [0.8, 0.5, 0.2]\nmetallic = 0\nroughness = 0.5\nspecular = 0",
+    );
+    let mut rng = 11u32;
+    for _ in 0..1000 {
+        let (a, b) = (common::random_unit(&mut rng), common::random_unit(&mut rng));
+        let (wo, wi) = (
+            Vec3::new(a.x, a.y, a.z.abs()),
+            Vec3::new(b.x, b.y, b.z.abs()),
         );
+        let f = material_eval(&m, Vec3::Z, wo, wi);
+        let lambert = Vec3::new(0.8, 0.5, 0.2) * wi.z / std::f32::consts::PI;
+        assert!((f - lambert).abs().max_element() < 1e-6, "{f} vs {lambert}");
     }
 }

@@ -9,6 +9,8 @@ mod common;
 use std::path::{Path, PathBuf};
 
 use proptest::prelude::*;
+use wgtrace::scene::materials::common::Surface;
+use wgtrace::scene::materials::{dielectric, pbr, MaterialKind};
 use wgtrace::{FlatScene, Overrides};
 
 const HEAD: &str = "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\n\
@@ -302,20 +304,24 @@ fn obj_materials_come_from_the_mtl_unless_the_scene_names_one() {
     // the scene's material m, then the .mtl's paint and glass
     assert_eq!(s.materials.len(), 3, "{:?}", s.material_names);
     let (paint, glass) = (s.materials[1], s.materials[2]);
-    assert_eq!(paint.tag, records::MAT_PBR);
+    assert_eq!(paint.tag, MaterialKind::Pbr.tag());
+    let (p, surface) = (pbr::Params::read(&paint), Surface::read(&paint));
     let roughness = (2.0f32 / 100.0).powf(0.25);
-    assert_eq!(paint.params, [roughness * roughness, 1.6, 0.0, 1.0]);
-    assert_eq!(&paint.extra[..3], &[0.5, 0.5, 0.5]);
-    assert_eq!(paint.extra[3], 0.5, "-bm scales the normal map");
-    assert_eq!(&paint.emission[..3], &[2.0, 0.0, 0.0]);
-    assert_eq!(paint.albedo[3], 0.75);
+    assert_eq!(
+        (p.alpha, p.ior, p.metallic, p.specular),
+        (roughness * roughness, 1.6, 0.0, 1.0)
+    );
+    assert_eq!(p.specular_color, glam::Vec3::splat(0.5));
+    assert_eq!(surface.normal_scale, 0.5, "-bm scales the normal map");
+    assert_eq!(surface.emission, glam::Vec3::new(2.0, 0.0, 0.0));
+    assert_eq!(surface.opacity, 0.75);
     assert_ne!(paint.flags & records::MAT_FLAG_ALPHA_BLEND, 0);
-    assert_ne!(paint.tex_normal, records::NO_TEXTURE);
+    assert_ne!(surface.normal_texture, records::NO_TEXTURE);
     // map_Kd times Kd: the texture's factor
-    let base = s.textures[paint.tex_albedo as usize];
+    let base = s.textures[p.base_color_texture as usize];
     assert_eq!(&base.color0[..3], &[0.5, 0.25, 1.0]);
-    assert_eq!(glass.tag, records::MAT_DIELECTRIC);
-    assert_eq!(glass.params[0], 1.33);
+    assert_eq!(glass.tag, MaterialKind::Dielectric.tag());
+    assert_eq!(dielectric::Params::read(&glass).ior, 1.33);
     // the normal-mapped triangle has tangents, +x along u
     let mapped = s.primitives.iter().find(|p| p.material == 1).unwrap();
     assert_ne!(mapped.flags & records::PRIM_FLAG_TANGENTS, 0);

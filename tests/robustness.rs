@@ -465,7 +465,6 @@ material = "floor"
 fn microfacet_roughness_near_zero_is_finite_and_continuous() {
     use wgtrace::cpu::materials::scatter;
     use wgtrace::cpu::types::Hit;
-    use wgtrace::scene::records::{Material, MAT_MICROFACET};
     let wo_in = Vec3::new(0.6, -0.8, 0.0); // incoming ray direction
     let mirror = Vec3::new(0.6, 0.8, 0.0);
     let hit = Hit {
@@ -481,12 +480,11 @@ fn microfacet_roughness_near_zero_is_finite_and_continuous() {
     let mut last_spread = 0.0f64;
     for alpha in [1.0f32, 1e-2, 1e-3, 1e-4, 1e-6, 0.0] {
         // white (kd = ks = 1) for the furnace; specular only for the spread about the mirror
-        let material = |kd: f32| Material {
-            tag: MAT_MICROFACET,
-            albedo: [kd, kd, kd, 0.0],
-            extra: [1.0, 1.0, 1.0, 0.0],
-            params: [alpha, 1.5, 0.0, 0.0],
-            ..Default::default()
+        let material = |kd: f32| {
+            common::material(&format!(
+                "type = \"microfacet\"\nalbedo = [{kd}, {kd}, {kd}]\nspecular = [1, 1, 1]\n\
+                 roughness = {alpha}\nior = 1.5"
+            ))
         };
         let r = ray(Vec3::new(-0.6, 0.8, 0.0), wo_in);
         let mut state = 9u32;

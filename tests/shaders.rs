@@ -8,6 +8,7 @@ mod common;
 use std::collections::{BTreeMap, BTreeSet};
 
 use wgtrace::gpu::bindings::{Placement, Placements, Slot, UNIFORM_BYTES};
+use wgtrace::gpu::codegen::shared_constants;
 use wgtrace::gpu::kernel::KERNEL_IO;
 use wgtrace::gpu::limits::DeviceFit;
 use wgtrace::gpu::plan::{
@@ -15,6 +16,7 @@ use wgtrace::gpu::plan::{
 };
 use wgtrace::gpu::shader::{used_bindings, validate, ENTRY_SHADERS, SHADER_FILES};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
+use wgtrace::scene::materials::MaterialKind;
 use wgtrace::scene::records::{
     record_layouts, SharedValue, BVH_STACK_LANES, BVH_STACK_SIZE, SHARED_CONSTANTS,
 };
@@ -50,9 +52,9 @@ fn all_placed(placement: Placement) -> Placements {
 #[test]
 fn every_entry_shader_validates_and_binds_what_it_reads() {
     let mut sets: Vec<FeatureSet> = vec![FeatureSet::default(), FeatureSet::all()];
-    sets.extend(Feature::ALL.map(|f| FeatureSet::default().with(f, true)));
+    sets.extend(Feature::all().map(|f| FeatureSet::default().with(f, true)));
     // each feature with emission, so that its code is traced
-    sets.extend(Feature::ALL.map(|f| {
+    sets.extend(Feature::all().map(|f| {
         FeatureSet::default()
             .with(f, true)
             .with(Feature::Emission, true)
@@ -99,7 +101,11 @@ fn every_combination_of_texture_and_light_features_binds_what_it_reads() {
             .enumerate()
             .filter(|(i, _)| bits & (1 << i) != 0)
             .map(|(_, &f)| f)
-            .chain([Feature::Emission, Feature::Triangle, Feature::Lambertian])
+            .chain([
+                Feature::Emission,
+                Feature::Triangle,
+                Feature::Material(MaterialKind::Lambertian),
+            ])
             .collect();
         let spec = ShaderSpec::of(features);
         assert_eq!(
@@ -163,7 +169,7 @@ fn every_plan_the_scenes_reach_validates_and_binds_only_what_it_reads() {
     let cornell: FeatureSet = [
         Feature::Bvh,
         Feature::Emission,
-        Feature::Lambertian,
+        Feature::Material(MaterialKind::Lambertian),
         Feature::Sobol,
         Feature::Sphere,
         Feature::Triangle,
@@ -265,7 +271,7 @@ fn small_scenes_get_their_primitives_as_constants_exactly() {
 fn every_shader_file_is_embedded_and_imported() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let mut on_disk = Vec::new();
-    for sub in ["", "shared"] {
+    for sub in ["", "shared", "materials"] {
         for e in std::fs::read_dir(dir.join(sub)).unwrap() {
             let p = e.unwrap().path();
             if p.extension().is_some_and(|x| x == "wgsl") {
@@ -375,8 +381,9 @@ fn records_match_naga_layout_of_the_shader() {
 }
 
 /// The constants the two languages share have one value: naga's module of each entry
-/// shader holds exactly `SHARED_CONSTANTS`, by name, type and value (the WGSL gets them
-/// written from that list), and no shader file declares a constant of its own.
+/// shader holds exactly `SHARED_CONSTANTS` and the material tags of the type list, by
+/// name, type and value (the WGSL gets them written from those), and no shader file
+/// declares a constant of its own.
 #[test]
 fn shared_constants_have_one_value_in_both_languages() {
     for entry in ENTRY_SHADERS {
@@ -393,10 +400,9 @@ fn shared_constants_have_one_value_in_both_languages() {
                 (c.name.clone().unwrap_or_default(), value)
             })
             .collect();
-        let in_rust: BTreeMap<String, SharedValue> = SHARED_CONSTANTS
-            .iter()
-            .map(|&(n, v)| (n.to_string(), v))
-            .collect();
+        // the shared constants and the material tags (gpu::codegen::shared_constants)
+        let in_rust: BTreeMap<String, SharedValue> = shared_constants().into_iter().collect();
+        assert!(in_rust.len() > SHARED_CONSTANTS.len());
         assert_eq!(in_wgsl.len(), in_rust.len(), "{entry}: {in_wgsl:?}");
         for (name, v) in &in_rust {
             let w = in_wgsl
@@ -608,5 +614,51 @@ fn traversal_stacks_fit_workgroup_memory_one_column_per_invocation() {
         let bytes = module.types[var.ty].inner.size(module.to_ctx());
         assert_eq!(bytes, depth * lanes * 8, "{entry}");
         assert!(bytes <= wgpu::Limits::default().max_compute_workgroup_storage_size);
+    }
+}
+
+/// Every material's view, with the surface view every material has, names places the
+/// record has, each of the field's type (a colour the xyz of a vec4, a scalar one lane of
+/// one, a texture a u32), and no two of its fields share a component of the record.
+#[test]
+fn material_views_name_real_places_without_overlap() {
+    use wgtrace::scene::materials::common::{FieldKind, Surface};
+    use wgtrace::scene::records::{FieldValue, Material, SharedRecord};
+    let zero: Material = bytemuck::Zeroable::zeroed();
+    let places = zero.fields();
+    for &kind in MaterialKind::ALL {
+        let mut used = BTreeSet::new();
+        for f in Surface::VIEW.fields.iter().chain(kind.view().fields) {
+            let (_, value) = places
+                .iter()
+                .find(|(n, _)| *n == f.place)
+                .unwrap_or_else(|| {
+                    panic!("{}: {} names no place {}", kind.name(), f.name, f.place)
+                });
+            let fits = match (value, f.kind, f.lane) {
+                (FieldValue::Vec4(_), FieldKind::Rgb, None) => true,
+                (FieldValue::Vec4(_), FieldKind::F32, Some(l)) => {
+                    "xyzw".contains(l) && l.len() == 1
+                }
+                (FieldValue::U32(_), FieldKind::U32, None) => true,
+                _ => false,
+            };
+            assert!(
+                fits,
+                "{}: {} ({:?}) does not fit {}",
+                kind.name(),
+                f.name,
+                f.kind,
+                f.place
+            );
+            for c in f.components() {
+                assert!(
+                    used.insert(c),
+                    "{}: {} shares {c:?} with another field",
+                    kind.name(),
+                    f.name
+                );
+            }
+        }
     }
 }

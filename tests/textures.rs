@@ -7,8 +7,10 @@ use std::path::{Path, PathBuf};
 
 use glam::{Vec2, Vec3};
 use wgtrace::cpu::bindings::Bindings;
-use wgtrace::cpu::textures::{material_at, perlin, texture_value};
+use wgtrace::cpu::materials::material_at;
+use wgtrace::cpu::textures::{perlin, texture_value};
 use wgtrace::gpu::kernel::lookup_textures;
+use wgtrace::scene::materials::{microfacet, pbr};
 use wgtrace::scene::records::TextureLookup;
 use wgtrace::scene::textures::srgb_to_linear;
 use wgtrace::FlatScene;
@@ -221,7 +223,7 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// A texture in a material's extra slot is clamped to 1 where it is a reflectance (the
+/// A texture in a material's second colour is clamped to 1 where it is a reflectance (the
 /// microfacet's specular colour) but not as pbr's specular colour, which
 /// KHR_materials_specular lets exceed 1: there a texture gives what the same constant
 /// gives.
@@ -246,8 +248,10 @@ fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
         tangent: glam::Vec4::ZERO,
     };
     // materials are numbered in name order: a, b, c
-    let extra = |i: usize| Vec3::from_slice(&material_at(&b, &s.materials[i], &hit).extra[..3]);
-    assert_close(extra(0), Vec3::new(2.5, 0.5, 1.5));
-    assert_close(extra(0), extra(1));
-    assert_close(extra(2), Vec3::new(1.0, 0.5, 1.0));
+    let at = |i: usize| material_at(&b, &s.materials[i], &hit);
+    let pbr_specular = |i| pbr::Params::read(&at(i)).specular_color;
+    assert_close(pbr_specular(0), Vec3::new(2.5, 0.5, 1.5));
+    assert_close(pbr_specular(0), pbr_specular(1));
+    let microfacet_specular = microfacet::Params::read(&at(2)).specular;
+    assert_close(microfacet_specular, Vec3::new(1.0, 0.5, 1.0));
 }

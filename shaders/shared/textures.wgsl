@@ -1,5 +1,4 @@
-// Textures: constant, checker, image (bilinear, wrapped), Perlin noise, and the lookup of a
-// material's textured colours at a hit.
+// Textures: constant, checker, image (bilinear, wrapped), Perlin noise.
 #import shared/bindings
 #import shared/types
 
@@ -171,71 +170,6 @@ fn texture_value(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
 #endif
 }
 
-// The material at a hit with its textured colours looked up; reflectances (albedo, tint,
-// specular) are clamped to 1 so that no texture makes a surface create energy. Compiled only
-// for scenes with textures (HAS_TEXTURES): llvmpipe runs untaken branches under a mask, and
-// the look-ups cost an untextured scene about 30% of its speed.
-fn material_at(m: Material, hit: Hit) -> Material {
-    var mat = m;
-#ifdef HAS_TEXTURES
-    // the .w of each colour is a scalar of its own (pbr: alpha, normal scale, cutoff)
-    if (mat.tex_albedo != NO_TEXTURE) {
-        mat.albedo = vec4<f32>(min(texture_value(mat.tex_albedo, hit.uv, hit.p), vec3<f32>(1.0)), mat.albedo.w);
-    }
-    if (mat.tex_extra != NO_TEXTURE) {
-        // a reflectance, but for pbr's specular colour, which may exceed 1
-        // (KHR_materials_specular; its F0 is clamped to 1 instead)
-        let extra = texture_value(mat.tex_extra, hit.uv, hit.p);
-        mat.extra = vec4<f32>(select(min(extra, vec3<f32>(1.0)), extra, mat.tag == MAT_PBR), mat.extra.w);
-    }
-    if (mat.tex_emission != NO_TEXTURE) {
-        mat.emission = vec4<f32>(texture_value(mat.tex_emission, hit.uv, hit.p), mat.emission.w);
-    }
-#ifdef HAS_PBR
-    if (mat.tex_params != NO_TEXTURE) {
-        // glTF's metallicRoughnessTexture: green scales the roughness (alpha = r^2), blue
-        // the metallic factor
-        let mr = min(texture_value(mat.tex_params, hit.uv, hit.p), vec3<f32>(1.0));
-        mat.params.x = max(mat.params.x * mr.y * mr.y, ALPHA_SMOOTH);
-        mat.params.z *= mr.z;
-    }
-    if (mat.tex_specular != NO_TEXTURE) {
-        // KHR_materials_specular's specularTexture: its alpha scales the specular factor
-        mat.params.w *= min(texture_alpha(mat.tex_specular, hit.uv), 1.0);
-    }
-#endif
-#endif
-    return mat;
-}
-
-#ifdef HAS_NORMAL_MAP
-// The hit with its shading normal taken from the material's tangent-space normal map: n =
-// normalize(t x + b y + ns z) over the frame of the interpolated tangent, made
-// orthogonal to ns (b = sign x ns cross t), the map's x and y scaled by extra.w. A hit
-// without tangents, or a mapped normal that would face away from the geometric side, keeps
-// its normal.
-fn normal_mapped(mat: Material, hit: Hit) -> Hit {
-    var h = hit;
-#ifdef HAS_TEXTURES
-    let t_len = length(hit.tangent.xyz);
-    if (mat.tex_normal == NO_TEXTURE || t_len == 0.0) {
-        return h;
-    }
-    let n = hit.ns;
-    let t = normalize(hit.tangent.xyz - n * dot(n, hit.tangent.xyz));
-    let b = cross(n, t) * select(-1.0, 1.0, hit.tangent.w >= 0.0);
-    var c = 2.0 * texture_value(mat.tex_normal, hit.uv, hit.p) - vec3<f32>(1.0);
-    c = vec3<f32>(c.xy * mat.extra.w, c.z);
-    let m = t * c.x + b * c.y + n * c.z;
-    let len = length(m);
-    if (len > 0.0 && dot(m, hit.ng) > 0.0) {
-        h.ns = m / len;
-    }
-#endif
-    return h;
-}
-#endif
-
 // A texture's alpha at uv: an image's own, else 1.
 fn texture_alpha(index: u32, uv: vec2<f32>) -> f32 {
     let tex = textures[index];
@@ -245,30 +179,3 @@ fn texture_alpha(index: u32, uv: vec2<f32>) -> f32 {
     return 1.0;
 }
 
-#ifdef HAS_ALPHA
-// Whether a ray passes through a hit: a pbr surface with alpha (albedo.w times its base
-// colour texture's alpha) cut out below the cutoff (emission.w) with MAT_FLAG_ALPHA_MASK,
-// or transparent when u >= alpha with MAT_FLAG_ALPHA_BLEND (u uniform in [0, 1)).
-fn transparent_at(hit: Hit, u: f32) -> bool {
-    let m = material_record(hit.material);
-    if ((m.flags & (MAT_FLAG_ALPHA_MASK | MAT_FLAG_ALPHA_BLEND)) == 0u) {
-        return false;
-    }
-    var alpha = m.albedo.w;
-#ifdef HAS_TEXTURES
-    if (m.tex_albedo != NO_TEXTURE) {
-        alpha *= texture_alpha(m.tex_albedo, hit.uv);
-    }
-#endif
-    if ((m.flags & MAT_FLAG_ALPHA_MASK) != 0u) {
-        return alpha < m.emission.w;
-    }
-    return u >= alpha;
-}
-
-// The uniform number of the k-th surface a ray meets: u moved by k times the golden
-// ratio's fraction, so that each surface has its own.
-fn alpha_u(u: f32, k: u32) -> f32 {
-    return fract(u + f32(k) * 0.618034);
-}
-#endif

@@ -33,26 +33,23 @@ struct BvhNode {
     count: u32,
 }
 
+// Storage: each material names its places in its view (NAMEParams, written from
+// scene::materials), what every material has in SurfaceParams. The record's own rules: a
+// texture in tex_color replaces color.rgb (clamped to 1), in tex_color2 color2.rgb, in
+// tex_emission emission.rgb; tex_data0 and tex_data1 are the material's own.
 struct Material {
     tag: u32,
     flags: u32,
-    // textures of albedo and emission, or NO_TEXTURE
-    tex_albedo: u32,
+    tex_color: u32,
     tex_emission: u32,
-    // lambertian, metal: reflectance | dielectric: tint | microfacet: diffuse colour
-    albedo: vec4<f32>,
-    // radiance emitted from the front side (both sides with MAT_FLAG_TWO_SIDED)
+    color: vec4<f32>,
     emission: vec4<f32>,
-    // metal: .x = fuzz | dielectric: .x = index of refraction
-    // microfacet: .x = roughness (GGX alpha), .y = index of refraction
-    params: vec4<f32>,
-    // dielectric: absorption per unit length (Beer-Lambert) | microfacet: specular colour
-    extra: vec4<f32>,
-    // texture of extra (microfacet specular), or NO_TEXTURE
-    tex_extra: u32,
-    tex_params: u32,
+    scalars: vec4<f32>,
+    color2: vec4<f32>,
+    tex_color2: u32,
+    tex_data0: u32,
     tex_normal: u32,
-    tex_specular: u32,
+    tex_data1: u32,
 }
 
 // Constant: color0 | checker: cells of textures even / odd (color0 / color1 where

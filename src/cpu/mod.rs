@@ -7,6 +7,7 @@
 //! This module reads `scene::records` and never the GPU backend.
 
 pub mod bindings;
+pub mod bsdf;
 pub mod intersect;
 pub mod lights;
 pub mod materials;

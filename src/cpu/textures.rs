@@ -3,10 +3,9 @@
 use glam::{IVec3, Vec2, Vec3, Vec4};
 
 use super::bindings::Bindings;
-use super::types::{xyz, Hit};
+use super::types::xyz;
 use crate::scene::records::{
-    Material, Texture, ALPHA_SMOOTH, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_PBR,
-    NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK, TEX_NOISE,
+    Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK, TEX_NOISE,
 };
 
 /// A texture coordinate folded into [0, 1] by the wrap mode (0 repeat, 1 clamp, 2 mirror).
@@ -156,67 +155,6 @@ pub fn texture_value(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
     texture_leaf(b, cell, uv, p)
 }
 
-/// The material at a hit with its textured colours looked up (reflectances clamped to 1).
-pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
-    let mut mat = *m;
-    // the .w of each colour is a scalar of its own (pbr: alpha, normal scale, cutoff)
-    if mat.tex_albedo != NO_TEXTURE {
-        mat.albedo = texture_value(b, mat.tex_albedo, hit.uv, hit.p)
-            .min(Vec3::ONE)
-            .extend(mat.albedo[3])
-            .to_array();
-    }
-    if mat.tex_extra != NO_TEXTURE {
-        // a reflectance, but for pbr's specular colour, which may exceed 1
-        let extra = texture_value(b, mat.tex_extra, hit.uv, hit.p);
-        let extra = if mat.tag == MAT_PBR {
-            extra
-        } else {
-            extra.min(Vec3::ONE)
-        };
-        mat.extra = extra.extend(mat.extra[3]).to_array();
-    }
-    if mat.tex_emission != NO_TEXTURE {
-        mat.emission = texture_value(b, mat.tex_emission, hit.uv, hit.p)
-            .extend(mat.emission[3])
-            .to_array();
-    }
-    if mat.tag == MAT_PBR && mat.tex_params != NO_TEXTURE {
-        // glTF's metallicRoughnessTexture: green scales the roughness (alpha = r^2), blue
-        // the metallic factor
-        let mr = texture_value(b, mat.tex_params, hit.uv, hit.p).min(Vec3::ONE);
-        mat.params[0] = (mat.params[0] * mr.y * mr.y).max(ALPHA_SMOOTH);
-        mat.params[2] *= mr.z;
-    }
-    if mat.tag == MAT_PBR && mat.tex_specular != NO_TEXTURE {
-        // KHR_materials_specular's specularTexture: its alpha scales the specular factor
-        mat.params[3] *= texture_alpha(b, mat.tex_specular, hit.uv).min(1.0);
-    }
-    mat
-}
-
-/// The hit with its shading normal from the material's tangent-space normal map
-/// (textures.wgsl's `normal_mapped`).
-pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
-    let mut h = *hit;
-    let tangent = hit.tangent.truncate();
-    if mat.tex_normal == NO_TEXTURE || tangent.length() == 0.0 {
-        return h;
-    }
-    let n = hit.ns;
-    let t = (tangent - n * n.dot(tangent)).normalize();
-    let sign = if hit.tangent.w >= 0.0 { 1.0 } else { -1.0 };
-    let bt = n.cross(t) * sign;
-    let c = 2.0 * texture_value(b, mat.tex_normal, hit.uv, hit.p) - Vec3::ONE;
-    let (x, y) = (c.x * mat.extra[3], c.y * mat.extra[3]);
-    let m = t * x + bt * y + n * c.z;
-    let len = m.length();
-    if len > 0.0 && m.dot(hit.ng) > 0.0 {
-        h.ns = m / len;
-    }
-    h
-}
-
 /// A texture's alpha at uv: an image's own, else 1.
 pub fn texture_alpha(b: &Bindings, index: u32, uv: Vec2) -> f32 {
     let tex = &b.textures[index as usize];
@@ -225,27 +163,4 @@ pub fn texture_alpha(b: &Bindings, index: u32, uv: Vec2) -> f32 {
     } else {
         1.0
     }
-}
-
-/// Whether a ray passes through a hit (textures.wgsl's `transparent_at`): cut out below
-/// the cutoff (mask), or transparent when u >= alpha (blend).
-pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
-    let m = &b.materials[hit.material as usize];
-    if m.flags & (MAT_FLAG_ALPHA_MASK | MAT_FLAG_ALPHA_BLEND) == 0 {
-        return false;
-    }
-    let mut alpha = m.albedo[3];
-    if m.tex_albedo != NO_TEXTURE {
-        alpha *= texture_alpha(b, m.tex_albedo, hit.uv);
-    }
-    if m.flags & MAT_FLAG_ALPHA_MASK != 0 {
-        return alpha < m.emission[3];
-    }
-    u >= alpha
-}
-
-/// The uniform number of the k-th surface a ray meets (textures.wgsl's `alpha_u`).
-pub fn alpha_u(u: f32, k: u32) -> f32 {
-    let x = u + k as f32 * 0.618034;
-    x - x.floor()
 }

@@ -9,11 +9,13 @@ use super::lights::{
     background_radiance, choose_punctual, light_pdf, light_pdf_total, power_heuristic,
     sample_light, spot_falloff,
 };
-use super::materials::{bsdf_eval, bsdf_pdf, emitted, mixture_applies, nee_applies, scatter};
+use super::materials::{
+    alpha_u, bsdf_eval, bsdf_pdf, emitted, material_at, mixture_applies, nee_applies,
+    normal_mapped, scatter, transparent_at,
+};
 use super::rng::rand_2d;
 use super::samplers::{bounce_2d, sample_2d, DIM_ALPHA, DIM_PUNCTUAL, DIM_RR};
 use super::sampling::{offset_ray, sample_disk};
-use super::textures::{alpha_u, material_at, normal_mapped, transparent_at};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{

@@ -1,20 +1,141 @@
 //! WGSL written from Rust: the constants both languages read (from
-//! `scene::records::SHARED_CONSTANTS`), and, for a small scene, its records as constants
-//! with the searches over them. Each is a file the preprocessor's `#import generated/...`
-//! pulls in (`gpu::plan::ShaderSpec::wgsl`).
+//! `scene::records::SHARED_CONSTANTS` and the material tags), the materials' views of the
+//! record and the dispatch to each material's functions (from the type list,
+//! `scene::materials`), and, for a small scene, its records as constants with the searches
+//! over them. Each is a file the preprocessor's `#import generated/...` pulls in
+//! (`gpu::plan::ShaderSpec::wgsl`).
 
 use crate::scene::flat::FlatScene;
+use crate::scene::materials::common::{Field, FieldKind, Surface, View};
+use crate::scene::materials::{tag_constants, MaterialKind};
 use crate::scene::records::{FieldValue, SharedRecord, SharedValue, SHARED_CONSTANTS};
+
+/// Every constant the shaders get from Rust: the shared constants, then the material tags.
+pub fn shared_constants() -> Vec<(String, SharedValue)> {
+    SHARED_CONSTANTS
+        .iter()
+        .map(|&(name, value)| (name.to_string(), value))
+        .chain(
+            tag_constants()
+                .into_iter()
+                .map(|(name, tag)| (name, SharedValue::U32(tag))),
+        )
+        .collect()
+}
 
 /// `const` declarations of every shared constant (`#import generated/constants`).
 pub fn constants() -> String {
-    SHARED_CONSTANTS
+    shared_constants()
         .iter()
         .map(|(name, value)| match value {
             SharedValue::U32(v) => format!("const {name}: u32 = {v}u;\n"),
             SharedValue::F32(v) => format!("const {name}: f32 = {};\n", wgsl_f32(*v)),
         })
         .collect()
+}
+
+/// The materials of a shader (`#import generated/materials`, in shared/materials.wgsl):
+/// the surface view every material has; for each type in `kinds`, its file
+/// (`#import materials/NAME`) and its view; and the dispatch by the record's tag to the
+/// functions a type has: `NAME_scatter` with any lobe, `NAME_eval` and `NAME_pdf` with a
+/// lobe that has a density (`MaterialKind::lobes`), `NAME_textures` with textures of its
+/// own (`View::own_textures`); the default case (absorb, 0, the material as it is) serves
+/// the rest, and unknown tags. A case that only repeats the default costs llvmpipe code
+/// for nothing (a switch of identities even changed how it folds constants, and with that
+/// the last bits of an image), so there is none, nor a switch without cases.
+pub fn materials(kinds: &[MaterialKind]) -> String {
+    let mut code = String::from(
+        "// Written by gpu::codegen::materials from the type list and the views of \
+         scene::materials.\n#import shared/bsdf\n#import shared/types\n",
+    );
+    for k in kinds {
+        code += &format!("#import materials/{}\n", k.name());
+    }
+    code += &view(&Surface::VIEW, "surface");
+    for k in kinds {
+        code += &view(k.view(), k.name());
+    }
+    let dispatch = |signature: &str, kinds: &[MaterialKind], call: &str, default: &str| {
+        let mut f = format!("{signature} {{\n");
+        if kinds.is_empty() {
+            return f + &format!("    return {default};\n}}\n");
+        }
+        f += "    switch mat.tag {\n";
+        for k in kinds {
+            let call = call.replace("NAME", k.name());
+            f += &format!(
+                "        case {}: {{\n            return {call};\n        }}\n",
+                k.wgsl_tag()
+            );
+        }
+        f + &format!("        default: {{\n            return {default};\n        }}\n    }}\n}}\n")
+    };
+    let having = |has: fn(&MaterialKind) -> bool| -> Vec<MaterialKind> {
+        kinds.iter().copied().filter(has).collect()
+    };
+    code += "// Scattering by the material's type.\n";
+    code += &dispatch(
+        "fn scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter",
+        &having(|k| k.lobes().any()),
+        "NAME_scatter(NAME_params(mat), ray, hit, u)",
+        "absorbed()",
+    );
+    code += "// BSDF x cos for unit wo and wi about the unit normal n on wo's side.\n";
+    code += &dispatch(
+        "fn material_eval(mat: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32>",
+        &having(|k| k.lobes().density),
+        "NAME_eval(NAME_params(mat), n, wo, wi)",
+        "vec3<f32>(0.0)",
+    );
+    code += "// The density of the material's sampling.\n";
+    code += &dispatch(
+        "fn material_pdf(mat: Material, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32",
+        &having(|k| k.lobes().density),
+        "NAME_pdf(NAME_params(mat), n, wo, wi)",
+        "0.0",
+    );
+    code += "// The look-ups of the material's own textures.\n";
+    code += &dispatch(
+        "fn material_textures(mat: Material, hit: Hit) -> Material",
+        &having(|k| k.view().own_textures()),
+        "NAME_record(NAME_textures(NAME_params(mat), hit), mat)",
+        "mat",
+    );
+    code
+}
+
+/// A view in WGSL: its struct, `NAME_params(m: Material)` reading each field from its
+/// place, and `NAME_record(p, m)`, `m` with the fields written back. A view without
+/// fields gets one unused member (WGSL has no empty structs).
+fn view(v: &View, name: &str) -> String {
+    let ty = v.wgsl_struct;
+    let place = |f: &Field, of: &str| match (f.kind, f.lane) {
+        (FieldKind::Rgb, _) => format!("{of}.{}.xyz", f.place),
+        (_, Some(lane)) => format!("{of}.{}.{lane}", f.place),
+        (_, None) => format!("{of}.{}", f.place),
+    };
+    let mut code = format!("struct {ty} {{\n");
+    for f in v.fields {
+        code += &format!("    {}: {},\n", f.name, f.kind.wgsl());
+    }
+    let values = if v.fields.is_empty() {
+        code += "    unused: u32,\n";
+        "0u".to_string()
+    } else {
+        let values: Vec<String> = v.fields.iter().map(|f| place(f, "m")).collect();
+        values.join(", ")
+    };
+    code += &format!(
+        "}}\nfn {name}_params(m: Material) -> {ty} {{\n    return {ty}({values});\n}}\n\
+         fn {name}_record(p: {ty}, m: Material) -> Material {{\n    var r = m;\n"
+    );
+    for f in v.fields {
+        code += &match f.kind {
+            FieldKind::Rgb => format!("    r.{0} = vec4<f32>(p.{1}, r.{0}.w);\n", f.place, f.name),
+            _ => format!("    {} = p.{};\n", place(f, "r"), f.name),
+        };
+    }
+    code + "    return r;\n}\n"
 }
 
 /// A WGSL f32 literal that parses back to exactly `x` (naga reads a literal with the `f`

@@ -16,6 +16,8 @@ use super::limits::{DeviceFit, LLVMPIPE_LOOP_LIMIT};
 use super::shader::{self, ShaderError};
 use crate::scene::flat::FlatScene;
 use crate::scene::format::{LightSampling, SamplerKind};
+use crate::scene::materials::common::Surface;
+use crate::scene::materials::MaterialKind;
 use crate::scene::records as r;
 use crate::tuning::Tuning;
 
@@ -40,12 +42,9 @@ pub enum Feature {
     BvhLargeLeaves,
     /// The plain loop over a list of primitives grouped by type.
     PrimitiveLoop,
-    Lambertian,
-    Metal,
-    Dielectric,
-    Microfacet,
-    /// glTF's metallic-roughness material.
-    Pbr,
+    /// A material's type: its shading (`shaders/materials/NAME.wgsl`) and its case of
+    /// the dispatch.
+    Material(MaterialKind),
     /// Textured material colours at all.
     Textures,
     /// Tangent-space normal maps (pbr's `normal_map`), with the vertex tangents they need.
@@ -72,39 +71,46 @@ pub enum Feature {
     Emission,
 }
 
+/// The features before the materials' in define order.
+const GEOMETRY: [Feature; 10] = [
+    Feature::Sphere,
+    Feature::Triangle,
+    Feature::Plane,
+    Feature::Box,
+    Feature::Cylinder,
+    Feature::Disk,
+    Feature::Transforms,
+    Feature::Bvh,
+    Feature::BvhLargeLeaves,
+    Feature::PrimitiveLoop,
+];
+
+/// The features after the materials'.
+const SHADING: [Feature; 14] = [
+    Feature::Textures,
+    Feature::NormalMap,
+    Feature::Alpha,
+    Feature::ImageTexture,
+    Feature::NoiseTexture,
+    Feature::CheckerTexture,
+    Feature::Jittered,
+    Feature::Hammersley,
+    Feature::Sobol,
+    Feature::Mis,
+    Feature::Mixture,
+    Feature::Punctual,
+    Feature::EnvMap,
+    Feature::Emission,
+];
+
 impl Feature {
-    /// Every feature, in define order.
-    pub const ALL: [Feature; 29] = [
-        Feature::Sphere,
-        Feature::Triangle,
-        Feature::Plane,
-        Feature::Box,
-        Feature::Cylinder,
-        Feature::Disk,
-        Feature::Transforms,
-        Feature::Bvh,
-        Feature::BvhLargeLeaves,
-        Feature::PrimitiveLoop,
-        Feature::Lambertian,
-        Feature::Metal,
-        Feature::Dielectric,
-        Feature::Microfacet,
-        Feature::Pbr,
-        Feature::Textures,
-        Feature::NormalMap,
-        Feature::Alpha,
-        Feature::ImageTexture,
-        Feature::NoiseTexture,
-        Feature::CheckerTexture,
-        Feature::Jittered,
-        Feature::Hammersley,
-        Feature::Sobol,
-        Feature::Mis,
-        Feature::Mixture,
-        Feature::Punctual,
-        Feature::EnvMap,
-        Feature::Emission,
-    ];
+    /// Every feature, in define order: one per material of the type list among them.
+    pub fn all() -> impl Iterator<Item = Feature> {
+        GEOMETRY
+            .into_iter()
+            .chain(MaterialKind::ALL.iter().map(|&k| Feature::Material(k)))
+            .chain(SHADING)
+    }
 
     /// The preprocessor define that keeps its code (`#ifdef HAS_SPHERE`).
     pub fn define(self) -> &'static str {
@@ -119,11 +125,7 @@ impl Feature {
             Feature::Bvh => "HAS_BVH",
             Feature::BvhLargeLeaves => "HAS_BVH_LARGE_LEAVES",
             Feature::PrimitiveLoop => "HAS_PRIMITIVE_LOOP",
-            Feature::Lambertian => "HAS_LAMBERTIAN",
-            Feature::Metal => "HAS_METAL",
-            Feature::Dielectric => "HAS_DIELECTRIC",
-            Feature::Microfacet => "HAS_MICROFACET",
-            Feature::Pbr => "HAS_PBR",
+            Feature::Material(kind) => kind.define(),
             Feature::Textures => "HAS_TEXTURES",
             Feature::NormalMap => "HAS_NORMAL_MAP",
             Feature::Alpha => "HAS_ALPHA",
@@ -147,25 +149,37 @@ impl Feature {
             .trim_start_matches("HAS_")
             .to_ascii_lowercase()
     }
+
+    /// Its bit in a [`FeatureSet`]: the others' order, the materials' from 32 on by tag.
+    fn bit(self) -> u32 {
+        match self {
+            Feature::Material(kind) => 32 + kind.tag(),
+            f => GEOMETRY
+                .iter()
+                .chain(&SHADING)
+                .position(|&g| g == f)
+                .expect("every other feature is listed") as u32,
+        }
+    }
 }
 
 /// A set of [`Feature`]s.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
-pub struct FeatureSet(u32);
+pub struct FeatureSet(u64);
 
 impl FeatureSet {
     /// Every feature: the full shader, which picks the sampler, the light-sampling
     /// strategy and BVH or not at run time from `Params`.
     pub fn all() -> Self {
-        Feature::ALL.into_iter().collect()
+        Feature::all().collect()
     }
 
     pub fn contains(self, f: Feature) -> bool {
-        self.0 & (1 << f as u32) != 0
+        self.0 & (1 << f.bit()) != 0
     }
 
     pub fn insert(&mut self, f: Feature) {
-        self.0 |= 1 << f as u32;
+        self.0 |= 1 << f.bit();
     }
 
     /// `f` added when `on`.
@@ -177,7 +191,7 @@ impl FeatureSet {
     }
 
     pub fn iter(self) -> impl Iterator<Item = Feature> {
-        Feature::ALL.into_iter().filter(move |&f| self.contains(f))
+        Feature::all().filter(move |&f| self.contains(f))
     }
 }
 
@@ -194,14 +208,19 @@ impl FromIterator<Feature> for FeatureSet {
 /// The features a scene uses: code for the others is left out.
 pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     let prim = |tag: u32| scene.primitives.iter().any(|p| p.tag == tag);
-    let mat = |tag: u32| scene.materials.iter().any(|m| m.tag == tag);
+    let kind = |k: MaterialKind| scene.materials.iter().any(|m| m.tag == k.tag());
     let texture = |tag: u32| scene.textures.iter().any(|t| t.tag == tag);
     let bounded = scene.primitives.len() > scene.num_unbounded as usize;
-    // lights are sampled only toward surfaces with a lobe that is not a delta
-    // (`nee_applies`: Lambertian, microfacet or pbr), and only when there are lights
-    let nee = mat(r::MAT_LAMBERTIAN) || mat(r::MAT_MICROFACET) || mat(r::MAT_PBR);
+    // lights are sampled only toward surfaces with a lobe that has a density (the
+    // materials' own answer, `nee_applies`), and only when there are lights
+    let nee = scene.materials.iter().any(|m| m.nee());
     let lit = scene.emitters.len() > scene.num_punctual as usize && nee;
-    FeatureSet::default()
+    let materials: FeatureSet = MaterialKind::ALL
+        .iter()
+        .filter(|&&k| kind(k))
+        .map(|&k| Feature::Material(k))
+        .collect();
+    materials
         .with(Feature::Sphere, prim(r::PRIM_SPHERE))
         .with(Feature::Triangle, prim(r::PRIM_TRIANGLE))
         .with(Feature::Plane, prim(r::PRIM_PLANE))
@@ -221,18 +240,13 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
             bounded && scene.use_bvh && scene.bvh_has_large_leaves(),
         )
         .with(Feature::PrimitiveLoop, bounded && !scene.use_bvh)
-        .with(Feature::Lambertian, mat(r::MAT_LAMBERTIAN))
-        .with(Feature::Metal, mat(r::MAT_METAL))
-        .with(Feature::Dielectric, mat(r::MAT_DIELECTRIC))
-        .with(Feature::Microfacet, mat(r::MAT_MICROFACET))
-        .with(Feature::Pbr, mat(r::MAT_PBR))
         .with(Feature::Textures, !scene.textures.is_empty())
         .with(
             Feature::NormalMap,
             scene
                 .materials
                 .iter()
-                .any(|m| m.tex_normal != r::NO_TEXTURE),
+                .any(|m| Surface::read(m).normal_texture != r::NO_TEXTURE),
         )
         .with(
             Feature::Alpha,
@@ -298,8 +312,7 @@ impl ShaderSpec {
     /// every feature but the optional ones the scene does not use; storage buffers
     /// only. Every scene without them shares it.
     pub fn full_for(scene: FeatureSet) -> Self {
-        let features = Feature::ALL
-            .into_iter()
+        let features = Feature::all()
             .filter(|f| !Self::OPTIONAL_IN_FULL.contains(f) || scene.contains(*f))
             .collect();
         Self::of(features)
@@ -333,12 +346,22 @@ impl ShaderSpec {
     pub fn wgsl(&self, entry: &str) -> Result<String, ShaderError> {
         let constants = codegen::constants();
         let bindings = wgsl_declarations(&self.placements) + &wgsl_accessors(&self.placements);
+        let kinds: Vec<MaterialKind> = self
+            .features
+            .iter()
+            .filter_map(|f| match f {
+                Feature::Material(k) => Some(k),
+                _ => None,
+            })
+            .collect();
+        let materials = codegen::materials(&kinds);
         shader::assemble(
             entry,
             &self.defines(),
             &[
                 ("generated/constants", &constants),
                 ("generated/bindings", &bindings),
+                ("generated/materials", &materials),
                 ("generated/scene", &self.scene_code),
             ],
         )

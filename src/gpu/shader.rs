@@ -10,44 +10,32 @@
 
 use std::collections::BTreeSet;
 
-/// Every shader file, by the name `#import` uses; embedded so the binary runs from anywhere.
-pub const SHADER_FILES: &[(&str, &str)] = &[
-    ("trace", include_str!("../../shaders/trace.wgsl")),
-    ("kernel", include_str!("../../shaders/kernel.wgsl")),
-    (
-        "shared/bindings",
-        include_str!("../../shaders/shared/bindings.wgsl"),
-    ),
-    (
-        "shared/intersect",
-        include_str!("../../shaders/shared/intersect.wgsl"),
-    ),
-    (
-        "shared/lights",
-        include_str!("../../shaders/shared/lights.wgsl"),
-    ),
-    (
-        "shared/materials",
-        include_str!("../../shaders/shared/materials.wgsl"),
-    ),
-    ("shared/rng", include_str!("../../shaders/shared/rng.wgsl")),
-    (
-        "shared/samplers",
-        include_str!("../../shaders/shared/samplers.wgsl"),
-    ),
-    (
-        "shared/sampling",
-        include_str!("../../shaders/shared/sampling.wgsl"),
-    ),
-    (
-        "shared/textures",
-        include_str!("../../shaders/shared/textures.wgsl"),
-    ),
-    (
-        "shared/types",
-        include_str!("../../shaders/shared/types.wgsl"),
-    ),
-];
+macro_rules! shader_files {
+    ($( $(#[$doc:meta])* $kind:ident = $tag:literal, $module:ident, $define:literal; )*) => {
+        /// Every shader file, by the name `#import` uses; embedded so the binary runs from
+        /// anywhere. Each material's (`materials/NAME`) follows from the type list.
+        pub const SHADER_FILES: &[(&str, &str)] = &[
+            ("trace", include_str!("../../shaders/trace.wgsl")),
+            ("kernel", include_str!("../../shaders/kernel.wgsl")),
+            ("shared/bindings", include_str!("../../shaders/shared/bindings.wgsl")),
+            ("shared/bsdf", include_str!("../../shaders/shared/bsdf.wgsl")),
+            ("shared/intersect", include_str!("../../shaders/shared/intersect.wgsl")),
+            ("shared/lights", include_str!("../../shaders/shared/lights.wgsl")),
+            ("shared/materials", include_str!("../../shaders/shared/materials.wgsl")),
+            ("shared/rng", include_str!("../../shaders/shared/rng.wgsl")),
+            ("shared/samplers", include_str!("../../shaders/shared/samplers.wgsl")),
+            ("shared/sampling", include_str!("../../shaders/shared/sampling.wgsl")),
+            ("shared/textures", include_str!("../../shaders/shared/textures.wgsl")),
+            ("shared/types", include_str!("../../shaders/shared/types.wgsl")),
+            $( (
+                concat!("materials/", stringify!($module)),
+                include_str!(concat!("../../shaders/materials/", stringify!($module), ".wgsl")),
+            ), )*
+        ];
+    };
+}
+
+crate::scene::materials::for_each_material!(shader_files);
 
 /// Entry-point files: each is assembled into one shader module.
 pub const ENTRY_SHADERS: &[&str] = &["trace", "kernel"];

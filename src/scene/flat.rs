@@ -189,9 +189,7 @@ impl FlatScene {
     /// light, and the image is black.
     pub fn emits(&self) -> bool {
         let bright = |c: &[f32]| c.iter().any(|&x| x > 0.0);
-        self.materials
-            .iter()
-            .any(|m| bright(&m.emission[..3]) || m.tex_emission != records::NO_TEXTURE)
+        self.materials.iter().any(|m| m.emits())
             || bright(&self.background)
             || self.background_top.is_some_and(|t| bright(&t))
             || self.env.is_some()

@@ -7,155 +7,14 @@ use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
 
 use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
-use super::format::{
-    AlphaMode, ColorDesc, LightDesc, MaterialDesc, ObjectDesc, Projection, SceneFile, TextureDesc,
-    TransformDesc,
-};
+use super::format::{LightDesc, ObjectDesc, Projection, SceneFile, TextureDesc, TransformDesc};
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights, Environment};
+use super::materials::MaterialDesc;
 use super::mesh::MeshData;
-use super::records::{self, BvhNode, Material, Primitive, NO_DATA, NO_TEXTURE};
+use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
-use super::textures::{color_slot, texture_records, ImageData};
-
-fn material_record(m: &MaterialDesc, textures: &[String]) -> Material {
-    let slot = |c: &ColorDesc| color_slot(c, textures);
-    let named = |t: &Option<String>| {
-        t.as_ref().map_or(NO_TEXTURE, |name| {
-            textures.iter().position(|n| n == name).expect("validated") as u32
-        })
-    };
-    let mut pbr_extras = None;
-    let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
-    let (tag, albedo, emission, params, extra) = match m {
-        MaterialDesc::Lambertian {
-            albedo, emission, ..
-        } => (
-            records::MAT_LAMBERTIAN,
-            slot(albedo),
-            slot(emission),
-            [0.0; 4],
-            ([0.0; 4], NO_TEXTURE),
-        ),
-        MaterialDesc::Metal {
-            albedo,
-            fuzz,
-            emission,
-            ..
-        } => (
-            records::MAT_METAL,
-            slot(albedo),
-            slot(emission),
-            [*fuzz, 0.0, 0.0, 0.0],
-            ([0.0; 4], NO_TEXTURE),
-        ),
-        MaterialDesc::Dielectric {
-            ior,
-            tint,
-            absorption,
-            emission,
-            ..
-        } => (
-            records::MAT_DIELECTRIC,
-            slot(tint),
-            slot(emission),
-            [*ior, 0.0, 0.0, 0.0],
-            (rgb(*absorption), NO_TEXTURE),
-        ),
-        MaterialDesc::Microfacet {
-            albedo,
-            specular,
-            roughness,
-            ior,
-            emission,
-            ..
-        } => (
-            records::MAT_MICROFACET,
-            slot(albedo),
-            slot(emission),
-            [*roughness, *ior, 0.0, 0.0],
-            slot(specular.as_ref().unwrap_or(albedo)),
-        ),
-        MaterialDesc::Pbr {
-            base_color,
-            metallic,
-            roughness,
-            ior,
-            specular,
-            specular_color,
-            emission,
-            metallic_roughness,
-            specular_texture,
-            normal_map,
-            normal_scale,
-            alpha,
-            alpha_mode,
-            alpha_cutoff,
-            ..
-        } => {
-            pbr_extras = Some((
-                (named(metallic_roughness), named(specular_texture)),
-                named(normal_map),
-                *normal_scale,
-                *alpha,
-                *alpha_mode,
-                *alpha_cutoff,
-            ));
-            (
-                records::MAT_PBR,
-                slot(base_color),
-                slot(emission),
-                // alpha = roughness^2, a GGX lobe even at roughness 0 (ALPHA_SMOOTH, 1e-3: a
-                // mirror for every purpose but a delta)
-                [
-                    (roughness * roughness).max(records::ALPHA_SMOOTH),
-                    *ior,
-                    *metallic,
-                    *specular,
-                ],
-                slot(specular_color),
-            )
-        }
-        MaterialDesc::Emissive { radiance, .. } => (
-            records::MAT_EMISSIVE,
-            ([0.0; 4], NO_TEXTURE),
-            slot(radiance),
-            [0.0; 4],
-            ([0.0; 4], NO_TEXTURE),
-        ),
-    };
-    let two_sided = m.two_sided();
-    let mut record = Material {
-        tag,
-        flags: if two_sided {
-            records::MAT_FLAG_TWO_SIDED
-        } else {
-            0
-        },
-        albedo: albedo.0,
-        tex_albedo: albedo.1,
-        emission: emission.0,
-        tex_emission: emission.1,
-        params,
-        extra: extra.0,
-        tex_extra: extra.1,
-        ..Default::default()
-    };
-    if let Some(((mr, specular), normal, scale, alpha, mode, cutoff)) = pbr_extras {
-        record.tex_params = mr;
-        record.tex_specular = specular;
-        record.tex_normal = normal;
-        record.extra[3] = scale;
-        record.albedo[3] = alpha;
-        record.emission[3] = cutoff;
-        record.flags |= match mode {
-            AlphaMode::Opaque => 0,
-            AlphaMode::Mask => records::MAT_FLAG_ALPHA_MASK,
-            AlphaMode::Blend => records::MAT_FLAG_ALPHA_BLEND,
-        };
-    }
-    record
-}
+use super::textures::{texture_records, ImageData};
 
 /// Object-to-world matrix of a transform: translate * Rz * Ry * Rx * scale.
 pub fn transform_matrix(t: &TransformDesc) -> Affine3A {
@@ -597,7 +456,7 @@ pub fn flatten(
     let material_names: Vec<String> = material_list.iter().map(|m| m.0.clone()).collect();
     let materials: Vec<Material> = material_list
         .iter()
-        .map(|m| material_record(m.1, &texture_names))
+        .map(|m| m.1.record(&texture_names))
         .collect();
     let Builder {
         unbounded,

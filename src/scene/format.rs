@@ -5,6 +5,8 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use toml::Spanned;
 
+use super::materials::common::ColorDesc;
+use super::materials::MaterialDesc;
 use super::records;
 
 /// A whole scene file.
@@ -197,37 +199,6 @@ pub struct BackgroundDesc {
     pub strength: Option<f32>,
 }
 
-/// A colour parameter: `[r, g, b]`, or the name of a `[textures]` entry.
-#[derive(Debug, Clone, PartialEq, Deserialize)]
-#[serde(untagged)]
-pub enum ColorDesc {
-    Rgb([f32; 3]),
-    Texture(String),
-}
-
-impl ColorDesc {
-    /// The colour, or white where a texture gives it.
-    pub fn rgb(&self) -> [f32; 3] {
-        match self {
-            ColorDesc::Rgb(c) => *c,
-            ColorDesc::Texture(_) => [1.0; 3],
-        }
-    }
-
-    pub fn texture(&self) -> Option<&str> {
-        match self {
-            ColorDesc::Rgb(_) => None,
-            ColorDesc::Texture(name) => Some(name),
-        }
-    }
-}
-
-impl Default for ColorDesc {
-    fn default() -> Self {
-        ColorDesc::Rgb([0.0; 3])
-    }
-}
-
 /// `[textures]` entries, selected by `type`.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
@@ -352,155 +323,8 @@ pub enum NoiseKind {
     Marble,
 }
 
-/// `[materials]` entries, selected by `type`. Every type but `emissive` may also carry
-/// `emission = [r, g, b]`: radiance emitted from its front side, which makes it a light too.
-#[derive(Debug, Clone, Deserialize)]
-#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
-pub enum MaterialDesc {
-    /// Ideal diffuse reflector; scatters on whichever side the ray hits.
-    Lambertian {
-        albedo: ColorDesc,
-        #[serde(default)]
-        emission: ColorDesc,
-        /// Emit from the back side too.
-        #[serde(default)]
-        two_sided: bool,
-    },
-    /// Mirror reflection, the direction perturbed by up to `fuzz` (0 = perfect mirror).
-    Metal {
-        albedo: ColorDesc,
-        #[serde(default)]
-        fuzz: f32,
-        #[serde(default)]
-        emission: ColorDesc,
-        /// Emit from the back side too.
-        #[serde(default)]
-        two_sided: bool,
-    },
-    /// Glass-like: reflection or refraction chosen by the exact Fresnel reflectance; `tint` multiplies
-    /// every scattering, `absorption` (per unit length, Beer-Lambert) acts inside.
-    Dielectric {
-        ior: f32,
-        #[serde(default = "white_color")]
-        tint: ColorDesc,
-        #[serde(default)]
-        absorption: [f32; 3],
-        #[serde(default)]
-        emission: ColorDesc,
-        /// Emit from the back side too.
-        #[serde(default)]
-        two_sided: bool,
-    },
-    /// Cook-Torrance: a GGX specular lobe (`roughness` = alpha in [0, 1], Schlick's Fresnel
-    /// from `ior`, colour `specular`, default `albedo`) over a Lambertian base (`albedo`)
-    /// that receives what the specular lobe does not reflect.
-    Microfacet {
-        albedo: ColorDesc,
-        specular: Option<ColorDesc>,
-        roughness: f32,
-        #[serde(default = "glass_ior")]
-        ior: f32,
-        #[serde(default)]
-        emission: ColorDesc,
-        /// Emit from the back side too.
-        #[serde(default)]
-        two_sided: bool,
-    },
-    /// glTF 2.0's metallic-roughness material (its Appendix B): a GGX lobe (alpha =
-    /// `roughness`^2, Smith's height-correlated visibility, Fresnel-Schlick) over a
-    /// Lambertian base of `base_color` for the dielectric (F0 from `ior`, scaled by
-    /// `specular` and `specular_color` as in KHR_materials_specular), mixed by `metallic`
-    /// with a metal whose F0 is `base_color`. The base gets what the Fresnel of both
-    /// directions lets through (Appendix B's 1 - F(v . h) reflects more than arrives near
-    /// roughness 0). Defaults are glTF's.
-    Pbr {
-        #[serde(default = "white_color")]
-        base_color: ColorDesc,
-        #[serde(default = "one")]
-        metallic: f32,
-        #[serde(default = "one")]
-        roughness: f32,
-        #[serde(default = "glass_ior")]
-        ior: f32,
-        #[serde(default = "one")]
-        specular: f32,
-        #[serde(default = "white_color")]
-        specular_color: ColorDesc,
-        /// A texture whose green channel multiplies `roughness` and blue `metallic`
-        /// (glTF's metallicRoughnessTexture; give it `color_space = "linear"`).
-        #[serde(default)]
-        metallic_roughness: Option<String>,
-        /// A texture whose alpha channel multiplies `specular` (KHR_materials_specular's
-        /// specularTexture).
-        #[serde(default)]
-        specular_texture: Option<String>,
-        /// A tangent-space normal map (`color_space = "linear"`, +y toward growing v),
-        /// its x and y scaled by `normal_scale`; it needs a mesh with normals and uvs.
-        #[serde(default)]
-        normal_map: Option<String>,
-        #[serde(default = "one")]
-        normal_scale: f32,
-        /// Opacity, times the base colour texture's alpha.
-        #[serde(default = "one")]
-        alpha: f32,
-        /// `opaque` (alpha ignored), `mask` (cut out where alpha < `alpha_cutoff`) or
-        /// `blend` (opaque with probability alpha), for camera and shadow rays alike.
-        #[serde(default)]
-        alpha_mode: AlphaMode,
-        #[serde(default = "half")]
-        alpha_cutoff: f32,
-        #[serde(default)]
-        emission: ColorDesc,
-        /// Emit from the back side too.
-        #[serde(default)]
-        two_sided: bool,
-    },
-    /// A light: emits `radiance` from its front side, or both with `two_sided`; absorbs.
-    Emissive {
-        radiance: ColorDesc,
-        #[serde(default)]
-        two_sided: bool,
-    },
-}
-
-impl MaterialDesc {
-    /// Whether the material emits from both sides.
-    pub fn two_sided(&self) -> bool {
-        match self {
-            MaterialDesc::Lambertian { two_sided, .. }
-            | MaterialDesc::Metal { two_sided, .. }
-            | MaterialDesc::Dielectric { two_sided, .. }
-            | MaterialDesc::Microfacet { two_sided, .. }
-            | MaterialDesc::Pbr { two_sided, .. }
-            | MaterialDesc::Emissive { two_sided, .. } => *two_sided,
-        }
-    }
-}
-
-/// `alpha_mode` of a pbr material, as glTF's alphaMode.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum AlphaMode {
-    #[default]
-    Opaque,
-    Mask,
-    Blend,
-}
-
-fn half() -> f32 {
-    0.5
-}
-
-fn glass_ior() -> f32 {
-    1.5
-}
-
 fn white() -> [f32; 3] {
     [1.0; 3]
-}
-
-fn white_color() -> ColorDesc {
-    ColorDesc::Rgb([1.0; 3])
 }
 
 /// `transform = { scale, rotate, translate }`: scale, then rotate about X, Y, Z (degrees),

@@ -1,6 +1,6 @@
 //! What a file brings besides its triangles, in the scene format's terms: meshes, placed
 //! instances of them, materials and textures, cameras and lights. glTF files
-//! (`gltf_file`) and OBJ files with their .mtl (`mesh`) are read into it; the flattener
+//! (`gltf`) and OBJ files with their .mtl (`mesh`) are read into it; the flattener
 //! writes each instance's triangles under its own transform and appends the materials and
 //! textures after the scene file's own.
 
@@ -9,7 +9,8 @@ use std::sync::Arc;
 use glam::{Affine3A, Vec3};
 
 use super::bvh::Aabb;
-use super::format::{CameraDesc, LightDesc, MaterialDesc, TextureDesc};
+use super::format::{CameraDesc, LightDesc, TextureDesc};
+use super::materials::MaterialDesc;
 use super::mesh::MeshData;
 use super::textures::ImageData;
 
@@ -97,15 +98,8 @@ impl ImportedScene {
 
     /// Whether a material of an instance emits light.
     pub fn emits(&self) -> bool {
-        self.instances.iter().any(|i| {
-            let m = &self.materials[i.material].1;
-            let e = match m {
-                MaterialDesc::Pbr { emission, .. } | MaterialDesc::Dielectric { emission, .. } => {
-                    emission
-                }
-                _ => return true,
-            };
-            e.texture().is_some() || e.rgb().iter().any(|&c| c > 0.0)
-        })
+        self.instances
+            .iter()
+            .any(|i| self.materials[i.material].1.emits())
     }
 }

@@ -5,6 +5,7 @@
 use glam::{Mat3, Vec3};
 
 use super::format::LightDesc;
+use super::materials::common::Surface;
 use super::records::{
     self, Emitter, Material, Primitive, Texture, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
     LIGHT_POINT, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_HIT, NO_LIGHT, PRIM_LIGHT_SHIFT,
@@ -263,10 +264,11 @@ pub fn light_list(
         } else {
             1.0
         };
-        let radiance = if mat.tex_emission != records::NO_TEXTURE {
+        let emission = Surface::read(mat);
+        let radiance = if emission.emission_texture != records::NO_TEXTURE {
             1.0
         } else {
-            luminance(mat.emission)
+            luminance(emission.emission.extend(0.0).to_array())
         };
         if radiance.is_nan() || radiance <= 0.0 {
             continue;

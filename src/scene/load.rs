@@ -13,10 +13,10 @@ use super::error::{self, Problem, SceneError};
 use super::flat::FlatScene;
 use super::flatten::{self, Build, SceneFiles};
 use super::format::{
-    BackgroundDesc, CameraDesc, ColorSpace, LightSampling, MaterialDesc, ObjectDesc, Projection,
-    RenderDesc, SamplerKind, SceneFile, TextureDesc,
+    BackgroundDesc, CameraDesc, ColorSpace, LightSampling, ObjectDesc, Projection, RenderDesc,
+    SamplerKind, SceneFile, TextureDesc,
 };
-use super::gltf_file::{self, GltfError};
+use super::gltf::{self, GltfError};
 use super::imported::ImportedScene;
 use super::{mesh, mtl, textures, validate};
 
@@ -157,7 +157,7 @@ fn load_gltf_scene(
 ) -> Result<FlatScene, SceneError> {
     let invalid = invalid_in(path);
     let gltf_problem = |e: GltfError| Problem::at("", 0, e.key, e.message);
-    let g = gltf_file::load_gltf(path, "").map_err(|e| invalid(vec![gltf_problem(e)]))?;
+    let g = gltf::load_gltf(path, "").map_err(|e| invalid(vec![gltf_problem(e)]))?;
     let mut warnings = g.warnings.clone();
     let bounds = g.bounds();
     if bounds.is_empty() {
@@ -298,7 +298,7 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 |p| {
                     let prefix = format!("objects[{i}]/");
                     let g: ImportedScene = if matches!(obj.get_ref(), ObjectDesc::Gltf { .. }) {
-                        gltf_file::load_gltf(p, &prefix).map_err(|e| e.to_string())?
+                        gltf::load_gltf(p, &prefix).map_err(|e| e.to_string())?
                     } else if mesh::is_ply(p) {
                         return Err(
                             "a PLY file has no materials: give the object a `material`".into()
@@ -337,15 +337,10 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 |p| {
                     let mut m = mesh::load_mesh(p)?;
                     // a normal map needs tangents: MikkTSpace's, over the mesh's uvs
-                    let mapped = file.materials.get(material).is_some_and(|d| {
-                        matches!(
-                            d.get_ref(),
-                            MaterialDesc::Pbr {
-                                normal_map: Some(_),
-                                ..
-                            }
-                        )
-                    });
+                    let mapped = file
+                        .materials
+                        .get(material)
+                        .is_some_and(|d| d.get_ref().normal_map().is_some());
                     if mapped {
                         mesh::generate_tangents(&mut m);
                     }

@@ -7,8 +7,10 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::format::{AlphaMode, ColorDesc, ColorSpace, MaterialDesc, TextureDesc, WrapMode};
+use super::format::{ColorSpace, TextureDesc, WrapMode};
 use super::imported::{ImportedScene, ImportedTexture, Instance};
+use super::materials::common::ColorDesc;
+use super::materials::{dielectric, imported_key, lambertian, pbr, MaterialDesc};
 use super::mesh::{check, generate_tangents, read_obj, MeshData, MAX_MESH_FILE_BYTES};
 use super::textures::{ImageData, MAX_TEXELS};
 
@@ -79,23 +81,17 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
                 ));
                 out.materials.push((
                     format!("{prefix}default material"),
-                    MaterialDesc::Lambertian {
+                    MaterialDesc::Lambertian(lambertian::Desc {
                         albedo: ColorDesc::Rgb([0.8; 3]),
                         emission: ColorDesc::Rgb([0.0; 3]),
                         two_sided: false,
-                    },
+                    }),
                 ));
                 out.materials.len() - 1
             }),
         };
         mesh = check(mesh).map_err(|e| format!("object \"{}\" {e}", model.name))?;
-        if matches!(
-            &out.materials[material].1,
-            MaterialDesc::Pbr {
-                normal_map: Some(_),
-                ..
-            }
-        ) {
+        if out.materials[material].1.normal_map().is_some() {
             generate_tangents(&mut mesh);
         }
         out.meshes.push(mesh);
@@ -192,108 +188,32 @@ fn map_statement(s: &str) -> (String, f32) {
     (words[i.min(words.len())..].join(" "), bump)
 }
 
-/// A .mtl material on wgtrace's (documented in the README's scene format):
-/// - illum 4, 6, 7 or 9 (refraction): `dielectric` of ior Ni (1.5), tinted by Tf
-///   (white);
-/// - otherwise `pbr` with metallic 0: base colour Kd (times map_Kd), specular colour Ks
-///   (no specular lobe without Ks), roughness (2 / (Ns + 2))^(1/4) (GGX alpha =
-///   sqrt(2 / (Ns + 2)), Blinn-Phong's exponent matched, as in pbrt's conversion), ior Ni,
-///   opacity d (blend below 1), the normal map of map_Bump / bump / norm (its -bm scales
-///   it);
-/// - Ke emits, from the front side.
+/// A .mtl material on wgtrace's (documented in docs/scene-format.md): illum 4, 6, 7 or 9
+/// (refraction) onto `dielectric`, any other onto `pbr` (each module maps its own), then
+/// the same checks as a scene file's materials, their problems named by the statement.
 fn mtl_material(
     m: &tobj::Material,
     textures: &mut MtlTextures,
     warnings: &mut Vec<String>,
 ) -> Result<MaterialDesc, String> {
-    let finite3 = |what: &str, c: [f32; 3]| -> Result<[f32; 3], String> {
-        if c.iter().all(|x| x.is_finite() && *x >= 0.0) {
-            Ok(c)
-        } else {
-            Err(format!("{what} must be >= 0, got {c:?}"))
-        }
-    };
-    let kd = finite3("Kd", m.diffuse.unwrap_or([0.8; 3]))?;
-    let ks = finite3("Ks", m.specular.unwrap_or([0.0; 3]))?;
-    let ke = finite3("Ke", m.emissive.unwrap_or([0.0; 3]))?;
-    let ior = m.optical_density.unwrap_or(1.5);
-    if !(ior.is_finite() && ior >= 1.0) {
-        return Err(format!("Ni must be >= 1, got {ior}"));
-    }
-    let emission = ColorDesc::Rgb(ke);
-    if matches!(m.illumination_model, Some(4 | 6 | 7 | 9)) {
-        let tint = match m.unknown_param.get("Tf").map(|s| parse3(s)) {
-            Some(Some(c)) => finite3("Tf", c)?.map(|x| x.min(1.0)),
-            _ => [1.0; 3],
+    let (desc, keys) = if matches!(m.illumination_model, Some(4 | 6 | 7 | 9)) {
+        (
+            MaterialDesc::Dielectric(dielectric::from_mtl(m)),
+            dielectric::MTL_KEYS,
+        )
+    } else {
+        let mut image = |statement: &str, srgb: bool, factor: [f32; 3]| {
+            textures.texture(statement, srgb, factor)
         };
-        return Ok(MaterialDesc::Dielectric {
-            ior,
-            tint: ColorDesc::Rgb(tint),
-            absorption: [0.0; 3],
-            emission,
-            two_sided: false,
-        });
-    }
-    let base_color = match &m.diffuse_texture {
-        Some(t) => ColorDesc::Texture(textures.texture(t, true, kd)?.0),
-        None => ColorDesc::Rgb(kd.map(|x| x.min(1.0))),
+        (
+            MaterialDesc::Pbr(pbr::from_mtl(m, &mut image, warnings)?),
+            pbr::MTL_KEYS,
+        )
     };
-    let (normal_map, normal_scale) = match m
-        .normal_texture
-        .as_deref()
-        .or(m.unknown_param.get("norm").map(String::as_str))
-    {
-        Some(t) => {
-            let (name, bump) = textures.texture(t, false, [1.0; 3])?;
-            (Some(name), bump)
-        }
-        None => (None, 1.0),
-    };
-    let ns = m.shininess.unwrap_or(0.0).max(0.0);
-    let roughness = (2.0 / (ns + 2.0)).powf(0.25);
-    let dissolve = m.dissolve.unwrap_or(1.0);
-    if !(0.0..=1.0).contains(&dissolve) {
-        return Err(format!("d must be in [0, 1], got {dissolve}"));
-    }
-    if m.specular_texture.is_some() || m.shininess_texture.is_some() || m.dissolve_texture.is_some()
-    {
-        warnings.push(format!(
-            "material \"{}\": map_Ks, map_Ns and map_d are left out (their factors apply)",
-            m.name
-        ));
-    }
-    let has_specular = ks.iter().any(|&x| x > 0.0);
-    Ok(MaterialDesc::Pbr {
-        base_color,
-        metallic: 0.0,
-        roughness,
-        ior,
-        specular: if has_specular { 1.0 } else { 0.0 },
-        specular_color: ColorDesc::Rgb(if has_specular { ks } else { [1.0; 3] }),
-        metallic_roughness: None,
-        specular_texture: None,
-        normal_map,
-        normal_scale,
-        alpha: dissolve,
-        alpha_mode: if dissolve < 1.0 {
-            AlphaMode::Blend
-        } else {
-            AlphaMode::Opaque
-        },
-        alpha_cutoff: 0.5,
-        emission,
-        two_sided: false,
-    })
-}
-
-fn parse3(s: &str) -> Option<[f32; 3]> {
-    let v: Vec<f32> = s
-        .split_whitespace()
-        .map(|w| w.parse().ok())
-        .collect::<Option<_>>()?;
-    match v[..] {
-        [x] => Some([x; 3]),
-        [r, g, b] => Some([r, g, b]),
-        _ => None,
+    let names: Vec<String> = textures.out.iter().map(|t| t.name.clone()).collect();
+    let named = |field: &str| imported_key("", keys, field);
+    match desc.check(&named, &names).into_iter().next() {
+        Some((key, message)) => Err(format!("{key}: {message}")),
+        None => Ok(desc),
     }
 }

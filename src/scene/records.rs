@@ -77,21 +77,24 @@ shared_constants! {
     BVH_COUNT_BITS: u32 = 3;
     BVH_COUNT_MASK: u32 = (1 << BVH_COUNT_BITS) - 1;
 
-    /// Material tags: the cases of the `switch` in `materials.wgsl`.
-    MAT_LAMBERTIAN: u32 = 0;
-    MAT_EMISSIVE: u32 = 1;
-    MAT_METAL: u32 = 2;
-    MAT_DIELECTRIC: u32 = 3;
-    MAT_MICROFACET: u32 = 4;
-    MAT_PBR: u32 = 5;
     /// Material flag: emits from both sides.
     MAT_FLAG_TWO_SIDED: u32 = 1;
-    /// Material flag (pbr): cut out where alpha (`albedo.w` times the base colour
-    /// texture's alpha) is below the cutoff (`emission.w`), for every ray.
+    /// Material flag: cut out where alpha (the surface view's `opacity` times the
+    /// `color` texture's alpha) is below its `alpha_cutoff`, for every ray.
     MAT_FLAG_ALPHA_MASK: u32 = 2;
-    /// Material flag (pbr): opaque with probability alpha, else passed through, for every
-    /// ray (stochastic transparency).
+    /// Material flag: opaque with probability alpha, else passed through, for every ray
+    /// (stochastic transparency).
     MAT_FLAG_ALPHA_BLEND: u32 = 4;
+    /// Material flag: it has a lobe with a density, so next-event estimation weighs
+    /// light samples at it (its `eval` and `pdf`): the material's answer
+    /// (`scene::materials::Lobes`), which the shaders, the CPU and the GPU plan all read.
+    MAT_FLAG_NEE: u32 = 8;
+    /// Material flag: it may sample a delta lobe (a mirror, a refraction), which only its
+    /// own sampling finds: the 50/50 mixture, whose pdf cannot hold one, leaves it out.
+    MAT_FLAG_DELTA: u32 = 16;
+    /// Material flag: a texture of `color2` is clamped to 1, as one of `color` always is
+    /// (the second colour is a reflectance).
+    MAT_FLAG_COLOR2_CLAMPED: u32 = 32;
 
     /// Texture tags: the cases of the `switch` in `textures.wgsl`.
     TEX_CONSTANT: u32 = 0;
@@ -215,35 +218,30 @@ pub struct Primitive {
     pub c: [f32; 4],
 }
 
-/// A tagged material. `emission` is the radiance leaving the front side (both sides with
-/// [`MAT_FLAG_TWO_SIDED`]); `params` holds per-type scalars (metal: fuzz; dielectric: ior;
-/// microfacet: roughness, ior); `extra` a per-type colour (dielectric: absorption per unit
-/// length; microfacet: specular colour). `albedo` is the dielectric's tint and the
-/// microfacet's diffuse colour.
+/// A tagged material. The record is storage: each material names its places in its view
+/// (`scene::materials::NAME::Params`, and `Surface` for what every material has), and no
+/// code outside those views gives a place a meaning. The record's own rules, the same
+/// for every material: a texture in `tex_color` replaces `color.rgb` at a hit, clamped
+/// to 1 (a reflectance), and its alpha multiplies the surface's opacity; one in
+/// `tex_color2` replaces `color2.rgb`, clamped with `MAT_FLAG_COLOR2_CLAMPED`; one in
+/// `tex_emission` replaces `emission.rgb`; `tex_data0` and `tex_data1` are read by the
+/// material's own texture hook only. Flags: `MAT_FLAG_*`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
+    /// The material's type (`scene::materials::MaterialKind`).
     pub tag: u32,
     pub flags: u32,
-    /// Texture of `albedo` (or `NO_TEXTURE`).
-    pub tex_albedo: u32,
-    /// Texture of `emission` (or `NO_TEXTURE`).
+    pub tex_color: u32,
     pub tex_emission: u32,
-    pub albedo: [f32; 4],
+    pub color: [f32; 4],
     pub emission: [f32; 4],
-    pub params: [f32; 4],
-    pub extra: [f32; 4],
-    /// Texture of `extra` (microfacet specular colour, or `NO_TEXTURE`).
-    pub tex_extra: u32,
-    /// pbr: texture whose green channel multiplies the roughness and blue the metallic
-    /// factor (glTF's metallicRoughnessTexture), or `NO_TEXTURE`.
-    pub tex_params: u32,
-    /// pbr: tangent-space normal map (linear, +y along the uv's v), its xy scaled by
-    /// `extra.w`; or `NO_TEXTURE`.
+    pub scalars: [f32; 4],
+    pub color2: [f32; 4],
+    pub tex_color2: u32,
+    pub tex_data0: u32,
     pub tex_normal: u32,
-    /// pbr: texture whose alpha multiplies `specular` (`params.w`; KHR_materials_specular's
-    /// specularTexture), or `NO_TEXTURE`.
-    pub tex_specular: u32,
+    pub tex_data1: u32,
 }
 
 impl Default for Material {
@@ -251,16 +249,16 @@ impl Default for Material {
         Material {
             tag: 0,
             flags: 0,
-            tex_albedo: NO_TEXTURE,
+            tex_color: NO_TEXTURE,
             tex_emission: NO_TEXTURE,
-            albedo: [0.0; 4],
+            color: [0.0; 4],
             emission: [0.0; 4],
-            params: [0.0; 4],
-            extra: [0.0; 4],
-            tex_extra: NO_TEXTURE,
-            tex_params: NO_TEXTURE,
+            scalars: [0.0; 4],
+            color2: [0.0; 4],
+            tex_color2: NO_TEXTURE,
+            tex_data0: NO_TEXTURE,
             tex_normal: NO_TEXTURE,
-            tex_specular: NO_TEXTURE,
+            tex_data1: NO_TEXTURE,
         }
     }
 }
@@ -530,16 +528,16 @@ shared_record!(Primitive {
 shared_record!(Material {
     tag,
     flags,
-    tex_albedo,
+    tex_color,
     tex_emission,
-    albedo,
+    color,
     emission,
-    params,
-    extra,
-    tex_extra,
-    tex_params,
+    scalars,
+    color2,
+    tex_color2,
+    tex_data0,
     tex_normal,
-    tex_specular
+    tex_data1
 });
 shared_record!(Texture {
     tag,

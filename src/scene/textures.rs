@@ -3,7 +3,8 @@
 
 use std::path::Path;
 
-use super::format::{CheckerMapping, ColorDesc, NoiseKind, TextureDesc, WrapMode};
+use super::format::{CheckerMapping, NoiseKind, TextureDesc, WrapMode};
+use super::materials::common::ColorDesc;
 use super::records::{self, Texture, NOISE_TABLE_ENTRIES, NO_TEXTURE, TEX_FLAG_SOLID};
 
 /// An image in linear RGB, row 0 at the top.

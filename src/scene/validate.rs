@@ -6,9 +6,11 @@ use super::error::Problem;
 use toml::Spanned;
 
 use super::format::{
-    CameraDesc, ColorDesc, LightDesc, MaterialDesc, ObjectDesc, Projection, RenderDesc, SceneFile,
-    TextureDesc, TransformDesc,
+    CameraDesc, LightDesc, ObjectDesc, Projection, RenderDesc, SceneFile, TextureDesc,
+    TransformDesc,
 };
+use super::materials::common::ColorDesc;
+use super::materials::MaterialDesc;
 use super::shapes::polygon_normal;
 
 /// Largest image side accepted.
@@ -268,137 +270,12 @@ impl Validator<'_> {
         }
     }
 
-    /// One `[materials.NAME]`.
+    /// One `[materials.NAME]`: its module's checks, under the scene file's keys.
     fn material(&mut self, name: &str, m: &Spanned<MaterialDesc>) {
-        let at = m.span().start;
-        let key = format!("materials.{name}");
-        match m.get_ref() {
-            MaterialDesc::Lambertian {
-                albedo, emission, ..
-            } => {
-                self.color(&format!("{key}.albedo"), albedo, true, at);
-                self.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Metal {
-                albedo,
-                fuzz,
-                emission,
-                ..
-            } => {
-                self.color(&format!("{key}.albedo"), albedo, true, at);
-                if !(0.0..=1.0).contains(fuzz) {
-                    self.push(
-                        at,
-                        &format!("{key}.fuzz"),
-                        format!("must be in [0, 1], got {fuzz}"),
-                    );
-                }
-                self.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Dielectric {
-                ior,
-                tint,
-                absorption,
-                emission,
-                ..
-            } => {
-                if !(*ior > 0.0 && ior.is_finite()) {
-                    self.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
-                }
-                self.color(&format!("{key}.tint"), tint, true, at);
-                self.nonnegative3(&format!("{key}.absorption"), *absorption, at);
-                self.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Microfacet {
-                albedo,
-                specular,
-                roughness,
-                ior,
-                emission,
-                ..
-            } => {
-                self.color(&format!("{key}.albedo"), albedo, true, at);
-                if let Some(ks) = specular {
-                    self.color(&format!("{key}.specular"), ks, true, at);
-                }
-                if !(0.0..=1.0).contains(roughness) {
-                    self.push(
-                        at,
-                        &format!("{key}.roughness"),
-                        format!("must be in [0, 1], got {roughness}"),
-                    );
-                }
-                if !(*ior > 0.0 && ior.is_finite()) {
-                    self.push(at, &format!("{key}.ior"), format!("must be > 0, got {ior}"));
-                }
-                self.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Pbr {
-                base_color,
-                metallic,
-                roughness,
-                ior,
-                specular,
-                specular_color,
-                emission,
-                metallic_roughness,
-                specular_texture,
-                normal_map,
-                normal_scale,
-                alpha,
-                alpha_cutoff,
-                ..
-            } => {
-                self.color(&format!("{key}.base_color"), base_color, true, at);
-                self.color(&format!("{key}.specular_color"), specular_color, false, at);
-                for (name, t) in [
-                    ("metallic_roughness", metallic_roughness),
-                    ("specular_texture", specular_texture),
-                    ("normal_map", normal_map),
-                ] {
-                    if let Some(t) = t {
-                        self.color(
-                            &format!("{key}.{name}"),
-                            &ColorDesc::Texture(t.clone()),
-                            false,
-                            at,
-                        );
-                    }
-                }
-                if !normal_scale.is_finite() {
-                    self.push(
-                        at,
-                        &format!("{key}.normal_scale"),
-                        format!("must be finite, got {normal_scale}"),
-                    );
-                }
-                for (name, v) in [
-                    ("metallic", metallic),
-                    ("roughness", roughness),
-                    ("specular", specular),
-                    ("alpha", alpha),
-                    ("alpha_cutoff", alpha_cutoff),
-                ] {
-                    if !(0.0..=1.0).contains(v) {
-                        self.push(
-                            at,
-                            &format!("{key}.{name}"),
-                            format!("must be in [0, 1], got {v}"),
-                        );
-                    }
-                }
-                if !(*ior >= 1.0 && ior.is_finite()) {
-                    self.push(
-                        at,
-                        &format!("{key}.ior"),
-                        format!("must be >= 1, got {ior}"),
-                    );
-                }
-                self.color(&format!("{key}.emission"), emission, false, at);
-            }
-            MaterialDesc::Emissive { radiance, .. } => {
-                self.color(&format!("{key}.radiance"), radiance, false, at);
-            }
+        let names: Vec<String> = self.textures.iter().map(|(n, _)| n.clone()).collect();
+        let key = |field: &str| format!("materials.{name}.{field}");
+        for (key, message) in m.get_ref().check(&key, &names) {
+            self.push(m.span().start, &key, message);
         }
     }
 

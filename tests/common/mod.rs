@@ -293,3 +293,130 @@ pub fn to_kernel(r: &wgtrace::cpu::types::Ray) -> wgtrace::scene::records::Kerne
         dir: r.dir.extend(0.0).to_array(),
     }
 }
+
+/// A material's record from its `[materials.NAME]` keys (`type = "pbr"\nroughness = 0.3`),
+/// checked and packed as the renderer does (`MaterialDesc::record`): tests never pack
+/// records by hand, so a change to the packing is a change to what they test.
+pub fn material(keys: &str) -> wgtrace::scene::records::Material {
+    let desc: wgtrace::scene::materials::MaterialDesc =
+        toml::from_str(keys).unwrap_or_else(|e| panic!("{keys}: {e}"));
+    let problems = desc.check(&|field| field.to_string(), &[]);
+    assert!(problems.is_empty(), "{keys}: {problems:?}");
+    desc.record(&[])
+}
+
+/// A material the material tests run every harness on (tests/materials.rs on the CPU,
+/// tests/kernel.rs on the GPU against the CPU).
+pub struct TestMaterial {
+    pub name: &'static str,
+    /// Its keys in a scene file (packed by [`material`]).
+    pub keys: &'static str,
+    /// It absorbs nothing: every sample of the white furnace weighs exactly 1.
+    pub lossless: bool,
+    /// Its pdf is smooth enough for the chi-square test's 20 x 40 cells (not a near-mirror).
+    pub chi2: bool,
+}
+
+const fn row(name: &'static str, keys: &'static str, lossless: bool, chi2: bool) -> TestMaterial {
+    TestMaterial {
+        name,
+        keys,
+        lossless,
+        chi2,
+    }
+}
+
+/// The materials every harness runs on: each type, its lobes and the extremes of its
+/// parameters (white for the furnace, roughness 0 and 1, high ior, grazing-prone ones).
+pub const MATERIALS: &[TestMaterial] = &[
+    row("lambertian white", "type = \"lambertian\"\nalbedo = [1, 1, 1]", true, true),
+    row("lambertian coloured", "type = \"lambertian\"\nalbedo = [0.8, 0.4, 0.1]", false, true),
+    row("emissive", "type = \"emissive\"\nradiance = [1, 1, 1]", false, false),
+    row("metal mirror", "type = \"metal\"\nalbedo = [1, 1, 1]", true, false),
+    row("metal fuzz 0.4", "type = \"metal\"\nalbedo = [0.9, 0.9, 0.9]\nfuzz = 0.4", false, false),
+    row("dielectric 1.5", "type = \"dielectric\"\nior = 1.5", true, false),
+    row(
+        "dielectric 1.33 tinted",
+        "type = \"dielectric\"\nior = 1.33\ntint = [0.9, 0.8, 0.7]",
+        false,
+        false,
+    ),
+    row(
+        "microfacet smooth",
+        "type = \"microfacet\"\nalbedo = [1, 1, 1]\nspecular = [1, 1, 1]\nroughness = 0",
+        false,
+        false,
+    ),
+    row(
+        "microfacet 0.05 ior 3",
+        "type = \"microfacet\"\nalbedo = [1, 1, 1]\nspecular = [1, 1, 1]\nroughness = 0.05\nior = 3",
+        false,
+        false,
+    ),
+    row(
+        "microfacet 0.1",
+        "type = \"microfacet\"\nalbedo = [0.5, 0.5, 0.5]\nspecular = [1, 1, 1]\nroughness = 0.1",
+        false,
+        true,
+    ),
+    row(
+        "microfacet 0.4",
+        "type = \"microfacet\"\nalbedo = [0.5, 0.5, 0.5]\nspecular = [1, 1, 1]\nroughness = 0.4",
+        false,
+        true,
+    ),
+    row(
+        "microfacet white 1.0",
+        "type = \"microfacet\"\nalbedo = [1, 1, 1]\nspecular = [1, 1, 1]\nroughness = 1",
+        false,
+        true,
+    ),
+    row(
+        "pbr white smooth",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0\nroughness = 0",
+        false,
+        false,
+    ),
+    row(
+        "pbr white 0.1 ior 3",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0\nroughness = 0.1\nior = 3",
+        false,
+        false,
+    ),
+    row(
+        "pbr dielectric 0.3",
+        "type = \"pbr\"\nbase_color = [0.9, 0.6, 0.3]\nmetallic = 0\nroughness = 0.3",
+        false,
+        true,
+    ),
+    row(
+        "pbr metal 0.3",
+        "type = \"pbr\"\nbase_color = [0.9, 0.6, 0.3]\nmetallic = 1\nroughness = 0.3",
+        false,
+        true,
+    ),
+    row(
+        "pbr half 0.7",
+        "type = \"pbr\"\nbase_color = [0.9, 0.6, 0.3]\nmetallic = 0.5\nroughness = 0.7",
+        false,
+        true,
+    ),
+    row(
+        "pbr white metal 1.0",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 1\nroughness = 1",
+        false,
+        true,
+    ),
+    row(
+        "pbr white 0.6 ior 3",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0.5\nroughness = 0.6\nior = 3",
+        false,
+        true,
+    ),
+    row(
+        "pbr lambertian limit",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0\nroughness = 0.5\nspecular = 0",
+        true,
+        true,
+    ),
+];

@@ -1,0 +1,192 @@
+//! Mirrors `shaders/shared/materials.wgsl` and the dispatch `gpu::codegen` writes for it
+//! (`generated/materials`): a material at a hit (its textures looked up), what it emits,
+//! the integrator's questions, and scattering, BSDF and pdf by the material's type. One
+//! file per material beside this one mirrors `shaders/materials/NAME.wgsl`; the dispatch
+//! below is written from the type list (`scene::materials::for_each_material!`).
+
+pub mod dielectric;
+pub mod emissive;
+pub mod lambertian;
+pub mod metal;
+pub mod microfacet;
+pub mod pbr;
+
+use glam::Vec3;
+
+use super::bindings::Bindings;
+use super::bsdf::{Scatter, Shading, ABSORBED};
+use super::textures::{texture_alpha, texture_value};
+use super::types::{Hit, Ray};
+use crate::scene::materials::common::Surface;
+use crate::scene::materials::{for_each_material, MaterialKind};
+use crate::scene::records::{
+    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA,
+    MAT_FLAG_NEE, MAT_FLAG_TWO_SIDED, NO_TEXTURE,
+};
+
+macro_rules! dispatch {
+    ($( $(#[$doc:meta])* $kind:ident = $tag:literal, $module:ident, $define:literal; )*) => {
+        /// Scattering by the material's type (the shaders' generated `scatter`); an
+        /// unknown type absorbs.
+        pub fn scatter(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
+            match MaterialKind::from_tag(mat.tag) {
+                $( Some(MaterialKind::$kind) => {
+                    crate::scene::materials::$module::Params::read(mat).scatter(ray, hit, u)
+                } )*
+                None => ABSORBED,
+            }
+        }
+
+        /// BSDF x cos of the material's type for unit wo and wi about the unit normal n
+        /// on wo's side (the generated `material_eval`).
+        pub fn material_eval(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+            match MaterialKind::from_tag(mat.tag) {
+                $( Some(MaterialKind::$kind) => {
+                    crate::scene::materials::$module::Params::read(mat).eval(n, wo, wi)
+                } )*
+                None => Vec3::ZERO,
+            }
+        }
+
+        /// The density of the material's sampling (the generated `material_pdf`).
+        pub fn material_pdf(mat: &Material, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+            match MaterialKind::from_tag(mat.tag) {
+                $( Some(MaterialKind::$kind) => {
+                    crate::scene::materials::$module::Params::read(mat).pdf(n, wo, wi)
+                } )*
+                None => 0.0,
+            }
+        }
+
+        /// The look-ups of the material's own textures (the generated
+        /// `material_textures`; a material without any is kept as it is).
+        pub fn material_textures(b: &Bindings, mat: &Material, hit: &Hit) -> Material {
+            let mut record = *mat;
+            match MaterialKind::from_tag(mat.tag) {
+                $( Some(MaterialKind::$kind) => {
+                    crate::scene::materials::$module::Params::read(mat)
+                        .textures(b, hit)
+                        .write(&mut record)
+                } )*
+                None => {}
+            }
+            record
+        }
+    };
+}
+
+for_each_material!(dispatch);
+
+/// Radiance the surface emits toward the ray that hit it.
+pub fn emitted(mat: &Material, hit: &Hit) -> Vec3 {
+    if hit.front_face || (mat.flags & MAT_FLAG_TWO_SIDED) != 0 {
+        Surface::read(mat).emission
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// The material at a hit with its textured colours looked up (the record's rules:
+/// `color` clamped to 1, `color2` where `MAT_FLAG_COLOR2_CLAMPED` says, `emission` as it
+/// is), then its own textures.
+pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
+    let mut mat = *m;
+    // the .w of each colour is a scalar of its own
+    if mat.tex_color != NO_TEXTURE {
+        mat.color = texture_value(b, mat.tex_color, hit.uv, hit.p)
+            .min(Vec3::ONE)
+            .extend(mat.color[3])
+            .to_array();
+    }
+    if mat.tex_color2 != NO_TEXTURE {
+        let c = texture_value(b, mat.tex_color2, hit.uv, hit.p);
+        let c = if mat.flags & MAT_FLAG_COLOR2_CLAMPED != 0 {
+            c.min(Vec3::ONE)
+        } else {
+            c
+        };
+        mat.color2 = c.extend(mat.color2[3]).to_array();
+    }
+    if mat.tex_emission != NO_TEXTURE {
+        mat.emission = texture_value(b, mat.tex_emission, hit.uv, hit.p)
+            .extend(mat.emission[3])
+            .to_array();
+    }
+    material_textures(b, &mat, hit)
+}
+
+/// The hit with its shading normal from the surface's tangent-space normal map
+/// (materials.wgsl's `normal_mapped`).
+pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
+    let mut h = *hit;
+    let s = Surface::read(mat);
+    let tangent = hit.tangent.truncate();
+    if s.normal_texture == NO_TEXTURE || tangent.length() == 0.0 {
+        return h;
+    }
+    let n = hit.ns;
+    let t = (tangent - n * n.dot(tangent)).normalize();
+    let sign = if hit.tangent.w >= 0.0 { 1.0 } else { -1.0 };
+    let bt = n.cross(t) * sign;
+    let c = 2.0 * texture_value(b, s.normal_texture, hit.uv, hit.p) - Vec3::ONE;
+    let (x, y) = (c.x * s.normal_scale, c.y * s.normal_scale);
+    let m = t * x + bt * y + n * c.z;
+    let len = m.length();
+    if len > 0.0 && m.dot(hit.ng) > 0.0 {
+        h.ns = m / len;
+    }
+    h
+}
+
+/// Whether a ray passes through a hit (materials.wgsl's `transparent_at`): cut out below
+/// the cutoff (mask), or transparent when u >= alpha (blend).
+pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
+    let m = &b.materials[hit.material as usize];
+    if m.flags & (MAT_FLAG_ALPHA_MASK | MAT_FLAG_ALPHA_BLEND) == 0 {
+        return false;
+    }
+    let s = Surface::read(m);
+    let mut alpha = s.opacity;
+    if m.tex_color != NO_TEXTURE {
+        alpha *= texture_alpha(b, m.tex_color, hit.uv);
+    }
+    if m.flags & MAT_FLAG_ALPHA_MASK != 0 {
+        return alpha < s.alpha_cutoff;
+    }
+    u >= alpha
+}
+
+/// The uniform number of the k-th surface a ray meets (materials.wgsl's `alpha_u`).
+pub fn alpha_u(u: f32, k: u32) -> f32 {
+    let x = u + k as f32 * 0.618034;
+    x - x.floor()
+}
+
+/// BSDF x cos toward wi, 0 under the geometric surface (where scatter absorbs) and for
+/// delta lobes.
+pub fn bsdf_eval(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> Vec3 {
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    if side * wi.dot(hit.ng) <= 0.0 {
+        return Vec3::ZERO;
+    }
+    material_eval(mat, side * hit.ns, -ray.dir, wi)
+}
+
+/// The density with which scatter draws wi (before it absorbs directions under the
+/// geometric surface).
+pub fn bsdf_pdf(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> f32 {
+    let n = if hit.front_face { hit.ns } else { -hit.ns };
+    material_pdf(mat, n, -ray.dir, wi)
+}
+
+/// Whether next-event estimation applies: the material has a lobe with a density (its
+/// module's answer, in the flags).
+pub fn nee_applies(mat: &Material) -> bool {
+    mat.flags & MAT_FLAG_NEE != 0
+}
+
+/// Whether the 50/50 mixture samples lights: as `nee_applies`, less a material that may
+/// sample a delta lobe, which the mixture's pdf cannot hold.
+pub fn mixture_applies(mat: &Material) -> bool {
+    mat.flags & (MAT_FLAG_NEE | MAT_FLAG_DELTA) == MAT_FLAG_NEE
+}

@@ -1,0 +1,222 @@
+//! Textures: each look-up of a glTF texture (its image, colour space, factor, uv set and
+//! KHR_texture_transform) becomes a texture of the scene format, made once; each image is
+//! decoded once per colour space, within the texel cap. The material modules ask for them
+//! through [`MaterialReader`].
+
+use std::sync::Arc;
+
+use super::error::{GltfError, Result};
+use super::file::{check_uri, source_error};
+use super::loader::{Loader, TextureKey};
+use super::reader::MaterialReader;
+use crate::scene::format::{ColorSpace, TextureDesc, UvTransformDesc, WrapMode};
+use crate::scene::imported::ImportedTexture;
+use crate::scene::materials::common::ColorDesc;
+use crate::scene::textures::{self, ImageData};
+
+impl Loader<'_> {
+    /// The name of the scene-format texture for one look-up of a glTF texture.
+    fn texture_of(
+        &mut self,
+        info: &gltf::texture::Info,
+        srgb: bool,
+        factor: [f32; 3],
+        key: &str,
+    ) -> Result<String> {
+        let t = info.texture_transform();
+        let transform = t
+            .as_ref()
+            .map(|t| UvTransformDesc::from_v_down(t.offset(), t.rotation(), t.scale()));
+        if let Some(tr) = &t {
+            let [a, b] = tr.offset();
+            let [c, d] = tr.scale();
+            if ![a, b, c, d, tr.rotation()].iter().all(|x| x.is_finite()) {
+                return Err(GltfError::new(
+                    format!("{key}.extensions.KHR_texture_transform"),
+                    "must hold finite numbers",
+                ));
+            }
+        }
+        let uv_set = t.and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
+        self.texture_lookup(info.texture(), uv_set, transform, srgb, factor)
+            .map_err(|e| GltfError::new(e.key, format!("{} (the image of {key})", e.message)))
+    }
+
+    /// A normal texture's look-up: the crate gives its KHR_texture_transform only as JSON.
+    fn normal_texture_of(
+        &mut self,
+        n: &gltf::material::NormalTexture,
+        key: &str,
+    ) -> Result<String> {
+        let ext = n.extension_value("KHR_texture_transform");
+        let pair = |name: &str, default: [f32; 2]| -> Result<[f32; 2]> {
+            match ext.and_then(|e| e.get(name)) {
+                None => Ok(default),
+                Some(v) => match v
+                    .as_array()
+                    .map(|a| a.iter().map(|x| x.as_f64()).collect::<Vec<_>>())
+                {
+                    Some(a) if a.len() == 2 && a.iter().all(|x| x.is_some_and(f64::is_finite)) => {
+                        Ok([a[0].unwrap_or(0.0) as f32, a[1].unwrap_or(0.0) as f32])
+                    }
+                    _ => Err(GltfError::new(
+                        format!("{key}.extensions.KHR_texture_transform.{name}"),
+                        "must be two finite numbers",
+                    )),
+                },
+            }
+        };
+        let transform = match ext {
+            Some(e) => {
+                let rotation = e
+                    .get("rotation")
+                    .map_or(Some(0.0), |r| r.as_f64())
+                    .filter(|r| r.is_finite())
+                    .ok_or_else(|| {
+                        GltfError::new(
+                            format!("{key}.extensions.KHR_texture_transform.rotation"),
+                            "must be a finite number",
+                        )
+                    })? as f32;
+                Some(UvTransformDesc::from_v_down(
+                    pair("offset", [0.0; 2])?,
+                    rotation,
+                    pair("scale", [1.0; 2])?,
+                ))
+            }
+            None => None,
+        };
+        let uv_set = ext
+            .and_then(|e| e.get("texCoord"))
+            .and_then(|c| c.as_u64())
+            .map_or(n.tex_coord(), |c| c as u32);
+        self.texture_lookup(n.texture(), uv_set, transform, false, [1.0; 3])
+    }
+
+    fn texture_lookup(
+        &mut self,
+        tex: gltf::Texture,
+        uv_set: u32,
+        transform: Option<UvTransformDesc>,
+        srgb: bool,
+        factor: [f32; 3],
+    ) -> Result<String> {
+        let k = TextureKey {
+            texture: tex.index(),
+            srgb,
+            factor,
+            uv_set,
+            transform,
+        };
+        if let Some(i) = self.texture_keys.iter().position(|t| *t == k) {
+            return Ok(self.out.textures[i].name.clone());
+        }
+        let source = tex.source();
+        let image = self.image(&source, srgb)?;
+        if tex.sampler().wrap_t() != tex.sampler().wrap_s() {
+            self.out.warnings.push(format!(
+                "samplers[{}]: wrapT {:?} differs from wrapS {:?}; wgtrace wraps both as wrapS",
+                tex.sampler().index().unwrap_or(0),
+                tex.sampler().wrap_t(),
+                tex.sampler().wrap_s()
+            ));
+        }
+        let wrap = match tex.sampler().wrap_s() {
+            gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
+            gltf::texture::WrappingMode::MirroredRepeat => WrapMode::Mirror,
+            gltf::texture::WrappingMode::Repeat => WrapMode::Repeat,
+        };
+        let name = format!(
+            "{}textures[{}]#{}",
+            self.prefix,
+            tex.index(),
+            self.texture_keys.len()
+        );
+        self.out.textures.push(ImportedTexture {
+            name: name.clone(),
+            desc: TextureDesc::Image {
+                path: String::new(),
+                wrap,
+                factor,
+                color_space: if srgb {
+                    ColorSpace::Srgb
+                } else {
+                    ColorSpace::Linear
+                },
+                transform,
+            },
+            image,
+        });
+        self.texture_keys.push(k);
+        Ok(name)
+    }
+
+    /// glTF image `source` decoded (sRGB or linear), once per colour space.
+    fn image(&mut self, source: &gltf::Image, srgb: bool) -> Result<Arc<ImageData>> {
+        if let Some(img) = self.images.get(&(source.index(), srgb)) {
+            return Ok(img.clone());
+        }
+        let key = format!("images[{}]", source.index());
+        let bytes: Vec<u8> = match source.source() {
+            gltf::image::Source::View { view, .. } => {
+                let b = &self.buffers[view.buffer().index()];
+                b[view.offset()..view.offset() + view.length()].to_vec()
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                check_uri(uri, &format!("{key}.uri"))?;
+                let src = gltf::buffer::Source::Uri(uri);
+                gltf::buffer::Data::from_source(src, Some(self.dir))
+                    .map_err(|e| {
+                        GltfError::new(
+                            format!("{key}.uri"),
+                            source_error(e, &gltf::buffer::Source::Uri(uri)),
+                        )
+                    })?
+                    .0
+            }
+        };
+        let img =
+            textures::decode_image(&bytes, srgb).map_err(|e| GltfError::new(key.clone(), e))?;
+        self.texels += img.width as u64 * img.height as u64;
+        if self.texels > textures::MAX_TEXELS {
+            return Err(GltfError::new(
+                key,
+                format!(
+                    "brings the file's texels past the {} accepted",
+                    textures::MAX_TEXELS
+                ),
+            ));
+        }
+        let img = Arc::new(img);
+        self.images.insert((source.index(), srgb), img.clone());
+        Ok(img)
+    }
+}
+
+impl MaterialReader for Loader<'_> {
+    /// The factor alone, or an sRGB texture named and made once per texture, factor and
+    /// look-up.
+    fn color(
+        &mut self,
+        info: Option<gltf::texture::Info>,
+        factor: [f32; 3],
+        key: &str,
+    ) -> Result<ColorDesc> {
+        Ok(match info {
+            Some(info) => ColorDesc::Texture(self.texture_of(&info, true, factor, key)?),
+            None => ColorDesc::Rgb(factor),
+        })
+    }
+
+    fn texture(&mut self, info: &gltf::texture::Info, srgb: bool, key: &str) -> Result<String> {
+        self.texture_of(info, srgb, [1.0; 3], key)
+    }
+
+    fn normal_texture(&mut self, n: &gltf::material::NormalTexture, key: &str) -> Result<String> {
+        self.normal_texture_of(n, key)
+    }
+
+    fn warn(&mut self, message: String) {
+        self.out.warnings.push(message);
+    }
+}

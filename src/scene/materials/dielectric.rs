@@ -1,0 +1,177 @@
+//! `type = "dielectric"`: smooth glass. Reflection or refraction is chosen by the exact
+//! Fresnel reflectance; `tint` multiplies every scattering and `absorption` (per unit
+//! length, Beer-Lambert) acts inside. glTF's KHR_materials_transmission (with
+//! KHR_materials_volume) and .mtl's refracting illumination models map onto it. Shading:
+//! `shaders/materials/dielectric.wgsl`, CPU twin `cpu/materials/dielectric.rs`.
+
+use serde::Deserialize;
+
+use super::common::{material_view, white_color, Check, ColorDesc, Lobes, Model, TextureNames};
+use crate::scene::gltf::error::{GltfError, Result};
+use crate::scene::gltf::reader::{self, MaterialReader};
+use crate::scene::records::Material;
+
+/// Its entry in the scene format.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Desc {
+    pub ior: f32,
+    #[serde(default = "white_color")]
+    pub tint: ColorDesc,
+    #[serde(default)]
+    pub absorption: [f32; 3],
+    #[serde(default)]
+    pub emission: ColorDesc,
+    /// Emit from the back side too.
+    #[serde(default)]
+    pub two_sided: bool,
+}
+
+material_view! {
+    /// What the shaders read of it.
+    pub struct Params("DielectricParams") {
+        /// Multiplies every scattering.
+        tint: rgb = color,
+        tint_texture: u32 = tex_color,
+        /// Index of refraction inside (outside is 1).
+        ior: f32 = scalars.x,
+        /// Beer-Lambert coefficient per unit length inside.
+        absorption: rgb = color2,
+    }
+}
+
+/// The lobes of its type: deltas (reflection, refraction).
+pub const LOBES: Lobes = Lobes {
+    density: false,
+    delta: true,
+};
+
+impl Model for Desc {
+    fn check(&self, c: &mut Check) {
+        c.positive("ior", self.ior);
+        c.color("tint", &self.tint, true);
+        c.nonnegative3("absorption", self.absorption);
+        c.color("emission", &self.emission, false);
+    }
+
+    fn emission(&self) -> (&ColorDesc, bool) {
+        (&self.emission, self.two_sided)
+    }
+
+    fn lobes(&self) -> Lobes {
+        LOBES
+    }
+
+    fn pack(&self, t: &TextureNames, record: &mut Material) {
+        let (tint, tint_texture) = t.color(&self.tint);
+        Params {
+            tint,
+            tint_texture,
+            ior: self.ior,
+            absorption: self.absorption.into(),
+        }
+        .write(record);
+    }
+}
+
+/// Where a glTF material's values come from, by field: its problems name the JSON path.
+pub const GLTF_KEYS: &[(&str, &str)] = &[
+    ("ior", "extensions.KHR_materials_ior.ior"),
+    ("tint", "pbrMetallicRoughness.baseColorFactor"),
+    ("absorption", "extensions.KHR_materials_volume"),
+    ("emission", "emissiveFactor"),
+];
+
+/// glTF's KHR_materials_transmission (`factor` > 0) onto smooth glass of the material's
+/// ior, tinted by the base colour, absorbing inside as KHR_materials_volume says
+/// (sigma_a = -ln(attenuationColor) / attenuationDistance).
+pub fn from_gltf(
+    m: &gltf::Material,
+    key: &str,
+    factor: f32,
+    r: &mut dyn MaterialReader,
+) -> Result<Desc> {
+    let pbr = m.pbr_metallic_roughness();
+    let [red, green, blue, _] = pbr.base_color_factor();
+    let tint = r.color(
+        pbr.base_color_texture(),
+        [red, green, blue],
+        &format!("{key}.pbrMetallicRoughness.baseColorTexture"),
+    )?;
+    let emission = reader::emission(m, key, r)?;
+    if factor < 1.0 {
+        r.warn(format!(
+            "{key}: transmissionFactor {factor} is rendered as 1 (wgtrace's glass transmits all it does not reflect)"
+        ));
+    }
+    if pbr.roughness_factor() > 0.0 {
+        r.warn(format!(
+            "{key}: rough transmission is rendered as smooth glass"
+        ));
+    }
+    let mut absorption = [0.0; 3];
+    if let Some(v) = m.volume() {
+        let d = v.attenuation_distance();
+        let c = v.attenuation_color();
+        if d.is_nan() || d <= 0.0 {
+            return Err(GltfError::new(
+                format!("{key}.extensions.KHR_materials_volume.attenuationDistance"),
+                format!("must be > 0, got {d}"),
+            ));
+        }
+        if !c.iter().all(|x| (0.0..=1.0).contains(x)) {
+            return Err(GltfError::new(
+                format!("{key}.extensions.KHR_materials_volume.attenuationColor"),
+                format!("must be in [0, 1], got {c:?}"),
+            ));
+        }
+        if d.is_finite() {
+            // a colour of 0 absorbs everything: a large finite coefficient
+            absorption = c.map(|x| (-(x.max(1e-6)).ln() / d).min(1e6));
+        }
+    }
+    Ok(Desc {
+        ior: m.ior().unwrap_or(1.5),
+        tint,
+        absorption,
+        emission,
+        two_sided: m.double_sided(),
+    })
+}
+
+/// Where a .mtl material's values come from, by field.
+pub const MTL_KEYS: &[(&str, &str)] = &[
+    ("ior", "Ni"),
+    ("tint", "Tf"),
+    ("absorption", "Tf"),
+    ("emission", "Ke"),
+];
+
+/// A .mtl material of a refracting illumination model (4, 6, 7, 9): glass of ior Ni
+/// (1.5), tinted by Tf (white; each component at most 1), emitting Ke.
+pub fn from_mtl(m: &tobj::Material) -> Desc {
+    let tint = match m.unknown_param.get("Tf").map(|s| parse3(s)) {
+        Some(Some(c)) => ColorDesc::Rgb(c.map(|x| if x > 1.0 { 1.0 } else { x })),
+        _ => white_color(),
+    };
+    Desc {
+        ior: m.optical_density.unwrap_or(1.5),
+        tint,
+        absorption: [0.0; 3],
+        emission: ColorDesc::Rgb(m.emissive.unwrap_or([0.0; 3])),
+        two_sided: false,
+    }
+}
+
+/// One number, or three, of a .mtl statement.
+fn parse3(s: &str) -> Option<[f32; 3]> {
+    let v: Vec<f32> = s
+        .split_whitespace()
+        .map(|w| w.parse().ok())
+        .collect::<Option<_>>()?;
+    match v[..] {
+        [x] => Some([x; 3]),
+        [r, g, b] => Some([r, g, b]),
+        _ => None,
+    }
+}

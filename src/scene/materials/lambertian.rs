@@ -1,0 +1,59 @@
+//! `type = "lambertian"`: the ideal diffuse reflector; it scatters on whichever side the
+//! ray hits. Shading: `shaders/materials/lambertian.wgsl`, CPU twin
+//! `cpu/materials/lambertian.rs`.
+
+use serde::Deserialize;
+
+use super::common::{material_view, Check, ColorDesc, Lobes, Model, TextureNames};
+use crate::scene::records::Material;
+
+/// Its entry in the scene format.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Desc {
+    pub albedo: ColorDesc,
+    #[serde(default)]
+    pub emission: ColorDesc,
+    /// Emit from the back side too.
+    #[serde(default)]
+    pub two_sided: bool,
+}
+
+material_view! {
+    /// What the shaders read of it.
+    pub struct Params("LambertianParams") {
+        /// Reflectance.
+        albedo: rgb = color,
+        albedo_texture: u32 = tex_color,
+    }
+}
+
+/// The lobes of its type: a diffuse one, with a density.
+pub const LOBES: Lobes = Lobes {
+    density: true,
+    delta: false,
+};
+
+impl Model for Desc {
+    fn check(&self, c: &mut Check) {
+        c.color("albedo", &self.albedo, true);
+        c.color("emission", &self.emission, false);
+    }
+
+    fn emission(&self) -> (&ColorDesc, bool) {
+        (&self.emission, self.two_sided)
+    }
+
+    fn lobes(&self) -> Lobes {
+        LOBES
+    }
+
+    fn pack(&self, t: &TextureNames, record: &mut Material) {
+        let (albedo, albedo_texture) = t.color(&self.albedo);
+        Params {
+            albedo,
+            albedo_texture,
+        }
+        .write(record);
+    }
+}

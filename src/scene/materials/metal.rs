@@ -1,0 +1,67 @@
+//! `type = "metal"`: mirror reflection, the direction perturbed by up to `fuzz` ("Ray
+//! Tracing in One Weekend"). Fuzzy metal counts as a delta: its sampling's density has no
+//! closed form. Shading: `shaders/materials/metal.wgsl`, CPU twin `cpu/materials/metal.rs`.
+
+use serde::Deserialize;
+
+use super::common::{material_view, Check, ColorDesc, Lobes, Model, TextureNames};
+use crate::scene::records::Material;
+
+/// Its entry in the scene format.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Desc {
+    pub albedo: ColorDesc,
+    /// 0 is a perfect mirror.
+    #[serde(default)]
+    pub fuzz: f32,
+    #[serde(default)]
+    pub emission: ColorDesc,
+    /// Emit from the back side too.
+    #[serde(default)]
+    pub two_sided: bool,
+}
+
+material_view! {
+    /// What the shaders read of it.
+    pub struct Params("MetalParams") {
+        /// Reflectance.
+        albedo: rgb = color,
+        albedo_texture: u32 = tex_color,
+        /// Radius of the sphere the mirror direction is perturbed within.
+        fuzz: f32 = scalars.x,
+    }
+}
+
+/// The lobes of its type: a delta (fuzz perturbs it by a law without a closed-form
+/// density).
+pub const LOBES: Lobes = Lobes {
+    density: false,
+    delta: true,
+};
+
+impl Model for Desc {
+    fn check(&self, c: &mut Check) {
+        c.color("albedo", &self.albedo, true);
+        c.unit("fuzz", self.fuzz);
+        c.color("emission", &self.emission, false);
+    }
+
+    fn emission(&self) -> (&ColorDesc, bool) {
+        (&self.emission, self.two_sided)
+    }
+
+    fn lobes(&self) -> Lobes {
+        LOBES
+    }
+
+    fn pack(&self, t: &TextureNames, record: &mut Material) {
+        let (albedo, albedo_texture) = t.color(&self.albedo);
+        Params {
+            albedo,
+            albedo_texture,
+            fuzz: self.fuzz,
+        }
+        .write(record);
+    }
+}

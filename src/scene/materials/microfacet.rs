@@ -1,0 +1,88 @@
+//! `type = "microfacet"`: Cook-Torrance, a GGX specular lobe (`roughness` taken as GGX
+//! alpha, Schlick's Fresnel from `ior`, colour `specular`, default `albedo`) over a
+//! Lambertian base that receives what the specular lobe does not reflect. Below
+//! `ALPHA_SMOOTH` the specular lobe is a mirror: a delta. Shading:
+//! `shaders/materials/microfacet.wgsl`, CPU twin `cpu/materials/microfacet.rs`.
+
+use serde::Deserialize;
+
+use super::common::{glass_ior, material_view, Check, ColorDesc, Lobes, Model, TextureNames};
+use crate::scene::records::{Material, ALPHA_SMOOTH, MAT_FLAG_COLOR2_CLAMPED};
+
+/// Its entry in the scene format.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Desc {
+    pub albedo: ColorDesc,
+    pub specular: Option<ColorDesc>,
+    pub roughness: f32,
+    #[serde(default = "glass_ior")]
+    pub ior: f32,
+    #[serde(default)]
+    pub emission: ColorDesc,
+    /// Emit from the back side too.
+    #[serde(default)]
+    pub two_sided: bool,
+}
+
+material_view! {
+    /// What the shaders read of it.
+    pub struct Params("MicrofacetParams") {
+        /// The Lambertian base's colour.
+        diffuse: rgb = color,
+        diffuse_texture: u32 = tex_color,
+        /// GGX alpha (the format's `roughness` as it is).
+        alpha: f32 = scalars.x,
+        ior: f32 = scalars.y,
+        /// The specular lobe's colour (a reflectance: its texture is clamped to 1,
+        /// `MAT_FLAG_COLOR2_CLAMPED`).
+        specular: rgb = color2,
+        specular_texture: u32 = tex_color2,
+    }
+}
+
+/// The lobes of its type: the diffuse base and the GGX lobe, with a density; the mirror
+/// a smooth one samples, a delta.
+pub const LOBES: Lobes = Lobes {
+    density: true,
+    delta: true,
+};
+
+impl Model for Desc {
+    fn check(&self, c: &mut Check) {
+        c.color("albedo", &self.albedo, true);
+        if let Some(ks) = &self.specular {
+            c.color("specular", ks, true);
+        }
+        c.unit("roughness", self.roughness);
+        c.positive("ior", self.ior);
+        c.color("emission", &self.emission, false);
+    }
+
+    fn emission(&self) -> (&ColorDesc, bool) {
+        (&self.emission, self.two_sided)
+    }
+
+    fn lobes(&self) -> Lobes {
+        Lobes {
+            density: true,
+            delta: self.roughness < ALPHA_SMOOTH,
+        }
+    }
+
+    fn pack(&self, t: &TextureNames, record: &mut Material) {
+        let (diffuse, diffuse_texture) = t.color(&self.albedo);
+        let (specular, specular_texture) = t.color(self.specular.as_ref().unwrap_or(&self.albedo));
+        Params {
+            diffuse,
+            diffuse_texture,
+            alpha: self.roughness,
+            ior: self.ior,
+            specular,
+            specular_texture,
+        }
+        .write(record);
+        // the specular colour is a reflectance: a texture may not push it past 1
+        record.flags |= MAT_FLAG_COLOR2_CLAMPED;
+    }
+}

@@ -1,0 +1,222 @@
+//! Materials, one module each: its entry in the scene format, the checks of its values,
+//! its record (through its view, `Params`), the lobes it scatters by, and where it has
+//! one, the mapping of glTF and .mtl materials onto it. Its shading is
+//! `shaders/materials/NAME.wgsl`, with the CPU twin `cpu/materials/NAME.rs` beside it.
+//!
+//! The type list below is the one place that names them all: the scene format's `type`,
+//! the record's tag (`MAT_NAME` in the shaders), the shader define of the code a scene
+//! needs (`HAS_NAME`), the GPU and CPU dispatch and the shader files embedded all follow
+//! from it. Adding a material: its module here, its WGSL file, its CPU twin, a line of the
+//! list, its rows in the tests.
+//!
+//! The material modules import `common` and never this file: it imports them.
+
+pub mod common;
+pub mod dielectric;
+pub mod emissive;
+pub mod lambertian;
+pub mod metal;
+pub mod microfacet;
+pub mod pbr;
+
+use serde::Deserialize;
+
+use crate::scene::records::{Material, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_TWO_SIDED};
+use common::{Check, Lobes, Model, Surface, TextureNames, View};
+
+/// Calls macro `$then` with the type list: for each material, its doc comment, its
+/// [`MaterialKind`] variant, its tag, its module (its name in the format, its WGSL file,
+/// its CPU twin) and its shader define. `gpu::shader` (the embedded WGSL files) and
+/// `cpu::materials` (the dispatch) expand it too.
+macro_rules! for_each_material {
+    ($then:ident) => {
+        $then! {
+            /// The ideal diffuse reflector.
+            Lambertian = 0, lambertian, "HAS_LAMBERTIAN";
+            /// A light that absorbs.
+            Emissive = 1, emissive, "HAS_EMISSIVE";
+            /// A mirror, perturbed by fuzz.
+            Metal = 2, metal, "HAS_METAL";
+            /// Smooth glass.
+            Dielectric = 3, dielectric, "HAS_DIELECTRIC";
+            /// Cook-Torrance over a Lambertian base.
+            Microfacet = 4, microfacet, "HAS_MICROFACET";
+            /// glTF's metallic-roughness material.
+            Pbr = 5, pbr, "HAS_PBR";
+        }
+    };
+}
+pub(crate) use for_each_material;
+
+macro_rules! material_types {
+    ($( $(#[$doc:meta])* $kind:ident = $tag:literal, $module:ident, $define:literal; )*) => {
+        /// A material's type: the record's tag.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        #[repr(u32)]
+        pub enum MaterialKind {
+            $( $(#[$doc])* $kind = $tag, )*
+        }
+
+        impl MaterialKind {
+            /// Every material, in tag order.
+            pub const ALL: &'static [MaterialKind] = &[$(MaterialKind::$kind),*];
+
+            /// Its tag in the record.
+            pub fn tag(self) -> u32 {
+                self as u32
+            }
+
+            pub fn from_tag(tag: u32) -> Option<Self> {
+                match tag {
+                    $( $tag => Some(MaterialKind::$kind), )*
+                    _ => None,
+                }
+            }
+
+            /// Its name: the format's `type`, its module, its WGSL file.
+            pub fn name(self) -> &'static str {
+                match self {
+                    $( MaterialKind::$kind => stringify!($module), )*
+                }
+            }
+
+            /// The shader define that keeps its code.
+            pub fn define(self) -> &'static str {
+                match self {
+                    $( MaterialKind::$kind => $define, )*
+                }
+            }
+
+            /// Its view: the names of its places in the record.
+            pub fn view(self) -> &'static View {
+                match self {
+                    $( MaterialKind::$kind => &$module::Params::VIEW, )*
+                }
+            }
+
+            /// The lobes a material of this type may have (which of its shading
+            /// functions exist).
+            pub fn lobes(self) -> Lobes {
+                match self {
+                    $( MaterialKind::$kind => $module::LOBES, )*
+                }
+            }
+        }
+
+        /// `[materials]` entries, selected by `type`. Every type may emit: `emission` (a
+        /// colour or a texture) is the radiance of its front side, which makes it a light
+        /// too (`emissive` calls it `radiance`).
+        #[derive(Debug, Clone, Deserialize)]
+        #[serde(tag = "type", rename_all = "lowercase")]
+        pub enum MaterialDesc {
+            $( $(#[$doc])* $kind($module::Desc), )*
+        }
+
+        impl MaterialDesc {
+            pub fn kind(&self) -> MaterialKind {
+                match self {
+                    $( MaterialDesc::$kind(_) => MaterialKind::$kind, )*
+                }
+            }
+
+            /// Its module's answers.
+            pub fn model(&self) -> &dyn Model {
+                match self {
+                    $( MaterialDesc::$kind(d) => d, )*
+                }
+            }
+        }
+    };
+}
+
+for_each_material!(material_types);
+
+impl MaterialKind {
+    /// Its tag's name in the shaders (`MAT_PBR`).
+    pub fn wgsl_tag(self) -> String {
+        format!("MAT_{}", self.name().to_ascii_uppercase())
+    }
+}
+
+impl MaterialDesc {
+    /// Its problems as (key, message), each under the key `key` gives its field (the
+    /// format's name: `fuzz`, `base_color`, ...); colours may name `textures`.
+    pub fn check(
+        &self,
+        key: &dyn Fn(&str) -> String,
+        textures: &[String],
+    ) -> Vec<(String, String)> {
+        let mut c = Check::new(key, textures);
+        self.model().check(&mut c);
+        c.problems()
+    }
+
+    /// Whether it emits light: a texture or a colour above 0 (a record's `emits`).
+    pub fn emits(&self) -> bool {
+        self.model().emission().0.is_bright()
+    }
+
+    /// The normal map it reads (its mesh then needs tangents).
+    pub fn normal_map(&self) -> Option<&str> {
+        self.model().normal_map()
+    }
+
+    /// Its record, with `textures` in record order: the tag, the emission and the flags
+    /// of its answers, then its own parameters through its view.
+    pub fn record(&self, textures: &[String]) -> Material {
+        let model = self.model();
+        let names = TextureNames(textures);
+        let (emission, two_sided) = model.emission();
+        let lobes = model.lobes();
+        debug_assert!(lobes.within(self.kind().lobes()), "{:?}", self.kind());
+        let mut record = Material {
+            tag: self.kind().tag(),
+            ..Default::default()
+        };
+        let flag = |on: bool, f: u32| if on { f } else { 0 };
+        record.flags = flag(two_sided, MAT_FLAG_TWO_SIDED)
+            | flag(lobes.density, MAT_FLAG_NEE)
+            | flag(lobes.delta, MAT_FLAG_DELTA);
+        let mut surface = Surface::read(&record);
+        (surface.emission, surface.emission_texture) = names.color(emission);
+        surface.write(&mut record);
+        model.pack(&names, &mut record);
+        record
+    }
+}
+
+/// The key of field `field` of a material imported from a file whose fields have other
+/// names (`keys`: glTF's JSON paths, .mtl statements), under `prefix`.
+pub fn imported_key(prefix: &str, keys: &[(&str, &str)], field: &str) -> String {
+    let name = keys
+        .iter()
+        .find(|(f, _)| *f == field)
+        .map_or(field, |(_, k)| k);
+    if prefix.is_empty() {
+        name.to_string()
+    } else {
+        format!("{prefix}.{name}")
+    }
+}
+
+/// The constants of the material tags, as the shaders get them (`MAT_PBR`).
+pub fn tag_constants() -> Vec<(String, u32)> {
+    MaterialKind::ALL
+        .iter()
+        .map(|k| (k.wgsl_tag(), k.tag()))
+        .collect()
+}
+
+impl Material {
+    /// Whether the record emits light: an emission texture or a colour above 0.
+    pub fn emits(&self) -> bool {
+        let s = Surface::read(self);
+        s.emission_texture != crate::scene::records::NO_TEXTURE
+            || s.emission.to_array().iter().any(|&c| c > 0.0)
+    }
+
+    /// Whether next-event estimation applies at it (its module's `Lobes::density`).
+    pub fn nee(&self) -> bool {
+        self.flags & MAT_FLAG_NEE != 0
+    }
+}
