@@ -1,10 +1,14 @@
 // Kernels for tests. `main`: one ray per invocation through the closest-hit search,
 // surface_at and the shadow-ray search, reporting everything the CPU reference computes for
 // the same ray.
-// `textures_main`: one texture look-up per invocation. Group 0 is the scene, as in
-// trace.wgsl; group 1 holds each kernel's inputs and results.
+// `textures_main`: one texture look-up per invocation.
+// `materials_main`: one material at one hit per invocation, asked what the integrator asks.
+// `lights_main`: lights sampled from one point per invocation, with their pdfs.
+// Group 0 is the scene, as in trace.wgsl; group 1 holds each kernel's inputs and results.
 #import shared/bindings
 #import shared/intersect
+#import shared/lights
+#import shared/materials
 #import shared/textures
 #import shared/types
 
@@ -72,4 +76,115 @@ fn textures_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let l = lookups[i];
     colors[i] = vec4<f32>(texture_value(u32(l.uv.z), l.uv.xy, l.p.xyz), 0.0);
+}
+
+struct MaterialQuery {
+    material: u32,
+    front_face: u32,
+    pad0: u32,
+    pad1: u32,
+    origin: vec4<f32>,
+    dir: vec4<f32>,
+    p: vec4<f32>,
+    ng: vec4<f32>,
+    ns: vec4<f32>,
+    // the hit's uv in .xy, the sample in .zw
+    uv: vec4<f32>,
+    wi: vec4<f32>,
+}
+
+struct MaterialReply {
+    // bit 0: scatter's ok, bit 1: its delta, bit 2: nee_applies, bit 3: mixture_applies
+    flags: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
+    // scatter's direction, its pdf in .w
+    dir: vec4<f32>,
+    weight: vec4<f32>,
+    // bsdf_eval toward wi, bsdf_pdf toward it in .w
+    eval: vec4<f32>,
+    emitted: vec4<f32>,
+}
+
+@group(1) @binding(4) var<storage, read> material_queries: array<MaterialQuery>;
+@group(1) @binding(5) var<storage, read_write> material_replies: array<MaterialReply>;
+
+// The material of each query at its hit (its textures looked up), asked what the
+// integrator asks of it.
+@compute @workgroup_size(64, 1, 1)
+fn materials_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= arrayLength(&material_queries)) {
+        return;
+    }
+    let q = material_queries[i];
+    let ray = Ray(q.origin.xyz, q.dir.xyz);
+    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, q.uv.xy, q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0));
+    let mat = material_at(material_record(q.material), hit);
+    let s = scatter(mat, ray, hit, q.uv.zw);
+    var flags = select(0u, 1u, s.ok) | select(0u, 2u, s.delta);
+    flags |= select(0u, 4u, nee_applies(mat)) | select(0u, 8u, mixture_applies(mat));
+    let f = bsdf_eval(mat, ray, hit, q.wi.xyz);
+    let pdf = bsdf_pdf(mat, ray, hit, q.wi.xyz);
+    material_replies[i] = MaterialReply(flags, 0u, 0u, 0u, vec4<f32>(s.dir, s.pdf), vec4<f32>(s.weight, 0.0), vec4<f32>(f, pdf), vec4<f32>(emitted(mat, hit), 0.0));
+}
+
+struct LightQuery {
+    // the point lights are sampled from; .w chooses the light
+    p: vec4<f32>,
+    // .xy: the point on the light, .z: the light without a surface
+    u: vec4<f32>,
+    // a direction from p
+    d: vec4<f32>,
+}
+
+struct LightReply {
+    light: u32,
+    punctual: u32,
+    pad0: u32,
+    pad1: u32,
+    // sample_light's direction, its distance in .w
+    dir: vec4<f32>,
+    // sample_light's pdf, light_pdf of the point it sampled, light_pdf_total of d
+    pdf: vec4<f32>,
+    uv: vec4<f32>,
+    background: vec4<f32>,
+    // sample_punctual's direction (squared distance in .w) and radiance (probability)
+    punctual_dir: vec4<f32>,
+    punctual_le: vec4<f32>,
+}
+
+@group(1) @binding(6) var<storage, read> light_queries: array<LightQuery>;
+@group(1) @binding(7) var<storage, read_write> light_replies: array<LightReply>;
+
+// Lights sampled from each query's point, the pdfs of what they sampled and of the
+// query's direction, the background along it, and a light without a surface.
+@compute @workgroup_size(64, 1, 1)
+fn lights_main(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= arrayLength(&light_queries)) {
+        return;
+    }
+    let q = light_queries[i];
+    var r = LightReply(NO_LIGHT, NO_LIGHT, 0u, 0u, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    let ls = sample_light(q.p.xyz, q.p.w, q.u.xy);
+    r.light = ls.light;
+    r.dir = vec4<f32>(ls.dir, ls.dist);
+    r.uv = vec4<f32>(ls.uv, 0.0, 0.0);
+    var sampled = 0.0;
+    if (ls.light != NO_LIGHT) {
+        sampled = light_pdf(ls.light, q.p.xyz, q.p.xyz + ls.dist * ls.dir, ls.dir);
+    }
+    r.pdf = vec4<f32>(ls.pdf, sampled, light_pdf_total(q.p.xyz, q.d.xyz), 0.0);
+    r.background = vec4<f32>(background_radiance(q.d.xyz), 0.0);
+#ifdef HAS_PUNCTUAL
+    if (params.num_punctual != 0u) {
+        let s = sample_punctual(q.p.xyz, q.u.z);
+        r.punctual = s.light;
+        r.punctual_dir = vec4<f32>(s.dir, s.d2);
+        r.punctual_le = vec4<f32>(s.le, s.prob);
+    }
+#endif
+    light_replies[i] = r;
 }

@@ -120,34 +120,20 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>, u
 // light), and f x intensity x the spot's falloff / d^2 (or f x irradiance) over the
 // choice's probability. No MIS weight: no other strategy can find a point or a direction.
 fn direct_punctual(mat: Material, ray: Ray, hit: Hit, u: f32, u_alpha: f32) -> vec3<f32> {
-    let e = emitter_record(choose_punctual(u));
-    let positioned = e.kind != LIGHT_DIRECTIONAL;
-    var dir = e.a.xyz;
-    var le = e.b.xyz;
-    var d2 = 1.0;
-    if (positioned) {
-        let v = e.a.xyz - hit.p;
-        d2 = dot(v, v);
-        dir = v / sqrt(d2);
-        var falloff = 1.0;
-        if (e.kind == LIGHT_SPOT) {
-            falloff = spot_falloff(-dot(dir, e.c.xyz), e.a.w, e.b.w);
-        }
-        le *= falloff / d2;
-    }
-    var shadow = spawn_ray(hit, dir);
+    let s = sample_punctual(hit.p, u);
+    var shadow = spawn_ray(hit, s.dir);
     var t_max = FAR;
-    if (positioned) {
-        let w = e.a.xyz - shadow.origin;
+    if (s.positioned) {
+        let w = s.position - shadow.origin;
         t_max = length(w);
         shadow.dir = w / t_max;
     }
-    let f = bsdf_eval(mat, ray, hit, dir);
-    let lit = e.prob > 0.0 && d2 > 0.0 && t_max > 0.0 && any(f != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0));
+    let f = bsdf_eval(mat, ray, hit, s.dir);
+    let lit = s.prob > 0.0 && s.d2 > 0.0 && t_max > 0.0 && any(f != vec3<f32>(0.0)) && any(s.le != vec3<f32>(0.0));
     if (!lit || shadowed(shadow, t_max, u_alpha)) {
         return vec3<f32>(0.0);
     }
-    return f * le / e.prob;
+    return f * s.le / s.prob;
 }
 #endif
 

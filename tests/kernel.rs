@@ -293,3 +293,341 @@ fn bvh_matches_brute_force(ctx: &wgtrace::gpu::GpuContext, src: &str, min_hits: 
         assert_eq!(x, y, "ray {k}: BVH vs brute force");
     }
 }
+
+// ------------------------------------------------------- materials and lights, GPU vs CPU
+
+use wgtrace::cpu::lights::{
+    background_radiance, light_pdf, light_pdf_total, sample_light, sample_punctual,
+};
+use wgtrace::cpu::materials::{
+    bsdf_eval, bsdf_pdf, emitted, material_at, mixture_applies, nee_applies, scatter,
+};
+use wgtrace::cpu::types::Hit;
+use wgtrace::gpu::kernel::{sample_lights, shade_materials};
+use wgtrace::scene::records::{LightQuery, LightReply, MaterialQuery, MaterialReply, NO_LIGHT};
+
+/// Whether two values agree as the intersection kernel's do: to 1e-4 of their size (the
+/// two math libraries' sqrt, sin, cos, exp, pow differ in the last bits), or both
+/// negligible.
+fn close(a: f32, b: f32) -> bool {
+    (a - b).abs() <= 1e-4 * a.abs().max(b.abs()).max(1e-3)
+}
+
+/// Whether two pdfs of one sampled direction agree. The pdf a GGX lobe gives its own
+/// sample is ill-conditioned in f32: the last bits of the direction move its half
+/// vector's cosine by some 5e-7, which moves D by about 14 x 5e-7 sqrt(pdf) / alpha of
+/// itself; for the sharpest lobe wgtrace has (alpha = ALPHA_SMOOTH, 1e-3) that is
+/// 7e-3 sqrt(pdf): pdfs of 4,000 come out 20% apart on the two backends while the
+/// weights, where D cancels, agree to 1e-6. Broad lobes are held to 1e-4 by `eval` and
+/// `pdf` toward a fixed direction, which are well conditioned.
+fn close_pdf(a: f32, b: f32) -> bool {
+    let p = a.abs().max(b.abs());
+    (a - b).abs() <= (1e-4 + 8e-3 * p.sqrt()) * p.max(1e-3)
+}
+
+fn close3(a: [f32; 4], b: [f32; 4], n: usize) -> bool {
+    (0..n).all(|i| close(a[i], b[i]))
+}
+
+/// Unit direction `d` as agreeing when they are 1e-4 apart (the intersection kernel's
+/// normals: cosine above 0.9999 is 1.4e-2 apart; this is tighter).
+fn same_dir(a: [f32; 4], b: [f32; 4]) -> bool {
+    Vec3::from_slice(&a[..3]).distance(Vec3::from_slice(&b[..3])) <= 1e-4
+}
+
+/// The table's materials (tests/common MATERIALS) and textured ones, each at random hits
+/// with random rays, samples and directions: the GPU's material_at, scatter, bsdf_eval,
+/// bsdf_pdf, emitted, nee_applies and mixture_applies agree with the CPU's query by query.
+/// A sample within rounding of a choice (a lobe, a Fresnel coin) may go either way on the
+/// two backends: at most 1 in 1000 queries may differ, as for rays that graze an edge.
+#[test]
+fn gpu_materials_match_cpu_query_by_query() {
+    let ctx = common::gpu_context();
+    let mut src = String::from(
+        "[camera]\nlook_from = [0, 0, 10]\nlook_at = [0, 0, 0]\n[textures]\n\
+         cells = { type = \"checker\", even = [0.9, 0.2, 0.1], odd = \"noise\", scale = 3 }\n\
+         noise = { type = \"noise\", scale = 2, color = [1, 0.8, 0.6] }\n\
+         bright = { type = \"constant\", color = [2.5, 0.5, 1.5] }\n\
+         mr = { type = \"constant\", color = [1, 0.5, 0.8] }\n",
+    );
+    let textured = [
+        "type = \"lambertian\"\nalbedo = \"cells\"",
+        "type = \"microfacet\"\nalbedo = [0.5, 0.5, 0.5]\nspecular = \"bright\"\nroughness = 0.3",
+        "type = \"pbr\"\nbase_color = \"noise\"\nspecular_color = \"bright\"\nmetallic = 0.4\n\
+         roughness = 0.6\nmetallic_roughness = \"mr\"\nspecular_texture = \"mr\"",
+        "type = \"emissive\"\nradiance = \"cells\"\ntwo_sided = true",
+        "type = \"dielectric\"\nior = 1.7\ntint = \"noise\"\nabsorption = [0.3, 0.1, 0.05]",
+    ];
+    let keys: Vec<&str> = common::MATERIALS
+        .iter()
+        .map(|t| t.keys)
+        .chain(textured)
+        .collect();
+    for (i, k) in keys.iter().enumerate() {
+        src += &format!("[materials.m{i:02}]\n{k}\n");
+    }
+    src += "[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m00\"\n";
+    let s = common::scene_from_str(&src);
+    let b = Bindings::new(&s, s.params(0, s.full_tile()));
+    let mut rng = 0x5eed_u32;
+    let mut queries = Vec::new();
+    for m in 0..keys.len() as u32 {
+        for _ in 0..256 {
+            let ng = common::random_unit(&mut rng);
+            // a shading normal on ng's side, tilted up to about 35 degrees
+            let ns = (ng + 0.7 * common::random_unit(&mut rng)).normalize();
+            let ns = if ns.dot(ng) > 0.05 { ns } else { ng };
+            let front = common::random_f32(&mut rng) < 0.5;
+            let mut dir = common::random_unit(&mut rng);
+            if (dir.dot(ng) < 0.0) != front {
+                dir = -dir;
+            }
+            let p = 2.0 * common::random_unit(&mut rng);
+            queries.push(MaterialQuery {
+                material: m,
+                front_face: front as u32,
+                origin: (p - 1.5 * dir).extend(0.0).to_array(),
+                dir: dir.extend(0.0).to_array(),
+                p: p.extend(0.0).to_array(),
+                ng: ng.extend(0.0).to_array(),
+                ns: ns.extend(0.0).to_array(),
+                uv: [
+                    common::random_f32(&mut rng),
+                    common::random_f32(&mut rng),
+                    common::random_f32(&mut rng),
+                    common::random_f32(&mut rng),
+                ],
+                wi: common::random_unit(&mut rng).extend(0.0).to_array(),
+                ..Default::default()
+            });
+        }
+    }
+    let gpu = shade_materials(&ctx, &s, &queries).expect("kernel dispatch");
+    let cpu = |q: &MaterialQuery| -> MaterialReply {
+        let ray = Ray {
+            origin: Vec3::from_slice(&q.origin[..3]),
+            dir: Vec3::from_slice(&q.dir[..3]),
+        };
+        let hit = Hit {
+            p: Vec3::from_slice(&q.p[..3]),
+            ng: Vec3::from_slice(&q.ng[..3]),
+            ns: Vec3::from_slice(&q.ns[..3]),
+            uv: glam::Vec2::new(q.uv[0], q.uv[1]),
+            front_face: q.front_face != 0,
+            material: q.material,
+            err: 0.0,
+            tangent: glam::Vec4::ZERO,
+        };
+        let mat = material_at(&b, &s.materials[q.material as usize], &hit);
+        let sc = scatter(&mat, &ray, &hit, [q.uv[2], q.uv[3]]);
+        let wi = Vec3::from_slice(&q.wi[..3]);
+        MaterialReply {
+            flags: sc.ok as u32
+                | (sc.delta as u32) << 1
+                | (nee_applies(&mat) as u32) << 2
+                | (mixture_applies(&mat) as u32) << 3,
+            dir: sc.dir.extend(sc.pdf).to_array(),
+            weight: sc.weight.extend(0.0).to_array(),
+            eval: bsdf_eval(&mat, &ray, &hit, wi)
+                .extend(bsdf_pdf(&mat, &ray, &hit, wi))
+                .to_array(),
+            emitted: emitted(&mat, &hit).extend(0.0).to_array(),
+            ..Default::default()
+        }
+    };
+    let agree = |g: &MaterialReply, c: &MaterialReply| -> Result<(), &'static str> {
+        if g.flags != c.flags {
+            return Err("flags");
+        }
+        if !close3(g.eval, c.eval, 4) {
+            return Err("eval or pdf toward wi");
+        }
+        if !close3(g.emitted, c.emitted, 3) {
+            return Err("emitted");
+        }
+        if c.flags & 1 != 0
+            && !(same_dir(g.dir, c.dir)
+                && close_pdf(g.dir[3], c.dir[3])
+                && close3(g.weight, c.weight, 3))
+        {
+            return Err("scatter");
+        }
+        Ok(())
+    };
+    let mut disagree = Vec::new();
+    let mut scattered = 0;
+    for (q, g) in queries.iter().zip(&gpu) {
+        let c = cpu(q);
+        scattered += (c.flags & 1) as usize;
+        if let Err(what) = agree(g, &c) {
+            disagree.push(format!(
+                "{} ({what}): {q:?}\n  gpu {g:?}\n  cpu {c:?}",
+                keys[q.material as usize]
+            ));
+        }
+    }
+    assert!(
+        disagree.len() * 1000 <= queries.len(),
+        "{} of {} queries differ, first: {}",
+        disagree.len(),
+        queries.len(),
+        disagree[0]
+    );
+    assert!(scattered > queries.len() / 3, "only {scattered} scattered");
+    eprintln!(
+        "{} materials, {} queries, {scattered} scattered, {} differ",
+        keys.len(),
+        queries.len(),
+        disagree.len()
+    );
+}
+
+/// Scenes of every kind of light (triangles of a quad and a polygon, a disk, spheres,
+/// the image background, points, spots and a directional light), sampled from random
+/// points (some inside a sphere light) toward random choices: the GPU's sample_light, the
+/// light_pdf of what it sampled, light_pdf_total and background_radiance of a random
+/// direction, and sample_punctual agree with the CPU's query by query (at most 1 in 1000
+/// may differ, as a choice within rounding of a CDF step may go either way).
+#[test]
+fn gpu_lights_match_cpu_query_by_query() {
+    let ctx = common::gpu_context();
+    const HEAD: &str = "[camera]\nlook_from = [0, 0, 10]\nlook_at = [0, 0, 0]\n[materials]\n\
+        grey = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }\n\
+        lamp = { type = \"emissive\", radiance = [4, 3, 2] }\n\
+        both = { type = \"emissive\", radiance = [1, 2, 3], two_sided = true }\n\
+        [[objects]]\ntype = \"plane\"\npoint = [0, -3, 0]\nnormal = [0, 1, 0]\nmaterial = \"grey\"\n";
+    let scenes = [
+        (
+            "triangles",
+            "[[objects]]\ntype = \"polygon\"\nvertices = [[-1, 2, -1], [1, 2, -1], [1.4, 2.2, 1], [-1, 2.2, 1]]\nmaterial = \"lamp\"\n\
+             [[objects]]\ntype = \"triangle\"\nvertices = [[2, -1, 0], [3, 0, 0.5], [2, 1, 0]]\nmaterial = \"both\"\n",
+        ),
+        (
+            "disks",
+            "[[objects]]\ntype = \"disk\"\ncenter = [0, 2.5, 0]\nnormal = [0.2, -1, 0.1]\nradius = 0.8\nmaterial = \"lamp\"\n\
+             [[objects]]\ntype = \"disk\"\ncenter = [-2, 0, 0]\nnormal = [1, 0, 0]\nradius = 0.3\nmaterial = \"both\"\n",
+        ),
+        (
+            "spheres",
+            "[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1.5\nmaterial = \"lamp\"\n\
+             [[objects]]\ntype = \"sphere\"\ncenter = [2.5, 1, -1]\nradius = 0.05\nmaterial = \"both\"\n",
+        ),
+        (
+            "image background",
+            "[textures]\nsky = { type = \"image\", path = \"textures/sky.hdr\" }\n\
+             [background]\ntexture = \"sky\"\nrotation = 30\nstrength = 0.7\n\
+             [[objects]]\ntype = \"sphere\"\ncenter = [0, 2, 0]\nradius = 0.5\nmaterial = \"lamp\"\n",
+        ),
+        (
+            "punctual",
+            "[background]\ntop = [0.4, 0.6, 1]\nbottom = [1, 1, 1]\n\
+             [[lights]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [5, 5, 5]\n\
+             [[lights]]\ntype = \"spot\"\nposition = [1, 2, 1]\nlook_at = [0, -3, 0]\nintensity = [20, 15, 10]\ninner_angle = 15\nouter_angle = 35\n\
+             [[lights]]\ntype = \"directional\"\ndirection = [0.3, 1, 0.2]\nirradiance = [1, 1, 0.8]\n\
+             [[objects]]\ntype = \"triangle\"\nvertices = [[-1, 2.5, -1], [1, 2.5, -1], [0, 2.5, 1]]\nmaterial = \"both\"\n",
+        ),
+    ];
+    for (name, objects) in scenes {
+        let s = common::scene_from_file_str(&format!("{HEAD}{objects}"), "scenes/lights-test.toml");
+        let b = Bindings::new(&s, s.params(0, s.full_tile()));
+        let mut rng = 0xc0ffee_u32;
+        let queries: Vec<LightQuery> = (0..4096)
+            .map(|_| {
+                let p = 1.6 * common::random_unit(&mut rng) * common::random_f32(&mut rng);
+                let mut u = || common::random_f32(&mut rng);
+                let (ul, u0, u1, u2) = (u(), u(), u(), u());
+                LightQuery {
+                    p: p.extend(ul).to_array(),
+                    u: [u0, u1, u2, 0.0],
+                    d: common::random_unit(&mut rng).extend(0.0).to_array(),
+                }
+            })
+            .collect();
+        let gpu = sample_lights(&ctx, &s, &queries).expect("kernel dispatch");
+        let cpu = |q: &LightQuery| -> LightReply {
+            let p = Vec3::from_slice(&q.p[..3]);
+            let d = Vec3::from_slice(&q.d[..3]);
+            let ls = sample_light(&b, p, q.p[3], [q.u[0], q.u[1]]);
+            let sampled = if ls.light != NO_LIGHT {
+                light_pdf(&b, ls.light, p, p + ls.dist * ls.dir, ls.dir)
+            } else {
+                0.0
+            };
+            let mut r = LightReply {
+                light: ls.light,
+                punctual: NO_LIGHT,
+                dir: ls.dir.extend(ls.dist).to_array(),
+                pdf: [ls.pdf, sampled, light_pdf_total(&b, p, d), 0.0],
+                uv: [ls.uv.x, ls.uv.y, 0.0, 0.0],
+                background: background_radiance(&b, d).extend(0.0).to_array(),
+                ..Default::default()
+            };
+            if s.num_punctual != 0 {
+                let ps = sample_punctual(&b, p, q.u[2]);
+                r.punctual = ps.light;
+                r.punctual_dir = ps.dir.extend(ps.d2).to_array();
+                r.punctual_le = ps.le.extend(ps.prob).to_array();
+            }
+            r
+        };
+        let agree = |q: &LightQuery, g: &LightReply, c: &LightReply| -> Result<(), &'static str> {
+            if (g.light, g.punctual) != (c.light, c.punctual) {
+                return Err("the light chosen");
+            }
+            if !close3(g.pdf, c.pdf, 3) {
+                return Err("a pdf");
+            }
+            if !close3(g.background, c.background, 3) {
+                return Err("the background");
+            }
+            // the point sampled on a light: its direction from a point just off the light
+            // is ill-conditioned (1e-6 of the scene over a distance of 1e-3), the point not
+            let point = |r: &LightReply| {
+                Vec3::from_slice(&q.p[..3]) + r.dir[3] * Vec3::from_slice(&r.dir[..3])
+            };
+            let sample_agrees = if c.dir[3] < FAR {
+                (point(g) - point(c)).length() <= 1e-5 * (1.0 + point(c).length())
+                    && close3(g.uv, c.uv, 2)
+            } else {
+                same_dir(g.dir, c.dir)
+            };
+            if c.light != NO_LIGHT && !sample_agrees {
+                return Err("the sample");
+            }
+            if c.punctual != NO_LIGHT
+                && !(same_dir(g.punctual_dir, c.punctual_dir)
+                    && close3(g.punctual_dir, c.punctual_dir, 4)
+                    && close3(g.punctual_le, c.punctual_le, 4))
+            {
+                return Err("the light without a surface");
+            }
+            Ok(())
+        };
+        let mut disagree = Vec::new();
+        let mut sampled = 0;
+        for (q, g) in queries.iter().zip(&gpu) {
+            let c = cpu(q);
+            sampled += (c.light != NO_LIGHT) as usize;
+            if let Err(what) = agree(q, g, &c) {
+                disagree.push(format!("{what}: {q:?}\n  gpu {g:?}\n  cpu {c:?}"));
+            }
+        }
+        assert!(
+            disagree.len() * 1000 <= queries.len(),
+            "{name}: {} of {} queries differ, first: {}",
+            disagree.len(),
+            queries.len(),
+            disagree[0]
+        );
+        assert!(
+            sampled > queries.len() / 2,
+            "{name}: only {sampled} sampled"
+        );
+        eprintln!(
+            "{name}: {} lights, {sampled} of {} sampled, {} differ",
+            s.emitters.len(),
+            queries.len(),
+            disagree.len()
+        );
+    }
+}

@@ -169,6 +169,45 @@ fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32) -> f32 {
     let ramp = clamp((cos_theta - cos_outer) / max(0.001, cos_inner - cos_outer), 0.0, 1.0);
     return ramp * ramp;
 }
+
+// A light without a surface, seen from a point.
+struct PunctualSample {
+    // the light (index in emitters)
+    light: u32,
+    // unit direction toward it
+    dir: vec3<f32>,
+    // what it sends along dir: intensity x a spot's falloff / d^2, or a directional
+    // light's irradiance
+    le: vec3<f32>,
+    // squared distance to it (1 for a directional light)
+    d2: f32,
+    // the probability it was chosen with
+    prob: f32,
+    // where it is, when it is somewhere (a directional light is not)
+    position: vec3<f32>,
+    positioned: bool,
+}
+
+// The light without a surface chosen by u (in proportion to its power), seen from p.
+fn sample_punctual(p: vec3<f32>, u: f32) -> PunctualSample {
+    let i = choose_punctual(u);
+    let e = emitter_record(i);
+    let positioned = e.kind != LIGHT_DIRECTIONAL;
+    var dir = e.a.xyz;
+    var le = e.b.xyz;
+    var d2 = 1.0;
+    if (positioned) {
+        let v = e.a.xyz - p;
+        d2 = dot(v, v);
+        dir = v / sqrt(d2);
+        var falloff = 1.0;
+        if (e.kind == LIGHT_SPOT) {
+            falloff = spot_falloff(-dot(dir, e.c.xyz), e.a.w, e.b.w);
+        }
+        le *= falloff / d2;
+    }
+    return PunctualSample(i, dir, le, d2, e.prob, e.a.xyz, positioned);
+}
 #endif
 
 // A direction toward a light from a reference point.

@@ -9,8 +9,8 @@ use super::sampling::{onb_tangents, sample_disk, sample_sphere, PI};
 use super::textures::texture_value;
 use super::types::{xyz, Ray, FAR};
 use crate::scene::records::{
-    BACKGROUND_GRADIENT, BACKGROUND_IMAGE, LIGHT_DISK, LIGHT_ENVIRONMENT, LIGHT_SPHERE,
-    LIGHT_TRIANGLE, NO_LIGHT,
+    BACKGROUND_GRADIENT, BACKGROUND_IMAGE, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
+    LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_LIGHT,
 };
 
 pub use crate::scene::records::EDGE_ON_COS;
@@ -171,6 +171,52 @@ pub fn choose_punctual(b: &Bindings, u: f32) -> u32 {
 pub fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32) -> f32 {
     let ramp = ((cos_theta - cos_outer) / (cos_inner - cos_outer).max(0.001)).clamp(0.0, 1.0);
     ramp * ramp
+}
+
+/// A light without a surface seen from a point (lights.wgsl's `PunctualSample`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PunctualSample {
+    pub light: u32,
+    /// Unit direction toward it.
+    pub dir: Vec3,
+    /// Intensity x a spot's falloff / d^2, or a directional light's irradiance.
+    pub le: Vec3,
+    /// Squared distance to it (1 for a directional light).
+    pub d2: f32,
+    /// The probability it was chosen with.
+    pub prob: f32,
+    /// Where it is, when it is somewhere (a directional light is not).
+    pub position: Vec3,
+    pub positioned: bool,
+}
+
+/// The light without a surface chosen by u (in proportion to its power), seen from p.
+pub fn sample_punctual(b: &Bindings, p: Vec3, u: f32) -> PunctualSample {
+    let light = choose_punctual(b, u);
+    let e = &b.emitters[light as usize];
+    let positioned = e.kind != LIGHT_DIRECTIONAL;
+    let mut dir = xyz(e.a);
+    let mut le = xyz(e.b);
+    let mut d2 = 1.0;
+    if positioned {
+        let v = xyz(e.a) - p;
+        d2 = v.dot(v);
+        dir = v / d2.sqrt();
+        let mut falloff = 1.0;
+        if e.kind == LIGHT_SPOT {
+            falloff = spot_falloff(-dir.dot(xyz(e.c)), e.a[3], e.b[3]);
+        }
+        le *= falloff / d2;
+    }
+    PunctualSample {
+        light,
+        dir,
+        le,
+        d2,
+        prob: e.prob,
+        position: xyz(e.a),
+        positioned,
+    }
 }
 
 /// A direction toward a light from a reference point.

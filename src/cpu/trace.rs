@@ -6,8 +6,7 @@ use rayon::prelude::*;
 use super::bindings::Bindings;
 use super::intersect::{intersect_scene, occluded, surface_at};
 use super::lights::{
-    background_radiance, choose_punctual, light_pdf, light_pdf_total, power_heuristic,
-    sample_light, spot_falloff,
+    background_radiance, light_pdf, light_pdf_total, power_heuristic, sample_light, sample_punctual,
 };
 use super::materials::{
     alpha_u, bsdf_eval, bsdf_pdf, emitted, material_at, mixture_applies, nee_applies,
@@ -19,8 +18,8 @@ use super::sampling::{offset_ray, sample_disk};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{
-    Material, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE,
-    LIGHT_SPOT, MAX_ALPHA_SKIPS, NO_LIGHT, PRIM_LIGHT_SHIFT,
+    Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE, MAX_ALPHA_SKIPS,
+    NO_LIGHT, PRIM_LIGHT_SHIFT,
 };
 
 pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
@@ -175,34 +174,20 @@ pub fn direct_punctual(
     u: f32,
     u_alpha: f32,
 ) -> Vec3 {
-    let e = &b.emitters[choose_punctual(b, u) as usize];
-    let positioned = e.kind != LIGHT_DIRECTIONAL;
-    let mut dir = xyz(e.a);
-    let mut le = xyz(e.b);
-    let mut d2 = 1.0;
-    if positioned {
-        let v = xyz(e.a) - hit.p;
-        d2 = v.dot(v);
-        dir = v / d2.sqrt();
-        let mut falloff = 1.0;
-        if e.kind == LIGHT_SPOT {
-            falloff = spot_falloff(-dir.dot(xyz(e.c)), e.a[3], e.b[3]);
-        }
-        le *= falloff / d2;
-    }
-    let mut shadow = spawn_ray(hit, dir);
+    let s = sample_punctual(b, hit.p, u);
+    let mut shadow = spawn_ray(hit, s.dir);
     let mut t_max = FAR;
-    if positioned {
-        let w = xyz(e.a) - shadow.origin;
+    if s.positioned {
+        let w = s.position - shadow.origin;
         t_max = w.length();
         shadow.dir = w / t_max;
     }
-    let f = bsdf_eval(mat, ray, hit, dir);
-    let lit = e.prob > 0.0 && d2 > 0.0 && t_max > 0.0 && f != Vec3::ZERO && le != Vec3::ZERO;
+    let f = bsdf_eval(mat, ray, hit, s.dir);
+    let lit = s.prob > 0.0 && s.d2 > 0.0 && t_max > 0.0 && f != Vec3::ZERO && s.le != Vec3::ZERO;
     if !lit || shadowed(b, &shadow, t_max, u_alpha) {
         return Vec3::ZERO;
     }
-    f * le / e.prob
+    f * s.le / s.prob
 }
 
 /// A camera path being traced (trace.wgsl's `Path`): the next ray, the radiance so far,

@@ -1,6 +1,6 @@
 //! The test kernels (`shaders/kernel.wgsl`): a batch of rays through the GPU's closest-hit
-//! search and `surface_at`, or of texture look-ups, for tests that compare the GPU with the
-//! CPU reference one by one.
+//! search and `surface_at`, of texture look-ups, of materials at hits, or of lights
+//! sampled from points, for tests that compare the GPU with the CPU reference one by one.
 
 use wgpu::util::DeviceExt;
 
@@ -9,16 +9,29 @@ use super::context::GpuContext;
 use super::error::GpuError;
 use super::plan::GpuPlan;
 use crate::scene::flat::FlatScene;
-use crate::scene::records::{KernelHit, KernelRay, TextureLookup, BVH_STACK_LANES};
+use crate::scene::records::{
+    KernelHit, KernelRay, LightQuery, LightReply, MaterialQuery, MaterialReply, TextureLookup,
+    BVH_STACK_LANES,
+};
 use crate::tuning::Tuning;
 
 /// Workgroup size of `kernel.wgsl`'s entry points: one invocation per column of the
 /// traversal stacks.
 const WORKGROUP: u32 = BVH_STACK_LANES;
 
-/// Group-1 bindings of `kernel.wgsl`: the rays and hits of `main`, the look-ups and colours
-/// of `textures_main` (`tests/shaders.rs` holds them to naga's view of the shader).
-pub const KERNEL_IO: [(&str, u32); 4] = [("rays", 0), ("hits", 1), ("lookups", 2), ("colors", 3)];
+/// Group-1 bindings of `kernel.wgsl`: the inputs and outputs of `main`, `textures_main`,
+/// `materials_main` and `lights_main` (`tests/shaders.rs` holds them to naga's view of the
+/// shader).
+pub const KERNEL_IO: [(&str, u32); 8] = [
+    ("rays", 0),
+    ("hits", 1),
+    ("lookups", 2),
+    ("colors", 3),
+    ("material_queries", 4),
+    ("material_replies", 5),
+    ("light_queries", 6),
+    ("light_replies", 7),
+];
 
 /// Intersects `rays` with `scene` on the GPU, under the plan the default tuning gives it;
 /// one [`KernelHit`] per ray, in order.
@@ -53,6 +66,43 @@ pub fn lookup_textures(
         "textures_main",
         [KERNEL_IO[2].1, KERNEL_IO[3].1],
         lookups,
+    )
+}
+
+/// Asks the GPU's materials what the integrator asks of them (`materials_main`): each
+/// query's material at its hit, scattered, evaluated and its pdf taken toward `wi`.
+pub fn shade_materials(
+    ctx: &GpuContext,
+    scene: &FlatScene,
+    queries: &[MaterialQuery],
+) -> Result<Vec<MaterialReply>, GpuError> {
+    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
+    run_kernel(
+        ctx,
+        scene,
+        &plan,
+        "materials_main",
+        [KERNEL_IO[4].1, KERNEL_IO[5].1],
+        queries,
+    )
+}
+
+/// Samples the GPU's lights from each query's point (`lights_main`), with the pdfs of what
+/// they sampled and of the query's direction.
+pub fn sample_lights(
+    ctx: &GpuContext,
+    scene: &FlatScene,
+    queries: &[LightQuery],
+) -> Result<Vec<LightReply>, GpuError> {
+    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
+    plan.fit.check_loops(plan.ray_loops)?;
+    run_kernel(
+        ctx,
+        scene,
+        &plan,
+        "lights_main",
+        [KERNEL_IO[6].1, KERNEL_IO[7].1],
+        queries,
     )
 }
 

@@ -446,6 +446,84 @@ pub struct TextureLookup {
     pub p: [f32; 4],
 }
 
+/// One query of the kernel's `materials_main`: material `material` at a hit (point,
+/// normals, uv, side) that a ray (`origin`, `dir`) arrived at; the 2D sample its
+/// scattering draws with (`uv.zw`), and a direction `wi` its BSDF and pdf are asked
+/// toward.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MaterialQuery {
+    pub material: u32,
+    pub front_face: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub origin: [f32; 4],
+    pub dir: [f32; 4],
+    pub p: [f32; 4],
+    pub ng: [f32; 4],
+    pub ns: [f32; 4],
+    /// The hit's uv in `.xy`, the sample in `.zw`.
+    pub uv: [f32; 4],
+    pub wi: [f32; 4],
+}
+
+/// What `materials_main` reports for one query: the material at the hit (`material_at`)
+/// asked everything the integrator asks of it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct MaterialReply {
+    /// Bit 0: scatter's `ok`; bit 1: its `delta`; bit 2: `nee_applies`; bit 3:
+    /// `mixture_applies`.
+    pub flags: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
+    /// Scatter's direction, its pdf in `.w`.
+    pub dir: [f32; 4],
+    /// Scatter's weight.
+    pub weight: [f32; 4],
+    /// `bsdf_eval` toward `wi`, `bsdf_pdf` toward it in `.w`.
+    pub eval: [f32; 4],
+    /// `emitted` toward the ray.
+    pub emitted: [f32; 4],
+}
+
+/// One query of the kernel's `lights_main`: a point `p` lights are sampled from (the
+/// light's choice by `p.w`, the point on it by `u.xy`, the light without a surface by
+/// `u.z`), and a direction `d` from it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LightQuery {
+    pub p: [f32; 4],
+    pub u: [f32; 4],
+    pub d: [f32; 4],
+}
+
+/// What `lights_main` reports for one query.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct LightReply {
+    /// `sample_light`'s light, or `NO_LIGHT`.
+    pub light: u32,
+    /// `sample_punctual`'s light, or `NO_LIGHT` in a scene without one.
+    pub punctual: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    /// `sample_light`'s direction, its distance in `.w`.
+    pub dir: [f32; 4],
+    /// `.x`: `sample_light`'s pdf; `.y`: `light_pdf` of the point it sampled; `.z`:
+    /// `light_pdf_total` of `d`.
+    pub pdf: [f32; 4],
+    /// `sample_light`'s candidate (u, v) in `.xy`.
+    pub uv: [f32; 4],
+    /// `background_radiance` of `d`.
+    pub background: [f32; 4],
+    /// `sample_punctual`'s direction, its squared distance in `.w`.
+    pub punctual_dir: [f32; 4],
+    /// `sample_punctual`'s radiance, its probability in `.w`.
+    pub punctual_le: [f32; 4],
+}
+
 /// Size and field offsets of one record, for the layout test against naga.
 #[derive(Debug)]
 pub struct RecordLayout {
@@ -614,6 +692,42 @@ shared_record!(KernelHit {
     ns,
     uv
 });
+shared_record!(MaterialQuery {
+    material,
+    front_face,
+    pad0,
+    pad1,
+    origin,
+    dir,
+    p,
+    ng,
+    ns,
+    uv,
+    wi
+});
+shared_record!(MaterialReply {
+    flags,
+    pad0,
+    pad1,
+    pad2,
+    dir,
+    weight,
+    eval,
+    emitted
+});
+shared_record!(LightQuery { p, u, d });
+shared_record!(LightReply {
+    light,
+    punctual,
+    pad0,
+    pad1,
+    dir,
+    pdf,
+    uv,
+    background,
+    punctual_dir,
+    punctual_le
+});
 shared_record!(BvhNode {
     lo,
     offset,
@@ -632,6 +746,10 @@ pub fn record_layouts() -> Vec<RecordLayout> {
         KernelRay::layout(),
         TextureLookup::layout(),
         KernelHit::layout(),
+        MaterialQuery::layout(),
+        MaterialReply::layout(),
+        LightQuery::layout(),
+        LightReply::layout(),
         BvhNode::layout(),
     ]
 }
