@@ -301,7 +301,7 @@ fn every_shader_file_is_embedded_and_imported() {
 
 #[test]
 fn preprocessor_selects_branches_imports_once_and_reports_errors() {
-    use wgtrace::gpu::shader::{assemble, preprocess_files};
+    use wgtrace::gpu::shader::{assemble, preprocess_files, Defines};
     let files = [
         (
             "main",
@@ -312,28 +312,83 @@ fn preprocessor_selects_branches_imports_once_and_reports_errors() {
         ("c", "C"),
     ];
     let defs = |names: &[&'static str]| names.iter().copied().collect::<BTreeSet<&str>>();
-    let lines = |d: &[&'static str]| preprocess_files("main", &defs(d), &files).unwrap();
+    let known = defs(&["FAST", "WIDE", "X"]);
+    let lines = |d: &[&'static str]| {
+        let set = defs(d);
+        let d = Defines {
+            known: &known,
+            set: &set,
+        };
+        preprocess_files("main", d, &files).unwrap()
+    };
     assert_eq!(lines(&[]), "B\nA\nslow\nC\nend\n");
     assert_eq!(lines(&["FAST"]), "B\nA\nfast\nnarrow\nend\n");
     assert_eq!(lines(&["FAST", "WIDE"]), "B\nA\nfast\nend\n");
 
+    let none = defs(&[]);
+    let nothing = Defines {
+        known: &known,
+        set: &none,
+    };
     let bad = |src: &'static str| {
-        preprocess_files("m", &defs(&[]), &[("m", src)])
+        preprocess_files("m", nothing, &[("m", src)])
             .unwrap_err()
             .to_string()
     };
     assert!(bad("#if X\nx").contains("#if without #endif"));
     assert!(bad("#endif").contains("m:1: #endif without #if"));
     assert!(bad("x\n#import nope").contains("m:2: #import of unknown file nope"));
-    let err = assemble("no/such/file", &defs(&[]), &[]).unwrap_err();
+    // a misspelled name is refused, not taken for an absent feature
+    let e = bad("x\n#ifdef FAAST\ny\n#endif");
+    assert!(
+        e.contains("m:2: #ifdef FAAST: no such define; did you mean FAST?"),
+        "{e}"
+    );
+    let unknown_set = defs(&["SLOW"]);
+    let e = preprocess_files(
+        "main",
+        Defines {
+            known: &known,
+            set: &unknown_set,
+        },
+        &files,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("SLOW is defined but not a known name"), "{e}");
+    let err = assemble("no/such/file", nothing, &[]).unwrap_err();
     assert!(
         err.to_string()
             .contains("no shader file named no/such/file"),
         "{err}"
     );
     // the shaders need the generated files
-    let err = assemble("trace", &defs(&[]), &[]).unwrap_err().to_string();
+    let err = assemble("trace", nothing, &[]).unwrap_err().to_string();
     assert!(err.contains("#import of unknown file generated/"), "{err}");
+}
+
+/// Every `#if` of every shader file names a define the plan knows
+/// (`ShaderSpec::known_defines`): the preprocessor refuses any other, so a misspelled
+/// feature cannot leave its code out unnoticed.
+#[test]
+fn every_shader_directive_names_a_known_define() {
+    let known = ShaderSpec::known_defines();
+    let mut named = 0;
+    for (name, src) in SHADER_FILES {
+        for (i, line) in src.lines().enumerate() {
+            let mut words = line.split_whitespace();
+            if let Some("#if" | "#ifdef" | "#ifndef") = words.next() {
+                let flag = words.next().unwrap_or("");
+                assert!(
+                    known.contains(flag),
+                    "shaders/{name}.wgsl:{}: {flag} is no define",
+                    i + 1
+                );
+                named += 1;
+            }
+        }
+    }
+    assert!(named > 50, "{named} directives");
 }
 
 /// Finds the struct named `name` in a naga module and returns (size, [(member, offset)]).

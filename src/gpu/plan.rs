@@ -337,9 +337,19 @@ impl ShaderSpec {
             Feature::Transforms,
         ];
         if f(Feature::Triangle) && !other_bounded.into_iter().any(f) {
-            d.insert("BOUNDED_TRIANGLES_ONLY");
+            d.insert(BOUNDED_TRIANGLES_ONLY);
         }
         d
+    }
+
+    /// Every name a shader file's `#if` may ask about: each feature's define, each
+    /// `BAKED_*`, and `BOUNDED_TRIANGLES_ONLY`. The preprocessor refuses any other.
+    pub fn known_defines() -> BTreeSet<&'static str> {
+        Feature::all()
+            .map(Feature::define)
+            .chain(BAKED_DEFINES.map(|(_, d)| d))
+            .chain([BOUNDED_TRIANGLES_ONLY])
+            .collect()
     }
 
     /// The assembled WGSL of entry point file `entry` (`trace` or `kernel`).
@@ -355,9 +365,13 @@ impl ShaderSpec {
             })
             .collect();
         let materials = codegen::materials(&kinds);
+        let (known, set) = (Self::known_defines(), self.defines());
         shader::assemble(
             entry,
-            &self.defines(),
+            shader::Defines {
+                known: &known,
+                set: &set,
+            },
             &[
                 ("generated/constants", &constants),
                 ("generated/bindings", &bindings),
@@ -400,6 +414,10 @@ impl ShaderSpec {
             .collect()
     }
 }
+
+/// The define of a shader whose BVH leaves hold only untransformed triangles (they test
+/// without the tag's switch).
+const BOUNDED_TRIANGLES_ONLY: &str = "BOUNDED_TRIANGLES_ONLY";
 
 /// The define of each record array that may be written into the shader.
 const BAKED_DEFINES: [(Slot, &str); 3] = [

@@ -4,7 +4,9 @@
 //! - `#import shared/name` pulls in `shaders/shared/name.wgsl`, once per assembled shader;
 //!   `#import generated/name` a file written from Rust (`gpu::codegen`, `gpu::bindings`);
 //! - `#if NAME` / `#ifdef NAME`, `#ifndef NAME`, `#else`, `#endif` keep or drop lines by
-//!   whether `NAME` is in the set of defines (they nest).
+//!   whether `NAME` is in the set of defines (they nest). A name that is no define at all
+//!   (not among the names the caller knows) is an error: a misspelled `#ifdef` would
+//!   otherwise leave its code out without a word.
 //!
 //! What to assemble for a scene is its plan's business (`gpu::plan::ShaderSpec::wgsl`).
 
@@ -52,11 +54,20 @@ pub enum ShaderError {
     Invalid { name: String, message: String },
 }
 
+/// The names a shader's `#if` may ask about, and which of them are defined.
+#[derive(Debug, Clone, Copy)]
+pub struct Defines<'a> {
+    /// Every name a directive may name (`gpu::plan::ShaderSpec::known_defines`).
+    pub known: &'a BTreeSet<&'a str>,
+    /// The ones defined for this shader.
+    pub set: &'a BTreeSet<&'a str>,
+}
+
 /// Assembles shader `entry` with its imports from [`SHADER_FILES`] and the `generated`
-/// files, keeping the `#if` branches selected by `defines`.
+/// files, keeping the `#if` branches `defines` selects.
 pub fn assemble(
     entry: &str,
-    defines: &BTreeSet<&str>,
+    defines: Defines,
     generated: &[(&str, &str)],
 ) -> Result<String, ShaderError> {
     let mut files = SHADER_FILES.to_vec();
@@ -67,9 +78,16 @@ pub fn assemble(
 /// The preprocessor over a given set of `(name, source)` files.
 pub fn preprocess_files(
     entry: &str,
-    defines: &BTreeSet<&str>,
+    defines: Defines,
     files: &[(&str, &str)],
 ) -> Result<String, ShaderError> {
+    if let Some(unknown) = defines.set.difference(defines.known).next() {
+        return Err(ShaderError::Preprocess {
+            file: entry.to_string(),
+            line: 0,
+            message: format!("{unknown} is defined but not a known name"),
+        });
+    }
     let mut out = String::new();
     let mut imported = BTreeSet::new();
     imported.insert(entry.to_string());
@@ -79,7 +97,7 @@ pub fn preprocess_files(
 
 fn expand(
     name: &str,
-    defines: &BTreeSet<&str>,
+    defines: Defines,
     files: &[(&str, &str)],
     imported: &mut BTreeSet<String>,
     out: &mut String,
@@ -103,8 +121,14 @@ fn expand(
                 let flag = words
                     .next()
                     .ok_or_else(|| err(lineno, format!("{d} needs a name")))?;
+                if !defines.known.contains(flag) {
+                    return Err(err(
+                        lineno,
+                        format!("{d} {flag}: no such define{}", closest(flag, defines.known)),
+                    ));
+                }
                 let outer = active(&stack);
-                let on = defines.contains(flag) != (d == "#ifndef");
+                let on = defines.set.contains(flag) != (d == "#ifndef");
                 stack.push((outer && on, outer));
             }
             Some("#else") => {
@@ -140,6 +164,16 @@ fn expand(
         return Err(err(src.lines().count(), "#if without #endif".into()));
     }
     Ok(())
+}
+
+/// `; did you mean NAME?` for the known name closest to `flag`, when one is close.
+fn closest(flag: &str, known: &BTreeSet<&str>) -> String {
+    known
+        .iter()
+        .map(|k| (strsim::levenshtein(flag, k), k))
+        .min()
+        .filter(|(d, _)| *d <= 3)
+        .map_or(String::new(), |(_, k)| format!("; did you mean {k}?"))
 }
 
 /// Parses and validates assembled WGSL with naga, as wgpu will (the pipelines leave this to
