@@ -99,7 +99,7 @@ fn main() {
         let src = scene_text(&path);
         let load = |no_bvh: bool| {
             let knobs = if no_bvh { "no-bvh" } else { "" };
-            wgtrace::scene::load_scene_str(
+            wgtrace::scene::load_str(
                 &src,
                 Path::new("bench.toml"),
                 &Overrides::default(),

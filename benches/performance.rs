@@ -21,8 +21,9 @@ use std::time::Instant;
 
 use wgtrace::converge::rel_mse;
 use wgtrace::gpu::bindings::{Slot, UNIFORM_BYTES};
-use wgtrace::gpu::render::{ACCUM_BYTES_PER_PIXEL, MAX_DISPATCHES_PER_SUBMISSION, MAX_TILE_PIXELS};
+use wgtrace::gpu::render::{ACCUM_BYTES_PER_PIXEL, MAX_DISPATCHES_PER_SUBMISSION};
 use wgtrace::scene::textures::load_image;
+use wgtrace::tuning::MAX_BAND_PIXELS;
 
 const ROUNDS: usize = 3;
 
@@ -1017,7 +1018,7 @@ fn memory(md: &mut String, dir: &Path, scene: &Path) {
         // the same sizes as gpu::render allocates (a parameter block of 256 bytes, the
         // stride on this adapter)
         let per_pixel = ACCUM_BYTES_PER_PIXEL as f64;
-        let band = pixels.min(MAX_TILE_PIXELS as f64);
+        let band = pixels.min(MAX_BAND_PIXELS as f64);
         let params = MAX_DISPATCHES_PER_SUBMISSION as f64 * 256.0;
         let records = Slot::RECORDS.len() as f64 * UNIFORM_BYTES as f64;
         let gpu = (per_pixel * (pixels + band) + params + records) / (1u64 << 20) as f64;

@@ -1,4 +1,4 @@
-// A group of consecutive samples per pixel per dispatch over one tile of the image: for
+// A group of consecutive samples per pixel per dispatch over one band of the image: for
 // each, a camera ray, then one extend_path per ray until the path ends; each is added to
 // the pixel's sums in index order, or dropped and counted when it is not finite.
 #import shared/bindings
@@ -291,11 +291,11 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
 @compute @workgroup_size(8, 8, 1)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
     stack_lane = lane;
-    if (gid.x >= params.tile_width || gid.y >= params.tile_height) {
+    if (gid.x >= params.band_width || gid.y >= params.band_height) {
         return;
     }
-    let x = params.tile_x + gid.x;
-    let y = params.tile_y + gid.y;
+    let x = params.band_x + gid.x;
+    let y = params.band_y + gid.y;
     let pixel = y * params.width + x;
     // samples sample_index .. sample_index + sample_count, one after the other: a lane
     // whose path ends starts its next sample at once, so the 8 lanes of a SIMD batch stay
@@ -304,7 +304,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     // are read and written once. A sample that is not finite (or whose square is not) is
     // dropped and counted in the otherwise unused .w of the squares.
     // The bound accumulation buffer holds the pixels of the band of rows from accum_y.
-    let slot = (y - params.accum_y) * params.tile_width + gid.x;
+    let slot = (y - params.accum_y) * params.band_width + gid.x;
     var sum = accum[2u * slot];
     var sum2 = accum[2u * slot + 1u];
 #ifdef HAS_EMISSION

@@ -107,7 +107,7 @@ pub const FNV1A64_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
 /// so a resumed render may ask for more samples, except for samplers whose points depend
 /// on it (`SamplerKind::depends_on_spp`).
 pub fn scene_hash(scene: &FlatScene) -> u64 {
-    let mut params = scene.params(0, scene.full_tile());
+    let mut params = scene.params(0, scene.full_band());
     if !scene.sampler.depends_on_spp() {
         params.spp = 0;
         params.strata_log2 = 0;

@@ -109,14 +109,6 @@ impl Engine {
         }
     }
 
-    /// Ends the GPU device as a driver reset would, for tests of a render's recovery; the
-    /// CPU has nothing to lose.
-    pub fn lose_device(&mut self) {
-        if let Engine::Gpu(g) = self {
-            g.lose_device();
-        }
-    }
-
     /// The time one GPU submission should take (see
     /// [`crate::gpu::render::DEFAULT_SUBMISSION_TARGET`]); the CPU ignores it.
     pub fn set_submission_target(&mut self, target: Duration) {

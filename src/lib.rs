@@ -13,7 +13,6 @@ pub mod checkpoint;
 pub mod converge;
 pub mod cpu;
 pub mod engine;
-pub mod gallery;
 pub mod gpu;
 pub mod image_io;
 pub mod scene;

@@ -59,10 +59,6 @@ enum Command {
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
     },
-    /// Render the README's gallery (every scene of scenes/, and the Cornell box with each
-    /// pixel sampler) to OUT/NAME.png, then rewrite the README's gallery table with each
-    /// render time. Run it from the repository root.
-    Gallery(GalleryArgs),
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
     /// Combine checkpoints of one scene rendered over disjoint sample ranges
@@ -79,27 +75,6 @@ enum Command {
         #[arg(long, value_name = "PATH")]
         checkpoint: Option<PathBuf>,
     },
-}
-
-#[derive(clap::Args)]
-struct GalleryArgs {
-    /// Folder for the images.
-    #[arg(long, default_value = "docs/gallery")]
-    out: PathBuf,
-    /// README whose gallery block (between its two gallery comment lines) is rewritten.
-    #[arg(long, default_value = "README.md")]
-    readme: PathBuf,
-    /// Render only these images (names as in the table, e.g. `--only box --only sky`); the
-    /// README is then left alone.
-    #[arg(long, value_name = "NAME")]
-    only: Vec<String>,
-    /// Samples per pixel for every image instead of each entry's own (quick looks); the
-    /// README is then left alone.
-    #[arg(long)]
-    spp: Option<u32>,
-    /// Which Vulkan adapter (index from `wgtrace info`).
-    #[arg(long, default_value_t = 0)]
-    adapter: usize,
 }
 
 #[derive(clap::Args)]
@@ -293,7 +268,6 @@ fn main() -> ExitCode {
         Command::Converge(args) => converge(args),
         Command::Features { scene } => features(&scene),
         Command::Validate { scenes } => validate(&scenes),
-        Command::Gallery(args) => gallery(args),
         Command::Info => info(),
         Command::Merge {
             checkpoints,
@@ -382,78 +356,6 @@ fn validate(paths: &[PathBuf]) -> anyhow::Result<()> {
     if failed > 0 {
         anyhow::bail!("{failed} of {} scenes have problems", paths.len());
     }
-    Ok(())
-}
-
-fn gallery(args: GalleryArgs) -> anyhow::Result<()> {
-    use wgtrace::gallery::{readme_block, replace_block, ENTRIES};
-    let unknown: Vec<&String> = args
-        .only
-        .iter()
-        .filter(|n| !ENTRIES.iter().any(|e| e.name == n.as_str()))
-        .collect();
-    if !unknown.is_empty() {
-        let names: Vec<&str> = ENTRIES.iter().map(|e| e.name).collect();
-        anyhow::bail!(
-            "no gallery image {unknown:?}; the images are: {}",
-            names.join(", ")
-        );
-    }
-    // a full run rewrites the README's table: check it has one before rendering for minutes
-    let full = args.only.is_empty() && args.spp.is_none();
-    let readme = if full {
-        let text = std::fs::read_to_string(&args.readme)
-            .with_context(|| format!("reading {}", args.readme.display()))?;
-        replace_block(&text, "").map_err(|e| anyhow::anyhow!("{}: {e}", args.readme.display()))?;
-        text
-    } else {
-        String::new()
-    };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    let mut rendered = Vec::new();
-    for e in ENTRIES
-        .iter()
-        .filter(|e| args.only.is_empty() || args.only.iter().any(|n| n == e.name))
-    {
-        if let Some((file, cargo_args)) = e.generated {
-            if !Path::new(file).exists() {
-                println!(
-                    "{file} is missing; writing it: cargo {}",
-                    cargo_args.join(" ")
-                );
-                let status = std::process::Command::new("cargo")
-                    .args(cargo_args)
-                    .status()
-                    .with_context(|| format!("running cargo to write {file}"))?;
-                anyhow::ensure!(status.success(), "cargo {} failed", cargo_args.join(" "));
-            }
-        }
-        let r = wgtrace::gallery::render(e, args.spp, args.adapter, &args.out)?;
-        println!(
-            "{}: {} x {}, {} spp, {:.2} s, {} non-finite",
-            args.out.join(format!("{}.png", e.name)).display(),
-            r.width,
-            r.height,
-            r.spp,
-            r.seconds,
-            r.non_finite
-        );
-        rendered.push(r);
-    }
-    let device = rendered.last().map_or(String::new(), |r| r.device.clone());
-    if !full {
-        println!("{} left alone (a partial gallery)", args.readme.display());
-        return Ok(());
-    }
-    let base = args.readme.parent().unwrap_or(Path::new(""));
-    let dir = args.out.strip_prefix(base).unwrap_or(&args.out);
-    let block = readme_block(&rendered, &device, &dir.to_string_lossy());
-    let updated = replace_block(&readme, &block)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.readme.display()))?;
-    std::fs::write(&args.readme, updated)
-        .with_context(|| format!("writing {}", args.readme.display()))?;
-    println!("{}: gallery table written", args.readme.display());
     Ok(())
 }
 
@@ -620,7 +522,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     };
     let tuning = args.tune.unwrap_or_default();
     let loading = std::time::Instant::now();
-    let scene = wgtrace::scene::load_scene(&args.scene, &overrides, tuning.build())?;
+    let scene = wgtrace::scene::load(&args.scene, &overrides, tuning.build())?;
     // the first signal stops after the current pass and keeps the work; a second one, for
     // a pass that takes too long, exits at once
     let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
@@ -674,18 +576,12 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let done = match result {
         Ok(done) => done,
         Err(e) => {
-            let resume = e.resumable().map(|ckpt| {
-                format!(
-                    "; continue with\n  wgtrace render {} --resume {} (and the same options)",
-                    args.scene.display(),
-                    ckpt.display()
-                )
-            });
+            let message = failure(&args.scene, &e);
             if let SessionError::Interrupted { .. } = e {
-                eprintln!("{e}{}", resume.unwrap_or_default());
+                eprintln!("{message}");
                 return Err(Interrupted.into());
             }
-            anyhow::bail!("{e}{}", resume.unwrap_or_default());
+            anyhow::bail!("{message}");
         }
     };
     let mut line = summary(&output, &done, first, limited && args.spp.is_some());
@@ -744,11 +640,20 @@ fn session_options(
             preview_every: args.preview_every,
         }),
         submission_target: std::time::Duration::from_secs_f64(args.submission_time),
-        // for tests of a device lost mid-render
-        lose_device_at: std::env::var("WGTRACE_LOSE_DEVICE_AT_SAMPLE")
-            .ok()
-            .and_then(|v| v.parse().ok()),
     }
+}
+
+/// What a render that stopped short says: the session's error, and the command that
+/// continues it when its work is in a checkpoint (an interrupt, a lost device).
+fn failure(scene: &Path, e: &SessionError) -> String {
+    let resume = e.resumable().map(|ckpt| {
+        format!(
+            "; continue with\n  wgtrace render {} --resume {} (and the same options)",
+            scene.display(),
+            ckpt.display()
+        )
+    });
+    format!("{e}{}", resume.unwrap_or_default())
 }
 
 /// The line a finished render prints: the image, its size, samples, time and rate, the
@@ -803,6 +708,30 @@ fn progress_bar(quiet: bool, len: u64, template: &str) -> ProgressBar {
 mod tests {
     use super::*;
     use clap::CommandFactory;
+
+    /// A lost device's message says what was saved and how to continue (the session
+    /// side is tests/gpu.rs's `a_device_lost_mid_render_keeps_the_samples_read_back`).
+    #[test]
+    fn a_lost_device_says_how_to_continue() {
+        use wgtrace::session::LostDevice;
+        let e = SessionError::DeviceLost(Box::new(LostDevice {
+            error: wgtrace::gpu::GpuError::Lost("the device was lost (test)".into()),
+            at: 9,
+            saved: Some(0..8),
+            image: Some(PathBuf::from("out.png")),
+            checkpoint: PathBuf::from("out.ckpt"),
+            every: std::time::Duration::ZERO,
+        }));
+        let m = failure(Path::new("scene.toml"), &e);
+        assert!(
+            m.contains("at sample 9; wrote samples 0..8")
+                && m.contains("out.png and checkpoint out.ckpt")
+                && m.ends_with(
+                    "wgtrace render scene.toml --resume out.ckpt (and the same options)"
+                ),
+            "{m}"
+        );
+    }
 
     /// `wgtrace --help` and each command's help describe every command, option and value.
     #[test]

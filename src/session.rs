@@ -25,7 +25,7 @@ use crate::tuning::Tuning;
 
 /// Reads, validates and flattens a scene file under the default tuning.
 pub fn load_scene(path: &Path, overrides: &Overrides) -> Result<FlatScene, SceneError> {
-    crate::scene::load::load_scene(path, overrides, Tuning::default().build())
+    crate::scene::load::load(path, overrides, Tuning::default().build())
 }
 
 /// Validates and flattens scene text under the default tuning; `path` names it in errors.
@@ -34,7 +34,7 @@ pub fn load_scene_str(
     path: &Path,
     overrides: &Overrides,
 ) -> Result<FlatScene, SceneError> {
-    crate::scene::load::load_scene_str(src, path, overrides, Tuning::default().build())
+    crate::scene::load::load_str(src, path, overrides, Tuning::default().build())
 }
 
 /// The most passes of an uncapped render ([`Passes::Uncapped`]).
@@ -163,8 +163,6 @@ pub struct SessionOptions {
     pub output: Option<Output>,
     /// The time one GPU submission should take.
     pub submission_target: Duration,
-    /// For tests of a lost device: the device is destroyed once this many samples are done.
-    pub lose_device_at: Option<u32>,
 }
 
 impl Default for SessionOptions {
@@ -178,7 +176,6 @@ impl Default for SessionOptions {
             saving: None,
             output: None,
             submission_target: DEFAULT_SUBMISSION_TARGET,
-            lose_device_at: None,
         }
     }
 }
@@ -660,8 +657,8 @@ impl Session {
         Ok((progress, Stopped::AllPasses, estimate))
     }
 
-    /// After a batch that started at sample `before`: a preview when one is due, the sums
-    /// read back when a checkpoint is due, and the test hook that loses the device.
+    /// After a batch that started at sample `before`: a preview when one is due, and the
+    /// sums read back when a checkpoint is due.
     fn after_batch(&mut self, before: u32) -> Result<(), SessionError> {
         let n = self.next;
         let preview = self.opts.output.as_ref().and_then(|o| o.preview_every);
@@ -680,9 +677,6 @@ impl Session {
             let acc = self.engine.accumulation()?;
             self.save(acc, n, false)?;
             self.last_save = Instant::now();
-        }
-        if self.opts.lose_device_at.is_some_and(|at| n >= at) {
-            self.engine.lose_device();
         }
         Ok(())
     }

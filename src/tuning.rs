@@ -19,6 +19,10 @@ use crate::scene::flatten::{Acceleration, Build};
 /// crossover down from about 100 triangles but, by those figures, not below 64.
 pub const LIST_MAX_PRIMITIVES: usize = 64;
 
+/// Most pixels of one band of rows of the GPU's image (one accumulation buffer, 8 MiB),
+/// unless the tuning says fewer.
+pub const MAX_BAND_PIXELS: u32 = 1 << 18;
+
 /// The knobs, each on (fastest) unless turned off.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Tuning {
@@ -36,6 +40,9 @@ pub struct Tuning {
     pub sample_groups: bool,
     /// Primitives and BVH nodes too large for a uniform buffer read from textures.
     pub texture_records: bool,
+    /// Most pixels per band of rows (one accumulation buffer each): fewer, smaller
+    /// buffers change no image (the tests hold renders in many bands to one in one).
+    pub band_pixels: u32,
 }
 
 impl Default for Tuning {
@@ -50,6 +57,7 @@ impl Default for Tuning {
             baked_records: true,
             sample_groups: true,
             texture_records: true,
+            band_pixels: MAX_BAND_PIXELS,
         }
     }
 }
@@ -88,6 +96,10 @@ pub const KNOBS: &[(&str, &str)] = &[
         "no-russian-roulette",
         "trace every path to max_depth (or until it escapes or goes black)",
     ),
+    (
+        "band-pixels=N",
+        "at most N pixels per band of rows on the GPU (default 262144: 8 MiB of sums)",
+    ),
 ];
 
 impl Tuning {
@@ -100,7 +112,7 @@ impl Tuning {
     }
 
     /// The default tuning with the comma-separated knobs of [`KNOBS`] turned off (or, for
-    /// `bvh`, on), e.g. `no-bvh,no-specialize`.
+    /// `bvh`, on; `band-pixels=N` set), e.g. `no-bvh,no-specialize`.
     pub fn parse(list: &str) -> Result<Tuning, String> {
         let mut t = Tuning::default();
         for knob in list.split(',').map(str::trim).filter(|k| !k.is_empty()) {
@@ -122,6 +134,15 @@ impl Tuning {
                 "no-sample-groups" => t.sample_groups = false,
                 "no-texture-records" => t.texture_records = false,
                 "no-russian-roulette" => t.russian_roulette = false,
+                _ if knob.starts_with("band-pixels=") => {
+                    t.band_pixels = knob["band-pixels=".len()..]
+                        .parse()
+                        .ok()
+                        .filter(|&n| n > 0)
+                        .ok_or_else(|| {
+                            format!("\"{knob}\": band-pixels needs a whole number > 0")
+                        })?;
+                }
                 _ => {
                     let names: Vec<&str> = KNOBS.iter().map(|(n, _)| *n).collect();
                     return Err(format!(

@@ -88,7 +88,7 @@ material = "m"
 fn polygon_fan_hits_inside_misses_outside_and_faces_by_vertex_order() {
     let scene = common::scene_from_str(POLYGON_SCENE);
     assert_eq!(scene.primitives.len(), 4, "hexagon -> 4 fan triangles");
-    let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+    let b = Bindings::new(&scene, scene.params(0, scene.full_band()));
     for (x, y, hit) in [
         (0.0, 0.0, true),
         (0.9, 0.0, true),
@@ -137,7 +137,7 @@ fn rays_leaving_a_sphere_never_rehit_it_at_any_scale() {
     ];
     for (center, radius) in cases {
         let scene = sphere_scene(center, radius);
-        let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+        let b = Bindings::new(&scene, scene.params(0, scene.full_band()));
         let c = Vec3::from(center);
         for i in 0..2000 {
             // A ray from outside, above the sphere, aimed at a point inside it.

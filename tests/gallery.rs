@@ -1,14 +1,23 @@
 //! The gallery and `wgtrace validate`: every scene has a gallery image, every image is
 //! committed at its scene's size, the README's gallery table lists them all, the table is
-//! rewritten only between its markers, and the two commands behave as a user runs them.
+//! rewritten only between its markers, and the gallery tool (examples/gallery, a
+//! development tool) and `wgtrace validate` behave as a user runs them.
 
 mod common;
 
+#[path = "../examples/gallery/entries.rs"]
+#[allow(dead_code)]
+mod entries;
+#[path = "../examples/gallery/readme.rs"]
+#[allow(dead_code)]
+mod readme;
+
 use std::collections::BTreeSet;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use wgtrace::gallery::{replace_block, ENTRIES, README_END, README_START};
+use entries::ENTRIES;
+use readme::{civil_date, replace_block, README_END, README_START};
 
 fn wgtrace(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_wgtrace"))
@@ -42,8 +51,9 @@ fn every_scene_has_a_committed_gallery_image_listed_in_the_readme() {
     for e in ENTRIES {
         let scene = wgtrace::load_scene(&common::repo_path(e.scene), &Default::default());
         let image = format!("docs/gallery/{}.png", e.name);
-        let png = image::open(common::repo_path(&image))
-            .unwrap_or_else(|err| panic!("{image}: {err} (run `wgtrace gallery`)"));
+        let png = image::open(common::repo_path(&image)).unwrap_or_else(|err| {
+            panic!("{image}: {err} (run `cargo run --release --example gallery`)")
+        });
         if let Ok(scene) = scene {
             assert_eq!(
                 (png.width(), png.height()),
@@ -73,17 +83,51 @@ fn the_gallery_block_is_replaced_between_its_markers_only() {
     assert!(replace_block(&format!("{README_END}\n{README_START}\n"), "x").is_err());
 }
 
+/// The gallery tool, built in this test's profile (a `cargo build` that finds it up to
+/// date when `cargo test` has built the examples).
+fn gallery_tool(args: &[&str]) -> std::process::Output {
+    let exe = std::env::current_exe().unwrap();
+    let profile = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("target/PROFILE/deps");
+    let mut build = Command::new(env!("CARGO"));
+    build.args(["build", "--quiet", "--example", "gallery"]);
+    if profile.file_name().is_some_and(|n| n == "release") {
+        build.arg("--release");
+    }
+    let status = build
+        .current_dir(common::repo_path("."))
+        .status()
+        .expect("run cargo");
+    assert!(status.success(), "cargo build --example gallery failed");
+    let tool: PathBuf = profile.join("examples").join("gallery");
+    Command::new(tool)
+        .args(args)
+        .current_dir(common::repo_path("."))
+        .output()
+        .expect("run the gallery tool")
+}
+
+#[test]
+fn the_gallery_dates_its_table_by_the_calendar() {
+    assert_eq!(civil_date(0), "1970-01-01");
+    assert_eq!(civil_date(11_016), "2000-02-29");
+    assert_eq!(civil_date(20_789), "2026-12-02");
+    assert_eq!(civil_date(-1), "1969-12-31");
+}
+
 #[test]
 fn gallery_renders_the_chosen_images_leaves_the_readme_alone_and_checks_it_first() {
     let dir = common::tmp_dir("gallery-only");
     let out = dir.display().to_string();
-    let o = wgtrace(&["gallery", "--only", "plane", "--spp", "1", "--out", &out]);
+    let o = gallery_tool(&["--only", "plane", "--spp", "1", "--out", &out]);
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     assert!(stdout.contains("left alone"), "{stdout}");
     let png = image::open(dir.join("plane.png")).expect("plane.png");
     assert_eq!((png.width(), png.height()), (320, 240));
-    let o = wgtrace(&["gallery", "--only", "nope", "--out", &out]);
+    let o = gallery_tool(&["--only", "nope", "--out", &out]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(
@@ -94,8 +138,7 @@ fn gallery_renders_the_chosen_images_leaves_the_readme_alone_and_checks_it_first
     let readme = dir.join("README.md");
     std::fs::write(&readme, "# no gallery here\n").unwrap();
     let full_out = dir.join("full");
-    let o = wgtrace(&[
-        "gallery",
+    let o = gallery_tool(&[
         "--readme",
         &readme.display().to_string(),
         "--out",

@@ -226,7 +226,7 @@ fn cameras_are_chosen_by_name_and_orthographic_ones_are_parallel() {
     assert_eq!(s.camera.half_height, 1.5);
     assert!((s.camera.forward - Vec3::NEG_Y).length() < 1e-6);
     // orthographic rays all go along the view direction, from the view rectangle
-    let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_tile()));
+    let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_band()));
     let r0 = wgtrace::cpu::trace::camera_ray(&b, 0, 0, [0.5; 2], [0.5; 2]);
     let r1 = wgtrace::cpu::trace::camera_ray(&b, s.width - 1, s.height - 1, [0.5; 2], [0.5; 2]);
     assert_eq!(r0.dir, r1.dir);
@@ -964,7 +964,7 @@ fn textures_on_a_second_uv_set_and_the_specular_texture_are_read() {
         records::NO_TEXTURE
     );
     // on the CPU: specular 0.5 x alpha 64/255 at the hit
-    let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_tile()));
+    let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_band()));
     let hit = wgtrace::cpu::types::Hit {
         p: Vec3::ZERO,
         ng: Vec3::Z,

@@ -788,9 +788,101 @@ fn a_lost_device_is_an_error_not_a_panic() {
     ));
     engine.render_pass(0).expect("a pass before the loss");
     assert!(ctx.check().is_ok());
-    engine.lose_device();
+    // what a driver reset does to a device
+    ctx.device.destroy();
     let err = engine.render_pass(1).expect_err("a pass on a lost device");
     assert!(matches!(err, GpuError::Lost(_)), "{err}");
     assert!(matches!(engine.accumulation(), Err(GpuError::Lost(_))));
     assert!(matches!(ctx.check(), Err(GpuError::Lost(_))));
+}
+
+/// A device lost mid-render (destroyed from the progress callback of the third batch, as a
+/// driver reset would end it) ends the session with `DeviceLost`, having written the
+/// samples last read back (here after every batch) as image and checkpoint, to the
+/// checkpoint the user gave or beside the image; resuming that checkpoint gives the
+/// uninterrupted sums bit for bit. The lost session runs on a device of its own, as the
+/// shared one serves the tests beside it. (main.rs's `a_lost_device_says_how_to_continue`
+/// holds the message.)
+#[test]
+fn a_device_lost_mid_render_keeps_the_samples_read_back() {
+    use std::sync::Arc;
+    use wgtrace::gpu::GpuRenderer;
+    use wgtrace::session::{Output, Passes, Saving, SessionError};
+    use wgtrace::Engine;
+    use wgtrace::{Session, SessionOptions, StopRule};
+    let dir = common::tmp_dir("lost");
+    let o = Overrides {
+        width: Some(32),
+        height: Some(24),
+        spp: Some(64),
+        ..Default::default()
+    };
+    let scene = wgtrace::load_scene(&common::repo_path("scenes/cornell.toml"), &o).unwrap();
+    let whole = common::render(common::gpu_engine(&scene), &scene);
+    for periodic in [false, true] {
+        let (image, ckpt) = (
+            dir.join(format!("l{periodic}.exr")),
+            dir.join(format!("l{periodic}.ckpt")),
+        );
+        let opts = SessionOptions {
+            saving: Some(Saving {
+                path: ckpt.clone(),
+                periodic,
+                every: std::time::Duration::ZERO,
+                at_end: periodic,
+            }),
+            output: Some(Output {
+                image: image.clone(),
+                error_map: None,
+                preview_every: None,
+            }),
+            submission_target: std::time::Duration::from_millis(1),
+            ..Default::default()
+        };
+        let ctx = Arc::new(common::gpu_context());
+        let engine = Engine::Gpu(Box::new(
+            GpuRenderer::new(ctx.clone(), &scene, &wgtrace::Tuning::default()).unwrap(),
+        ));
+        let mut session = Session::with_engine(scene.clone(), engine, opts).unwrap();
+        let mut batches = 0;
+        let err = session
+            .run(&StopRule::default(), |_| {
+                batches += 1;
+                if batches == 3 {
+                    ctx.device.destroy();
+                }
+            })
+            .expect_err("a render on a lost device");
+        let SessionError::DeviceLost(lost) = &err else {
+            panic!("not a lost device: {err}");
+        };
+        let saved = lost
+            .saved
+            .clone()
+            .expect("samples read back before the loss");
+        assert!(
+            saved.start == 0 && (2..64).contains(&saved.end),
+            "{saved:?}"
+        );
+        assert_eq!(err.resumable(), Some(ckpt.as_path()));
+        assert!(err.to_string().contains("wrote samples"), "{err}");
+        assert!(image.exists());
+        let held = wgtrace::checkpoint::Checkpoint::read(&ckpt)
+            .unwrap()
+            .samples;
+        assert_eq!(held, vec![saved.clone()]);
+        let resumed = SessionOptions {
+            resume: Some(ckpt.clone()),
+            passes: Passes::Scene,
+            ..Default::default()
+        };
+        let done = Session::open(scene.clone(), resumed)
+            .unwrap()
+            .run(&StopRule::default(), |_| {})
+            .unwrap();
+        assert!(
+            done.accumulation == whole,
+            "resumed after a loss at {saved:?} differs from the uninterrupted render"
+        );
+    }
 }

@@ -70,7 +70,7 @@ fn rays(center: Vec3, r: f32, n: usize, seed: u32) -> Vec<Ray> {
 
 /// The CPU reference's answer in the kernel's record.
 fn cpu_hit(scene: &FlatScene, r: &Ray) -> KernelHit {
-    let b = Bindings::new(scene, scene.params(0, scene.full_tile()));
+    let b = Bindings::new(scene, scene.params(0, scene.full_band()));
     let c = intersect_scene(&b, r, FAR);
     let mut out = KernelHit {
         t: c.t,
@@ -368,7 +368,7 @@ fn gpu_materials_match_cpu_query_by_query() {
     }
     src += "[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m00\"\n";
     let s = common::scene_from_str(&src);
-    let b = Bindings::new(&s, s.params(0, s.full_tile()));
+    let b = Bindings::new(&s, s.params(0, s.full_band()));
     let mut rng = 0x5eed_u32;
     let mut queries = Vec::new();
     for m in 0..keys.len() as u32 {
@@ -529,7 +529,7 @@ fn gpu_lights_match_cpu_query_by_query() {
     ];
     for (name, objects) in scenes {
         let s = common::scene_from_file_str(&format!("{HEAD}{objects}"), "scenes/lights-test.toml");
-        let b = Bindings::new(&s, s.params(0, s.full_tile()));
+        let b = Bindings::new(&s, s.params(0, s.full_band()));
         let mut rng = 0xc0ffee_u32;
         let queries: Vec<LightQuery> = (0..4096)
             .map(|_| {

@@ -316,7 +316,7 @@ fn mean_inverse_pdf(samples: &[wgtrace::cpu::lights::LightSample]) -> (f64, f64)
 }
 
 fn bindings(scene: &FlatScene) -> Bindings<'_> {
-    Bindings::new(scene, scene.params(0, scene.full_tile()))
+    Bindings::new(scene, scene.params(0, scene.full_band()))
 }
 
 const ONE_LIGHT: &str = r#"

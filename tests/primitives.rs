@@ -31,7 +31,7 @@ fn ray(o: impl Into<Vec3>, d: impl Into<Vec3>) -> Ray {
 
 /// The closest hit of a ray in a scene (CPU reference), with its shading record.
 fn trace(s: &FlatScene, r: Ray) -> Option<(Candidate, Hit)> {
-    let b = Bindings::new(s, s.params(0, s.full_tile()));
+    let b = Bindings::new(s, s.params(0, s.full_band()));
     let c = intersect_scene(&b, &r, FAR);
     (c.prim != NO_HIT).then(|| (c, surface_at(&b, &r, &c)))
 }
@@ -566,8 +566,8 @@ fn bvh_finds_the_same_closest_hit_as_brute_force() {
     let without = common::scene_without_bvh(&src);
     assert!(with.bvh_depth <= wgtrace::scene::records::BVH_STACK_SIZE);
     let (bw, bo) = (
-        Bindings::new(&with, with.params(0, with.full_tile())),
-        Bindings::new(&without, without.params(0, without.full_tile())),
+        Bindings::new(&with, with.params(0, with.full_band())),
+        Bindings::new(&without, without.params(0, without.full_band())),
     );
     let mut hits = 0;
     for _ in 0..10_000 {

@@ -153,9 +153,9 @@ material = "wall"
         .unwrap()
         .build();
     let scene =
-        wgtrace::scene::load_scene_str(src, &dir.join("scene.toml"), &Overrides::default(), no_rr)
+        wgtrace::scene::load_str(src, &dir.join("scene.toml"), &Overrides::default(), no_rr)
             .unwrap_or_else(|e| panic!("{e}"));
-    let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+    let b = Bindings::new(&scene, scene.params(0, scene.full_band()));
     let mut state = 4242u32;
     let mut rays = Vec::new();
     for i in 0..100_000 {
@@ -304,7 +304,7 @@ radius = 0.01
 material = "m"
 "#;
     let scene = common::scene_from_str(src);
-    let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+    let b = Bindings::new(&scene, scene.params(0, scene.full_band()));
     let c = Vec3::new(100.0, 20.0, -30.0);
     let mut rays = Vec::new();
     let mut want = Vec::new();
@@ -567,7 +567,7 @@ material = "light"
     // shadow rays toward sampled light points, from the patch, stop short of the light
     use wgtrace::cpu::lights::sample_light;
     use wgtrace::cpu::sampling::offset_ray;
-    let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+    let b = Bindings::new(&scene, scene.params(0, scene.full_band()));
     let mut state = 1u32;
     for _ in 0..10_000 {
         let p = Vec3::new(
@@ -788,7 +788,7 @@ fn rays_leaving_a_surface_never_hit_it_again() {
             "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[materials]\nm = {{ type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }}\n[[objects]]\nmaterial = \"m\"\n{object}\n"
         );
         let scene = common::scene_from_str(&src);
-        let b = Bindings::new(&scene, scene.params(0, scene.full_tile()));
+        let b = Bindings::new(&scene, scene.params(0, scene.full_band()));
         let p = &scene.primitives[0];
         let target = if p.tag == wgtrace::scene::records::PRIM_SPHERE {
             Vec3::from_slice(&p.a)

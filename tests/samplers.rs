@@ -16,7 +16,7 @@ fn scene(spp: u32) -> FlatScene {
 }
 
 fn params(s: &FlatScene) -> Params {
-    s.params(0, s.full_tile())
+    s.params(0, s.full_band())
 }
 
 #[test]

@@ -41,7 +41,7 @@ fn image_dir(test: &str) -> PathBuf {
 }
 
 fn value(s: &FlatScene, index: u32, uv: [f32; 2], p: [f32; 3]) -> Vec3 {
-    let b = Bindings::new(s, s.params(0, s.full_tile()));
+    let b = Bindings::new(s, s.params(0, s.full_band()));
     texture_value(&b, index, Vec2::from(uv), Vec3::from(p))
 }
 
@@ -118,7 +118,7 @@ fn images_decode_srgb_filter_bilinearly_and_wrap() {
 #[test]
 fn perlin_noise_is_bounded_smooth_and_zero_on_the_lattice() {
     let s = scene("n = { type = \"noise\", scale = 1 }", Path::new("."));
-    let b = Bindings::new(&s, s.params(0, s.full_tile()));
+    let b = Bindings::new(&s, s.params(0, s.full_band()));
     let offset = s.textures[0].offset;
     let mut rng = 5u32;
     let (mut lo, mut hi) = (f32::MAX, f32::MIN);
@@ -236,7 +236,7 @@ fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
                c = { type = \"microfacet\", albedo = [0.5, 0.5, 0.5], specular = \"t\", roughness = 0.2 }\n";
     let s = wgtrace::load_scene_str(src, Path::new("t.toml"), &Default::default())
         .unwrap_or_else(|e| panic!("{e}"));
-    let b = Bindings::new(&s, s.params(0, s.full_tile()));
+    let b = Bindings::new(&s, s.params(0, s.full_band()));
     let hit = wgtrace::cpu::types::Hit {
         p: Vec3::ZERO,
         ng: Vec3::Z,

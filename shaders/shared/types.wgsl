@@ -88,7 +88,7 @@ struct Emitter {
     pad1: u32,
 }
 
-// Per-dispatch constants: camera, image, pass and tile.
+// Per-dispatch constants: camera, image, pass and band.
 struct Params {
     // camera position, .w = lens radius
     cam_origin: vec4<f32>,
@@ -111,10 +111,10 @@ struct Params {
     sample_index: u32,
     num_primitives: u32,
     num_emitters: u32,
-    tile_x: u32,
-    tile_y: u32,
-    tile_width: u32,
-    tile_height: u32,
+    band_x: u32,
+    band_y: u32,
+    band_width: u32,
+    band_height: u32,
     // primitives 0 .. num_unbounded (planes) are tested on every ray, the rest via the BVH
     num_unbounded: u32,
     // 1: traverse the BVH, 0: test every primitive

@@ -398,7 +398,7 @@ impl CpuRenderer {
     /// Adds sample `sample_index` of every pixel.
     pub fn render_pass(&mut self, sample_index: u32) {
         let scene = &self.scene;
-        let bindings = Bindings::new(scene, scene.params(sample_index, scene.full_tile()));
+        let bindings = Bindings::new(scene, scene.params(sample_index, scene.full_band()));
         let width = scene.width as usize;
         self.accum
             .par_chunks_mut(2 * width)

@@ -279,11 +279,6 @@ impl GpuContext {
         }
     }
 
-    /// Ends the device as a driver reset would (for tests of what a render does then).
-    pub fn lose_device(&self) {
-        self.device.destroy();
-    }
-
     /// What the device can hold and run, for its plans.
     pub fn fit(&self) -> DeviceFit {
         DeviceFit::new(&self.device.limits(), &self.info.name)

@@ -165,7 +165,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
     });
     let buffers = scene_buffers(device, &ctx.queue, &slots, &spec.placements, scene, 0);
     let scene_group = bind_scene(device, &scene_bgl, &slots, &buffers, &accum);
-    let params = scene.params(0, scene.full_tile());
+    let params = scene.params(0, scene.full_band());
     ctx.queue
         .write_buffer(&buffers.params, 0, bytemuck::bytes_of(&params));
 

@@ -10,12 +10,9 @@ use super::context::{describe, GpuContext};
 use super::error::GpuError;
 use super::pipeline::TracePipeline;
 use super::plan::GpuPlan;
-use crate::scene::flat::{FlatScene, Tile};
+use crate::scene::flat::{Band, FlatScene};
 use crate::scene::records::Params;
 use crate::tuning::Tuning;
-
-/// Most pixels of one band (one accumulation buffer, 8 MiB).
-pub const MAX_TILE_PIXELS: u32 = 1 << 18;
 
 /// Accumulation bytes per pixel: two `vec4<f32>` (sum with count, sum of squares).
 pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
@@ -34,7 +31,7 @@ pub struct GpuRenderer {
     /// with a dynamic offset.
     params: wgpu::Buffer,
     params_stride: u64,
-    bands: Vec<Band>,
+    bands: Vec<BandBuffers>,
     /// As large as the largest band's accumulation.
     readback: wgpu::Buffer,
     submissions: Submissions,
@@ -43,8 +40,8 @@ pub struct GpuRenderer {
 /// A band of whole rows with an accumulation buffer of its own, so no buffer exceeds a
 /// storage binding however large the image. A submission traces part of a band (some of
 /// its rows, one sample) or all of it (one or more samples).
-struct Band {
-    tile: Tile,
+struct BandBuffers {
+    band: Band,
     accum: wgpu::Buffer,
     group: wgpu::BindGroup,
 }
@@ -108,29 +105,19 @@ pub fn next_budget(
     next.clamp(min, max.max(min))
 }
 
-/// Most pixels per band: [`MAX_TILE_PIXELS`] (or `WGTRACE_MAX_TILE_PIXELS`, for tests),
-/// and no more than one storage binding of `limit` bytes holds.
-pub fn band_pixels(limit: u64) -> u32 {
-    let wanted = std::env::var("WGTRACE_MAX_TILE_PIXELS")
-        .ok()
-        .and_then(|v| v.parse::<u32>().ok())
-        .filter(|&n| n > 0)
-        .unwrap_or(MAX_TILE_PIXELS);
+/// Most pixels per band: the tuning's `band_pixels`, and no more than one storage binding
+/// of `limit` bytes holds.
+pub fn band_pixels(wanted: u32, limit: u64) -> u32 {
     wanted.min((limit / ACCUM_BYTES_PER_PIXEL).min(u32::MAX as u64) as u32)
-}
-
-/// Splits the image into bands of whole rows of at most [`MAX_TILE_PIXELS`] pixels.
-pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
-    tiles_within(width, height, MAX_TILE_PIXELS)
 }
 
 /// Splits the image into bands of whole rows of at most `max_pixels` pixels (one row at
 /// least).
-pub fn tiles_within(width: u32, height: u32, max_pixels: u32) -> Vec<Tile> {
+pub fn bands_within(width: u32, height: u32, max_pixels: u32) -> Vec<Band> {
     let rows = (max_pixels / width).max(1);
     (0..height)
         .step_by(rows as usize)
-        .map(|y| Tile {
+        .map(|y| Band {
             x: 0,
             y,
             width,
@@ -156,10 +143,10 @@ impl GpuRenderer {
         plan.check(scene)?;
         let pipeline = ctx.trace_pipeline(&plan.shader)?;
         let device = &ctx.device;
-        let tiles = tiles_within(
+        let bands = bands_within(
             scene.width,
             scene.height,
-            band_pixels(plan.fit.storage_bytes),
+            band_pixels(tuning.band_pixels, plan.fit.storage_bytes),
         );
         let stride = params_stride(device);
         let buffers = scene_buffers(
@@ -171,19 +158,19 @@ impl GpuRenderer {
             stride * MAX_DISPATCHES_PER_SUBMISSION as u64,
         );
         // wgpu zero-initialises new buffers, so the sums start at 0.
-        let bands: Vec<Band> = tiles
+        let bands: Vec<BandBuffers> = bands
             .into_iter()
-            .map(|tile| {
+            .map(|band| {
                 let accum = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("accumulation"),
-                    size: tile.width as u64 * tile.height as u64 * ACCUM_BYTES_PER_PIXEL,
+                    size: band.width as u64 * band.height as u64 * ACCUM_BYTES_PER_PIXEL,
                     usage: wgpu::BufferUsages::STORAGE
                         | wgpu::BufferUsages::COPY_SRC
                         | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 });
                 let group = bind_scene(device, &pipeline.layout, &pipeline.slots, &buffers, &accum);
-                Band { tile, accum, group }
+                BandBuffers { band, accum, group }
             })
             .collect();
         let largest = bands.iter().map(|b| b.accum.size()).max().unwrap_or(0);
@@ -226,11 +213,6 @@ impl GpuRenderer {
         self.submissions.target = target;
     }
 
-    /// Ends the device as a driver reset would (for tests).
-    pub fn lose_device(&mut self) {
-        self.ctx.lose_device();
-    }
-
     /// Submissions made so far.
     pub fn submission_count(&self) -> u64 {
         self.submissions.count
@@ -258,7 +240,7 @@ impl GpuRenderer {
     fn largest_band(&self) -> u64 {
         self.bands
             .iter()
-            .map(|b| b.tile.width as u64 * b.tile.height as u64)
+            .map(|b| b.band.width as u64 * b.band.height as u64)
             .max()
             .unwrap_or(1)
     }
@@ -276,7 +258,7 @@ impl GpuRenderer {
     pub fn render_samples(&mut self, samples: Range<u32>) -> Result<(), GpuError> {
         let parts = group_parts(samples, self.plan.sample_group);
         for b in 0..self.bands.len() {
-            let band = self.bands[b].tile;
+            let band = self.bands[b].band;
             let band_pixels = band.width as u64 * band.height as u64;
             let work = |p: &Range<u32>| band_pixels * p.len() as u64;
             let mut i = 0;
@@ -299,7 +281,7 @@ impl GpuRenderer {
                         total += work(&parts[j]);
                         j += 1;
                     }
-                    let dispatches: Vec<(Range<u32>, Tile)> =
+                    let dispatches: Vec<(Range<u32>, Band)> =
                         parts[i..j].iter().map(|p| (p.clone(), band)).collect();
                     self.submit(b, &dispatches)?;
                     i = j;
@@ -311,13 +293,13 @@ impl GpuRenderer {
                         let per_row = band.width as u64 * part.len() as u64;
                         let rows = (self.submissions.budget / per_row).max(1) as u32;
                         let rows = rows.min(band.y + band.height - y);
-                        let tile = Tile {
+                        let some = Band {
                             x: band.x,
                             y,
                             width: band.width,
                             height: rows,
                         };
-                        self.submit(b, &[(part.clone(), tile)])?;
+                        self.submit(b, &[(part.clone(), some)])?;
                         y += rows;
                     }
                     i += 1;
@@ -327,16 +309,16 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// One submission: a dispatch per (samples, tile) of band `b`, each with its own
+    /// One submission: a dispatch per (samples, rows) of band `b`, each with its own
     /// parameters; waits for it, then adapts the budget to the time it took.
-    fn submit(&mut self, b: usize, dispatches: &[(Range<u32>, Tile)]) -> Result<(), GpuError> {
+    fn submit(&mut self, b: usize, dispatches: &[(Range<u32>, Band)]) -> Result<(), GpuError> {
         let band = &self.bands[b];
         let stride = self.params_stride as usize;
         let mut bytes = vec![0u8; stride * dispatches.len()];
-        for (i, (samples, tile)) in dispatches.iter().enumerate() {
-            let mut params = self.scene.params(samples.start, *tile);
+        for (i, (samples, rows)) in dispatches.iter().enumerate() {
+            let mut params = self.scene.params(samples.start, *rows);
             params.sample_count = samples.len() as u32;
-            params.accum_y = band.tile.y;
+            params.accum_y = band.band.y;
             bytes[i * stride..][..std::mem::size_of::<Params>()]
                 .copy_from_slice(bytemuck::bytes_of(&params));
         }
@@ -351,11 +333,11 @@ impl GpuRenderer {
                 timestamp_writes: None,
             });
             pass.set_pipeline(&self.pipeline.pipeline);
-            for (i, &(_, tile)) in dispatches.iter().enumerate() {
+            for (i, &(_, rows)) in dispatches.iter().enumerate() {
                 pass.set_bind_group(0, &band.group, &[(i * stride) as u32]);
                 pass.dispatch_workgroups(
-                    tile.width.div_ceil(WORKGROUP),
-                    tile.height.div_ceil(WORKGROUP),
+                    rows.width.div_ceil(WORKGROUP),
+                    rows.height.div_ceil(WORKGROUP),
                     1,
                 );
             }
@@ -388,7 +370,7 @@ impl GpuRenderer {
     pub fn set_accumulation(&mut self, data: &[[f32; 4]]) -> Result<(), GpuError> {
         let mut at = 0;
         for band in &self.bands {
-            let n = 2 * band.tile.width as usize * band.tile.height as usize;
+            let n = 2 * band.band.width as usize * band.band.height as usize;
             self.ctx
                 .queue
                 .write_buffer(&band.accum, 0, bytemuck::cast_slice(&data[at..at + n]));
@@ -410,7 +392,7 @@ impl GpuRenderer {
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
             encoder.copy_buffer_to_buffer(&band.accum, 0, &self.readback, 0, band.accum.size());
             self.ctx.queue.submit([encoder.finish()]);
-            let n = 2 * band.tile.width as usize * band.tile.height as usize;
+            let n = 2 * band.band.width as usize * band.band.height as usize;
             let data: Vec<[f32; 4]> = self.ctx.read_buffer(&self.readback)?;
             out.extend_from_slice(&data[..n]);
         }

@@ -92,9 +92,10 @@ pub struct EnvironmentMap {
     pub strength: f32,
 }
 
-/// A rectangle of pixels rendered by one dispatch.
+/// A band of the image: whole rows y .. y + height (x = 0, width = the image's), held by
+/// one accumulation buffer of the GPU, or the rows of one that a dispatch covers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Tile {
+pub struct Band {
     pub x: u32,
     pub y: u32,
     pub width: u32,
@@ -113,8 +114,8 @@ impl FlatScene {
         self.bvh.iter().any(|n| n.count >= records::BVH_COUNT_MASK)
     }
 
-    /// The uniform block for one dispatch: pass `sample_index` over `tile`.
-    pub fn params(&self, sample_index: u32, tile: Tile) -> Params {
+    /// The uniform block for one dispatch: pass `sample_index` over `band`.
+    pub fn params(&self, sample_index: u32, band: Band) -> Params {
         let c = &self.camera;
         Params {
             cam_origin: c.origin.extend(c.lens_radius).to_array(),
@@ -143,10 +144,10 @@ impl FlatScene {
             num_primitives: self.primitives.len() as u32,
             num_emitters: self.emitters.len() as u32 - self.num_punctual,
             num_punctual: self.num_punctual,
-            tile_x: tile.x,
-            tile_y: tile.y,
-            tile_width: tile.width,
-            tile_height: tile.height,
+            band_x: band.x,
+            band_y: band.y,
+            band_width: band.width,
+            band_height: band.height,
             num_unbounded: self.num_unbounded,
             use_bvh: self.use_bvh as u32,
             sampler: self.sampler.record(),
@@ -169,9 +170,9 @@ impl FlatScene {
         }
     }
 
-    /// The whole image as one tile.
-    pub fn full_tile(&self) -> Tile {
-        Tile {
+    /// The whole image as one band.
+    pub fn full_band(&self) -> Band {
+        Band {
             x: 0,
             y: 0,
             width: self.width,

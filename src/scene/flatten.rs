@@ -29,7 +29,7 @@ pub fn transform_matrix(t: &TransformDesc) -> Affine3A {
 }
 
 /// A transform and what can be baked exactly under it.
-struct Placement {
+struct ObjectTransform {
     m: Affine3A,
     /// Inverse transpose of the linear part: maps normals.
     normal_m: Mat3,
@@ -44,12 +44,12 @@ struct Placement {
     mirrored: bool,
 }
 
-impl Placement {
+impl ObjectTransform {
     /// A triangle mesh's placement by any affine matrix (a glTF node's): only what
     /// triangles need is exact; analytic shapes never come this way.
     fn from_matrix(m: Affine3A) -> Self {
         let linear = Mat3::from(m.matrix3);
-        Placement {
+        ObjectTransform {
             m,
             normal_m: linear.inverse().transpose(),
             uniform: None,
@@ -63,7 +63,7 @@ impl Placement {
         let m = transform_matrix(&t);
         let s = t.scale.map_or([1.0; 3], |s| s.axes()).map(f32::abs);
         let linear = Mat3::from(m.matrix3);
-        Placement {
+        ObjectTransform {
             m,
             normal_m: linear.inverse().transpose(),
             uniform: (s[0] == s[1] && s[1] == s[2] && t.rotate == [0.0; 3]).then_some(s[0]),
@@ -95,7 +95,7 @@ struct Builder {
 
 impl Builder {
     /// An analytic primitive in object space with its transform (PRIM_FLAG_TRANSFORM).
-    fn push_transformed(&mut self, mut prim: Primitive, at: &Placement) {
+    fn push_transformed(&mut self, mut prim: Primitive, at: &ObjectTransform) {
         let w2o = at.m.inverse();
         prim.flags |= records::PRIM_FLAG_TRANSFORM;
         prim.data = self.shape_data.len() as u32;
@@ -155,7 +155,7 @@ impl Builder {
     /// two corners so the front side stays the mirror image of the original front.
     fn push_placed_triangle(
         &mut self,
-        at: &Placement,
+        at: &ObjectTransform,
         mut v: [Vec3; 3],
         mut attributes: Option<([Vec3; 3], [Vec2; 3])>,
         mut tangents: Option<[Vec4; 3]>,
@@ -204,14 +204,14 @@ impl Builder {
     fn push_imported(&mut self, o: &ObjectDesc, g: &ImportedScene, first_material: u32) {
         let object = transform_matrix(&o.transform().unwrap_or_default());
         for inst in &g.instances {
-            let at = Placement::from_matrix(object * inst.transform);
+            let at = ObjectTransform::from_matrix(object * inst.transform);
             let material = first_material + inst.material as u32;
             self.push_mesh(&at, &g.meshes[inst.mesh], material);
         }
     }
 
     fn push_object(&mut self, o: &ObjectDesc, mesh: Option<&MeshData>, material: u32) {
-        let at = Placement::new(o.transform());
+        let at = ObjectTransform::new(o.transform());
         let base = Primitive {
             material,
             data: NO_DATA,
@@ -319,7 +319,7 @@ impl Builder {
 
     /// A planar convex polygon, fan-split into triangles with planar uvs: coordinates from
     /// vertex 0 along the first edge and across it.
-    fn push_polygon(&mut self, at: &Placement, vertices: &[[f32; 3]], material: u32) {
+    fn push_polygon(&mut self, at: &ObjectTransform, vertices: &[[f32; 3]], material: u32) {
         let pts: Vec<Vec3> = vertices.iter().map(|&p| Vec3::from(p)).collect();
         let n = polygon_normal(&pts).normalize();
         let t = (pts[1] - pts[0]).normalize();
@@ -334,7 +334,7 @@ impl Builder {
 
     /// A tetrahedron as four triangles, each wound so its normal points away from the
     /// vertex opposite.
-    fn push_tetrahedron(&mut self, at: &Placement, vertices: &[[f32; 3]; 4], material: u32) {
+    fn push_tetrahedron(&mut self, at: &ObjectTransform, vertices: &[[f32; 3]; 4], material: u32) {
         let p = vertices.map(Vec3::from);
         for k in 0..4 {
             let mut f = [p[(k + 1) % 4], p[(k + 2) % 4], p[(k + 3) % 4]];
@@ -346,7 +346,7 @@ impl Builder {
     }
 
     /// A mesh's triangles, with its vertex normals (smooth shading) and uvs when it has them.
-    fn push_mesh(&mut self, at: &Placement, mesh: &MeshData, material: u32) {
+    fn push_mesh(&mut self, at: &ObjectTransform, mesh: &MeshData, material: u32) {
         let smooth = !mesh.normals.is_empty();
         let has_attributes = smooth || !mesh.uvs.is_empty();
         self.bounded.reserve(mesh.triangles.len());

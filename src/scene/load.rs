@@ -47,11 +47,7 @@ pub fn is_gltf(path: &Path) -> bool {
 }
 
 /// Reads, validates and flattens a scene file: TOML, or a glTF file on its own.
-pub fn load_scene(
-    path: &Path,
-    overrides: &Overrides,
-    build: Build,
-) -> Result<FlatScene, SceneError> {
+pub fn load(path: &Path, overrides: &Overrides, build: Build) -> Result<FlatScene, SceneError> {
     if is_gltf(path) {
         return load_gltf_scene(path, overrides, build);
     }
@@ -67,12 +63,12 @@ pub fn load_scene(
         ))));
     }
     let src = std::fs::read_to_string(path).map_err(io)?;
-    load_scene_str(&src, path, overrides, build)
+    load_str(&src, path, overrides, build)
 }
 
 /// Validates and flattens scene text; `path` names it in errors, and the files it names
 /// are read relative to its folder.
-pub fn load_scene_str(
+pub fn load_str(
     src: &str,
     path: &Path,
     overrides: &Overrides,

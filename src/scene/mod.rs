@@ -23,7 +23,7 @@ pub mod textures;
 pub mod validate;
 
 pub use error::{Problem, SceneError};
-pub use flat::{CameraFrame, EnvironmentMap, FlatScene, Tile, RR_DEPTH};
+pub use flat::{Band, CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
 pub use flatten::{Acceleration, Build};
-pub use load::{load_scene, load_scene_str, Overrides, MAX_SCENE_FILE_BYTES};
+pub use load::{load, load_str, Overrides, MAX_SCENE_FILE_BYTES};
 pub use validate::{MAX_DEPTH_LIMIT, MAX_IMAGE_SIDE, MAX_SPP};

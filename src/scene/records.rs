@@ -328,7 +328,7 @@ pub struct Emitter {
     pub pad1: u32,
 }
 
-/// Per-dispatch constants (a uniform buffer): camera, image, pass and tile.
+/// Per-dispatch constants (a uniform buffer): camera, image, pass and band.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Params {
@@ -353,10 +353,10 @@ pub struct Params {
     pub sample_index: u32,
     pub num_primitives: u32,
     pub num_emitters: u32,
-    pub tile_x: u32,
-    pub tile_y: u32,
-    pub tile_width: u32,
-    pub tile_height: u32,
+    pub band_x: u32,
+    pub band_y: u32,
+    pub band_width: u32,
+    pub band_height: u32,
     /// Primitives `0..num_unbounded` (planes) are tested on every ray; the rest sit in the BVH.
     pub num_unbounded: u32,
     /// 1: traverse the BVH; 0: test every primitive (for benchmarks and tests).
@@ -378,7 +378,7 @@ pub struct Params {
     /// Image background: its index in the light list, else `NO_LIGHT`.
     pub env_light: u32,
     /// Image row of the bound accumulation buffer's first pixel: the band a dispatch's
-    /// tile lies in starts there (the GPU keeps one buffer per band of rows).
+    /// band lies in starts there (the GPU keeps one buffer per band of rows).
     pub accum_y: u32,
     /// Russian roulette decides whether rays from this one on (0 = the camera ray) are
     /// traced; 0: no Russian roulette.
@@ -658,10 +658,10 @@ shared_record!(Params {
     sample_index,
     num_primitives,
     num_emitters,
-    tile_x,
-    tile_y,
-    tile_width,
-    tile_height,
+    band_x,
+    band_y,
+    band_width,
+    band_height,
     num_unbounded,
     use_bvh,
     sampler,

@@ -65,7 +65,7 @@ pub fn scene_from_str(src: &str) -> FlatScene {
 /// Parses scene text with every primitive tested on every ray (no BVH).
 pub fn scene_without_bvh(src: &str) -> FlatScene {
     let tuning = wgtrace::Tuning::parse("no-bvh").unwrap();
-    wgtrace::scene::load_scene_str(
+    wgtrace::scene::load_str(
         src,
         Path::new("test.toml"),
         &Overrides::default(),
@@ -77,7 +77,7 @@ pub fn scene_without_bvh(src: &str) -> FlatScene {
 /// Loads a scene file under the tuning knobs `knobs` (`--tune`'s list).
 pub fn load_tuned(path: &Path, overrides: &Overrides, knobs: &str) -> FlatScene {
     let tuning = wgtrace::Tuning::parse(knobs).unwrap();
-    wgtrace::scene::load_scene(path, overrides, tuning.build()).unwrap_or_else(|e| panic!("{e}"))
+    wgtrace::scene::load(path, overrides, tuning.build()).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Parses scene text as if it were the file `rel` of the repository (mesh paths resolve
