@@ -179,11 +179,12 @@ fn report(rows: &[Row], device: &str) -> String {
     let _ = writeln!(s, "# BVH: cost versus triangle count\n");
     let _ = writeln!(
         s,
-        "Written by `cargo bench --bench bvh`. Height-field meshes (`gen_mesh heightfield`), \
+        "Written on {} by `cargo bench --bench bvh`. Height-field meshes (`gen_mesh heightfield`), \
          {SIDE}x{SIDE} pixels, max_depth 2 (a primary ray and one bounce toward a uniform sky), \
          samples per second over at least {:.1} s after one warm-up pass. Load: reading the OBJ, \
          flattening and building the BVH; BVH build: `bvh::build` alone. GPU: {device}. \
          CPU reference: {} threads. One run on one machine: compare ratios within this table.\n",
+        wgtrace::report::today(),
         MIN_TIME.as_secs_f64(),
         rayon::current_num_threads()
     );

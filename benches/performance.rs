@@ -233,10 +233,11 @@ fn main() {
     let _ = writeln!(md, "# Performance\n");
     let _ = writeln!(
         md,
-        "Written by `cargo bench --bench performance` (benches/performance.rs) on {}; every \
+        "Written on {} by `cargo bench --bench performance` (benches/performance.rs) on {}; every \
          figure is the median of {ROUNDS} child processes run in alternating order, with \
          their range in parentheses. lavapipe is Mesa's software Vulkan driver: it runs the \
          shader on the CPU, here on the same 2 cores Mitsuba uses.\n",
+        wgtrace::report::today(),
         adapter_line()
     );
 

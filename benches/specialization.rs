@@ -286,7 +286,7 @@ fn report(rows: &[Row], full_cold: &Measure, first: &Path, device: &str, disk: b
     let _ = writeln!(s, "# Per-scene shader specialization, measured\n");
     let _ = writeln!(
         s,
-        "Written by `cargo bench --bench specialization` on {device}. For each scene in \
+        "Written on {} by `cargo bench --bench specialization` on {device}. For each scene in \
          `scenes/`, at {WIDTH} pixels wide (the scene's aspect), the trace shader assembled \
          for the scene's features (*spec.*) is measured against the full shader that \
          `--tune no-specialize` uses (*full*: all {} feature defines; sampler, light sampling and \
@@ -297,6 +297,7 @@ fn report(rows: &[Row], full_cold: &Measure, first: &Path, device: &str, disk: b
          image: pipeline, upload, one sample per pixel, readback. Samples/s: the passes after \
          the first, for at least {:.1} s, one submission per pass. One run on one shared \
          machine: compare ratios within a table.\n",
+        wgtrace::report::today(),
         Feature::all().count(),
         MIN_TIME.as_secs_f64()
     );

@@ -15,6 +15,7 @@ pub mod cpu;
 pub mod engine;
 pub mod gpu;
 pub mod image_io;
+pub mod report;
 pub mod scene;
 pub mod session;
 pub mod tuning;

@@ -8,15 +8,9 @@ use crate::scene::flatten::{Acceleration, Build};
 
 /// Scenes of at most this many bounded primitives, none of them transformed, are tested
 /// as a plain list rather than through a BVH (and the GPU plan writes such a list into
-/// the shader, `gpu::plan::BAKED_PRIMITIVES_MAX`). On lavapipe the loop was 1.3x to 2.1x
-/// faster on every such scene in `scenes/` (all SIMD lanes walk it together, where the
-/// BVH walk diverges), and written into the shader it won up to about 100 triangles (the
-/// 36 of bench/cornell-triangles.toml: 1.89 against 0.35 Msamples/s; an 80-triangle mesh
-/// in that box 0.92 against 0.37; 320 triangles 0.14 against 0.37); transformed
-/// primitives cost enough per test that the BVH won there (transforms.toml, 10
-/// primitives: 0.78 against 0.67 Msamples/s). These were measured before the BVH walk
-/// was made 1.3x to 1.7x faster (postponed leaves, docs/performance.md); that moves the
-/// crossover down from about 100 triangles but, by those figures, not below 64.
+/// the shader, `gpu::plan::BAKED_PRIMITIVES_MAX`): on lavapipe all SIMD lanes walk a list
+/// together, where the BVH walk diverges. docs/performance.md (`--tune bvh`) measures what
+/// the list gives on the suite.
 pub const LIST_MAX_PRIMITIVES: usize = 64;
 
 /// Most pixels of one band of rows of the GPU's image (one accumulation buffer, 8 MiB),

@@ -17,7 +17,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use entries::ENTRIES;
-use readme::{civil_date, replace_block, README_END, README_START};
+use readme::{replace_block, README_END, README_START};
+use wgtrace::report::civil_date;
 
 fn wgtrace(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_wgtrace"))

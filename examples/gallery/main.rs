@@ -18,8 +18,9 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Parser;
 use entries::{Entry, ENTRIES, GALLERY_SPP};
-use readme::{readme_block, replace_block, today, Rendered};
+use readme::{readme_block, replace_block, Rendered};
 use wgtrace::engine::BackendChoice;
+use wgtrace::report::today;
 use wgtrace::scene::load::Overrides;
 use wgtrace::session::{load_scene, Output, Session, SessionError, SessionOptions, StopRule};
 

@@ -1,5 +1,5 @@
-//! The README's gallery table: where it lies, what it says, how it is replaced, and the
-//! day it was made. tests/gallery.rs reads this file too.
+//! The README's gallery table: where it lies, what it says (and the day it was made),
+//! how it is replaced. tests/gallery.rs reads this file too.
 
 use super::entries::{Entry, GALLERY_SPP};
 
@@ -58,27 +58,4 @@ pub fn replace_block(readme: &str, block: &str) -> Result<String, String> {
         .map(|i| start + i + README_END.len())
         .ok_or_else(|| format!("no line `{README_END}` after `{README_START}`"))?;
     Ok(format!("{}{block}{}", &readme[..start], &readme[end..]))
-}
-
-/// Today's date (UTC) as YYYY-MM-DD, from the system clock: the civil date of a day count
-/// since 1970-01-01 (Howard Hinnant's days_from_civil, inverted).
-pub fn today() -> String {
-    let secs = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |d| d.as_secs());
-    civil_date((secs / 86_400) as i64)
-}
-
-/// The date of day `days` after 1970-01-01.
-pub fn civil_date(days: i64) -> String {
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    format!("{year:04}-{month:02}-{day:02}")
 }

@@ -24,7 +24,12 @@ fn fmt_amount(x: f64) -> String {
 pub fn write_report(study: &Study, out: &Path) -> Result<(), ConvergeError> {
     let mut md = String::new();
     let r = &study.reference;
-    let _ = writeln!(md, "## {}\n", study.scene_name());
+    let _ = writeln!(
+        md,
+        "## {}\n\nWritten on {} by `wgtrace converge`.\n",
+        study.scene_name(),
+        crate::report::today()
+    );
     let _ = writeln!(
         md,
         "{}x{} pixels, max_depth {} (scene), device: {}. Reference: {} spp ({} / {}, max_depth {}, seed {:#x}, {:.0} s on {}; its own estimated relMSE {:.1e}).\n",

@@ -33,6 +33,19 @@ pub const KERNEL_IO: [(&str, u32); 8] = [
     ("light_replies", 7),
 ];
 
+/// The plan the default tuning gives `scene` on the device, refused when one ray's loops
+/// would pass the device's loop limit.
+fn plan(ctx: &GpuContext, scene: &FlatScene) -> Result<GpuPlan, GpuError> {
+    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
+    plan.fit.check_loops(plan.ray_loops)?;
+    Ok(plan)
+}
+
+/// The group-1 bindings of kernel `k` of [`KERNEL_IO`]: its inputs and its outputs.
+fn io(k: usize) -> [u32; 2] {
+    [KERNEL_IO[2 * k].1, KERNEL_IO[2 * k + 1].1]
+}
+
 /// Intersects `rays` with `scene` on the GPU, under the plan the default tuning gives it;
 /// one [`KernelHit`] per ray, in order.
 pub fn intersect_rays(
@@ -40,16 +53,7 @@ pub fn intersect_rays(
     scene: &FlatScene,
     rays: &[KernelRay],
 ) -> Result<Vec<KernelHit>, GpuError> {
-    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
-    plan.fit.check_loops(plan.ray_loops)?;
-    run_kernel(
-        ctx,
-        scene,
-        &plan,
-        "main",
-        [KERNEL_IO[0].1, KERNEL_IO[1].1],
-        rays,
-    )
+    run_kernel(ctx, scene, &plan(ctx, scene)?, "main", io(0), rays)
 }
 
 /// Looks textures up on the GPU (`texture_value`); one linear RGB colour (`.w` = 0) each.
@@ -58,13 +62,12 @@ pub fn lookup_textures(
     scene: &FlatScene,
     lookups: &[TextureLookup],
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
     run_kernel(
         ctx,
         scene,
-        &plan,
+        &plan(ctx, scene)?,
         "textures_main",
-        [KERNEL_IO[2].1, KERNEL_IO[3].1],
+        io(1),
         lookups,
     )
 }
@@ -76,13 +79,12 @@ pub fn shade_materials(
     scene: &FlatScene,
     queries: &[MaterialQuery],
 ) -> Result<Vec<MaterialReply>, GpuError> {
-    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
     run_kernel(
         ctx,
         scene,
-        &plan,
+        &plan(ctx, scene)?,
         "materials_main",
-        [KERNEL_IO[4].1, KERNEL_IO[5].1],
+        io(2),
         queries,
     )
 }
@@ -94,14 +96,12 @@ pub fn sample_lights(
     scene: &FlatScene,
     queries: &[LightQuery],
 ) -> Result<Vec<LightReply>, GpuError> {
-    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
-    plan.fit.check_loops(plan.ray_loops)?;
     run_kernel(
         ctx,
         scene,
-        &plan,
+        &plan(ctx, scene)?,
         "lights_main",
-        [KERNEL_IO[6].1, KERNEL_IO[7].1],
+        io(3),
         queries,
     )
 }
