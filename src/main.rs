@@ -55,7 +55,7 @@ enum Command {
     /// textures and meshes, build the BVH, and assemble and validate the shader each would
     /// use. Prints a summary per scene; exits non-zero if any scene has a problem.
     Validate {
-        /// Scene files (TOML).
+        /// Scene files: TOML, or glTF 2.0 files (.gltf, .glb) on their own.
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
     },

@@ -4,7 +4,8 @@
 //! backend's submissions, the stop rules (all passes, a time limit, a target error, an
 //! interrupt), previews, checkpoints kept on disk or in memory, and, when the device is
 //! lost, writing the samples last read back so that a long render never loses finished
-//! work. `wgtrace render`, `converge`, `gallery` and the benchmarks all render through it.
+//! work. `wgtrace render`, `converge`, the gallery example and the benchmarks all render
+//! through it.
 
 use std::ops::Range;
 use std::path::{Path, PathBuf};

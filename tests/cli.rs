@@ -574,8 +574,8 @@ fn merged_sample_ranges_equal_one_render() {
 /// image larger than one storage binding is), gives the same file, byte for byte, as one
 /// band; so does a checkpoint written and resumed in bands.
 #[test]
-fn tiled_and_untiled_renders_are_identical() {
-    let dir = tmp_dir("tiles");
+fn banded_and_whole_renders_are_identical() {
+    let dir = tmp_dir("bands");
     let run = |rows: bool, extra: &[&str], out: &Path| {
         let mut cmd = Command::new(env!("CARGO_BIN_EXE_wgtrace"));
         cmd.args([

@@ -524,6 +524,75 @@ fn broken_files_are_refused_with_the_json_path() {
     );
 }
 
+/// A material's values are checked whether or not a texture multiplies them (a factor
+/// is then baked into the texture, out of the material check's sight), and glTF's ior
+/// (inside against air) is at least 1 on glass too.
+#[test]
+fn material_factors_are_checked_with_or_without_a_texture() {
+    let texel = image::RgbaImage::from_pixel(2, 2, image::Rgba([255, 255, 255, 255]));
+    let cases = [
+        (
+            "factor",
+            json!({ "baseColorFactor": [1.5, 0.5, 0.5, 1.0] }),
+            None,
+            "materials[0].pbrMetallicRoughness.baseColorFactor[0]",
+            "must be in [0, 1], got 1.5",
+        ),
+        (
+            "factortex",
+            json!({ "baseColorFactor": [0.5, 1.5, 0.5, 1.0] }),
+            None,
+            "materials[0].pbrMetallicRoughness.baseColorFactor[1]",
+            "must be in [0, 1], got 1.5",
+        ),
+        (
+            "specular",
+            json!({}),
+            Some(json!({ "KHR_materials_specular": { "specularColorFactor": [1.0, -1.0, 1.0] } })),
+            "materials[0].extensions.KHR_materials_specular.specularColorFactor[1]",
+            "must be >= 0, got -1",
+        ),
+        (
+            "glassior",
+            json!({}),
+            Some(
+                json!({ "KHR_materials_transmission": { "transmissionFactor": 1.0 },
+                         "KHR_materials_ior": { "ior": 0.8 } }),
+            ),
+            "materials[0].extensions.KHR_materials_ior.ior",
+            "must be >= 1, got 0.8",
+        ),
+        (
+            "glassfactor",
+            json!({ "baseColorFactor": [0.5, 0.5, 2.0, 1.0] }),
+            Some(json!({ "KHR_materials_transmission": { "transmissionFactor": 1.0 } })),
+            "materials[0].pbrMetallicRoughness.baseColorFactor[2]",
+            "must be in [0, 1], got 2",
+        ),
+    ];
+    for (name, mut pbr, extensions, key, why) in cases {
+        // the quad's file has no texture yet: the one added after it is texture 0
+        if name != "factor" {
+            pbr["baseColorTexture"] = json!({ "index": 0 });
+        }
+        let mut material = json!({ "pbrMetallicRoughness": pbr });
+        let mut used = Vec::new();
+        if let Some(mut e) = extensions {
+            if let Some(s) = e.get_mut("KHR_materials_specular") {
+                s["specularColorTexture"] = json!({ "index": 0 });
+            }
+            used = e.as_object().unwrap().keys().cloned().collect();
+            material["extensions"] = e;
+        }
+        let mut w = quad_file(material);
+        for k in &used {
+            w.use_extension(k, false);
+        }
+        assert_eq!(w.png_texture(&texel, None).unwrap(), 0);
+        assert_refused(name, &w, key, why);
+    }
+}
+
 #[test]
 fn a_cycle_in_the_node_hierarchy_is_refused_not_walked_forever() {
     let mut w = quad_file(pbr([0.5; 4], 0.0, 1.0));
@@ -888,8 +957,8 @@ fn the_shipped_gltf_files_render_alike_on_both_backends() {
 }
 
 /// Instances are flattened: a mesh used by n nodes is read once, and its triangles are
-/// written n times into the records. This measures what that costs (printed; the
-/// README quotes it) and holds the records to n times one instance's.
+/// written n times into the records. This measures what that costs (printed;
+/// ARCHITECTURE.md's limits quote it) and holds the records to n times one instance's.
 #[test]
 fn instances_cost_their_triangles_each_in_the_records() {
     let sphere = gltf_writer::uv_sphere([0.0; 3], 0.4, 32, 64);

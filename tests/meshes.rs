@@ -361,6 +361,34 @@ fn obj_materials_come_from_the_mtl_unless_the_scene_names_one() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("a PLY file has no materials"), "{e}");
+    // values out of range, named by their statement
+    for (statement, why) in [
+        ("Kd 0.5 inf 0.5", "Kd: must be finite"),
+        ("Kd 0.5 -1 0.5\nmap_Kd tex.png", "Kd: must be >= 0"),
+        ("Ks -1 0 0", "Ks: must be >= 0"),
+        ("Ni 0.5", "Ni: must be >= 1, got 0.5"),
+        ("illum 7\nNi 0.5", "Ni: must be >= 1, got 0.5"),
+        ("illum 7\nTf 1 inf 1", "Tf: must be finite"),
+        ("d 2", "d: must be in [0, 1], got 2"),
+    ] {
+        std::fs::write(dir.join("v.mtl"), format!("newmtl v\n{statement}\n")).unwrap();
+        std::fs::write(
+            dir.join("v.obj"),
+            "mtllib v.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl v\nf 1 2 3\n",
+        )
+        .unwrap();
+        let e = wgtrace::load_scene_str(
+            &scene("").replace("m.obj", "v.obj"),
+            &dir.join("s.toml"),
+            &Overrides::default(),
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("material \"v\"") && e.contains(why),
+            "{statement}: {e}"
+        );
+    }
     // a .mtl naming an image that is not there
     std::fs::remove_file(dir.join("tex.png")).unwrap();
     let e = wgtrace::load_scene_str(&scene(""), &dir.join("s.toml"), &Overrides::default())

@@ -2,7 +2,9 @@
 //!
 //! Directives (each alone on its line):
 //! - `#import shared/name` pulls in `shaders/shared/name.wgsl`, once per assembled shader;
-//!   `#import generated/name` a file written from Rust (`gpu::codegen`, `gpu::bindings`);
+//!   `#import materials/NAME` a material's shading (`shaders/materials/NAME.wgsl`, which
+//!   the generated dispatch imports); `#import generated/name` a file written from Rust
+//!   (`gpu::codegen`, `gpu::bindings`);
 //! - `#if NAME` / `#ifdef NAME`, `#ifndef NAME`, `#else`, `#endif` keep or drop lines by
 //!   whether `NAME` is in the set of defines (they nest). A name that is no define at all
 //!   (not among the names the caller knows) is an error: a misspelled `#ifdef` would

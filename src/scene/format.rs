@@ -233,7 +233,7 @@ pub enum TextureDesc {
     /// Perlin noise ("Ray Tracing: The Next Week"): `color` x 0.5 (1 + noise), turbulence,
     /// or marble, at `scale`.
     Noise {
-        #[serde(default = "one")]
+        #[serde(default = "crate::scene::materials::common::one")]
         scale: f32,
         #[serde(default)]
         kind: NoiseKind,
@@ -469,7 +469,7 @@ pub enum ObjectDesc {
     Plane {
         point: [f32; 3],
         normal: [f32; 3],
-        #[serde(default = "one")]
+        #[serde(default = "crate::scene::materials::common::one")]
         uv_scale: f32,
         material: String,
         transform: Option<TransformDesc>,
@@ -513,10 +513,6 @@ pub enum ObjectDesc {
         path: String,
         transform: Option<TransformDesc>,
     },
-}
-
-fn one() -> f32 {
-    1.0
 }
 
 fn yes() -> bool {

@@ -30,9 +30,9 @@ pub struct Environment<'a> {
 /// proportional to the mean over the texel of the bilinear look-up's luminance (weights
 /// 1/8, 3/4, 1/8 per axis over it and its eight neighbours: the look-up's support, so every
 /// direction with radiance can be sampled) times sin(theta) at the row's centre. (The
-/// largest luminance of the nine, used before, spread a small sun's samples over nine
-/// texels: twice Mitsuba's noise per sample on the bench's heightfield.) Also returns the integral of luminance over the sphere,
-/// sum L sin(theta) dphi dtheta.
+/// largest luminance of the nine would spread a small sun's samples over nine texels:
+/// twice Mitsuba's noise per sample on the bench's heightfield.) Also returns the
+/// integral of luminance over the sphere, sum L sin(theta) dphi dtheta.
 pub fn env_distribution(env: &Environment) -> (Vec<[f32; 4]>, f64) {
     let (w, h) = (env.texture.width as usize, env.texture.height as usize);
     let image = &env.texels[env.texture.offset as usize..][..w * h];

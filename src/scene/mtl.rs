@@ -198,7 +198,7 @@ fn mtl_material(
 ) -> Result<MaterialDesc, String> {
     let (desc, keys) = if matches!(m.illumination_model, Some(4 | 6 | 7 | 9)) {
         (
-            MaterialDesc::Dielectric(dielectric::from_mtl(m)),
+            MaterialDesc::Dielectric(dielectric::from_mtl(m)?),
             dielectric::MTL_KEYS,
         )
     } else {

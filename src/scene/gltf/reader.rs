@@ -23,6 +23,27 @@ pub trait MaterialReader {
     fn warn(&mut self, message: String);
 }
 
+/// A colour factor's components checked: each in [0, 1] for a reflectance, else finite
+/// and >= 0. A factor that multiplies a texture is baked into the texture, where the
+/// material's own checks no longer see it; so every factor is checked here, by index.
+pub fn factor(key: &str, factor: &[f32], reflectance: bool) -> Result<()> {
+    for (c, &x) in factor.iter().enumerate() {
+        let ok = if reflectance {
+            (0.0..=1.0).contains(&x)
+        } else {
+            x >= 0.0 && x.is_finite()
+        };
+        if !ok {
+            let range = if reflectance { "in [0, 1]" } else { ">= 0" };
+            return Err(GltfError::new(
+                format!("{key}[{c}]"),
+                format!("must be {range}, got {x}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// The radiance a glTF material emits: emissiveFactor (each in [0, 1], as glTF says)
 /// times KHR_materials_emissive_strength, times the emissive texture.
 pub fn emission(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> Result<ColorDesc> {
@@ -34,14 +55,7 @@ pub fn emission(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> Re
         ));
     }
     let emissive = m.emissive_factor();
-    for (c, x) in emissive.iter().enumerate() {
-        if !(0.0..=1.0).contains(x) {
-            return Err(GltfError::new(
-                format!("{key}.emissiveFactor[{c}]"),
-                format!("must be in [0, 1], got {x}"),
-            ));
-        }
-    }
+    factor(&format!("{key}.emissiveFactor"), &emissive, true)?;
     // an emissive texture times 0 (glTF's default emissiveFactor) emits nothing: no
     // texture, so that the material is not taken for a light
     r.color(

@@ -60,6 +60,16 @@ pub fn one() -> f32 {
     1.0
 }
 
+/// A .mtl colour component clamped to 1; an infinity or a NaN is kept for the
+/// material's check to find.
+pub fn at_most_one(x: f32) -> f32 {
+    if x.is_finite() && x > 1.0 {
+        1.0
+    } else {
+        x
+    }
+}
+
 /// The lobes a material scatters by: what light sampling can do at it. Its module
 /// answers once for a material ([`Model::lobes`]); the answer is packed into the record's
 /// flags (`MAT_FLAG_NEE`, `MAT_FLAG_DELTA`), which the shaders, the CPU reference and the

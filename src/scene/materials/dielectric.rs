@@ -6,7 +6,9 @@
 
 use serde::Deserialize;
 
-use super::common::{material_view, white_color, Check, ColorDesc, Lobes, Model, TextureNames};
+use super::common::{
+    at_most_one, material_view, white_color, Check, ColorDesc, Lobes, Model, TextureNames,
+};
 use crate::scene::gltf::error::{GltfError, Result};
 use crate::scene::gltf::reader::{self, MaterialReader};
 use crate::scene::records::Material;
@@ -92,7 +94,21 @@ pub fn from_gltf(
     r: &mut dyn MaterialReader,
 ) -> Result<Desc> {
     let pbr = m.pbr_metallic_roughness();
-    let [red, green, blue, _] = pbr.base_color_factor();
+    let factor4 = pbr.base_color_factor();
+    reader::factor(
+        &format!("{key}.pbrMetallicRoughness.baseColorFactor"),
+        &factor4,
+        true,
+    )?;
+    let [red, green, blue, _] = factor4;
+    // glTF's ior is the inside's against air: at least 1 (a scene file's may be less)
+    let ior = m.ior().unwrap_or(1.5);
+    if !(ior >= 1.0 && ior.is_finite()) {
+        return Err(GltfError::new(
+            format!("{key}.extensions.KHR_materials_ior.ior"),
+            format!("must be >= 1, got {ior}"),
+        ));
+    }
     let tint = r.color(
         pbr.base_color_texture(),
         [red, green, blue],
@@ -131,7 +147,7 @@ pub fn from_gltf(
         }
     }
     Ok(Desc {
-        ior: m.ior().unwrap_or(1.5),
+        ior,
         tint,
         absorption,
         emission,
@@ -140,27 +156,26 @@ pub fn from_gltf(
 }
 
 /// Where a .mtl material's values come from, by field.
-pub const MTL_KEYS: &[(&str, &str)] = &[
-    ("ior", "Ni"),
-    ("tint", "Tf"),
-    ("absorption", "Tf"),
-    ("emission", "Ke"),
-];
+pub const MTL_KEYS: &[(&str, &str)] = &[("ior", "Ni"), ("tint", "Tf"), ("emission", "Ke")];
 
 /// A .mtl material of a refracting illumination model (4, 6, 7, 9): glass of ior Ni
-/// (1.5), tinted by Tf (white; each component at most 1), emitting Ke.
-pub fn from_mtl(m: &tobj::Material) -> Desc {
+/// (1.5, at least 1), tinted by Tf (white; each component at most 1), emitting Ke.
+pub fn from_mtl(m: &tobj::Material) -> std::result::Result<Desc, String> {
     let tint = match m.unknown_param.get("Tf").map(|s| parse3(s)) {
-        Some(Some(c)) => ColorDesc::Rgb(c.map(|x| if x > 1.0 { 1.0 } else { x })),
+        Some(Some(c)) => ColorDesc::Rgb(c.map(at_most_one)),
         _ => white_color(),
     };
-    Desc {
-        ior: m.optical_density.unwrap_or(1.5),
+    let ior = m.optical_density.unwrap_or(1.5);
+    if !(ior >= 1.0 && ior.is_finite()) {
+        return Err(format!("Ni: must be >= 1, got {ior}"));
+    }
+    Ok(Desc {
+        ior,
         tint,
         absorption: [0.0; 3],
         emission: ColorDesc::Rgb(m.emissive.unwrap_or([0.0; 3])),
         two_sided: false,
-    }
+    })
 }
 
 /// One number, or three, of a .mtl statement.

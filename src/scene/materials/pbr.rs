@@ -10,8 +10,8 @@
 use serde::Deserialize;
 
 use super::common::{
-    glass_ior, material_view, one, white_color, Check, ColorDesc, Lobes, Model, Surface,
-    TextureNames,
+    at_most_one, glass_ior, material_view, one, white_color, Check, ColorDesc, Lobes, Model,
+    Surface, TextureNames,
 };
 use crate::scene::gltf::error::Result;
 use crate::scene::gltf::reader::{self, MaterialReader};
@@ -224,7 +224,13 @@ pub const GLTF_KEYS: &[(&str, &str)] = &[
 /// KHR_materials_ior, KHR_materials_specular and KHR_materials_emissive_strength.
 pub fn from_gltf(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> Result<Desc> {
     let pbr = m.pbr_metallic_roughness();
-    let [red, green, blue, alpha] = pbr.base_color_factor();
+    let factor = pbr.base_color_factor();
+    reader::factor(
+        &format!("{key}.pbrMetallicRoughness.baseColorFactor"),
+        &factor,
+        true,
+    )?;
+    let [red, green, blue, alpha] = factor;
     let base_color = r.color(
         pbr.base_color_texture(),
         [red, green, blue],
@@ -268,6 +274,11 @@ pub fn from_gltf(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> R
     if let Some(s) = m.specular() {
         let sk = format!("{key}.extensions.KHR_materials_specular");
         desc.specular = s.specular_factor();
+        reader::factor(
+            &format!("{sk}.specularColorFactor"),
+            &s.specular_color_factor(),
+            false,
+        )?;
         desc.specular_color = r.color(
             s.specular_color_texture(),
             s.specular_color_factor(),
@@ -298,8 +309,8 @@ pub const MTL_KEYS: &[(&str, &str)] = &[
 pub type MtlImage<'a> =
     dyn FnMut(&str, bool, [f32; 3]) -> std::result::Result<(String, f32), String> + 'a;
 
-/// A .mtl material that does not refract: metallic 0, base colour Kd (times map_Kd; each
-/// component at most 1), specular colour Ks (no specular lobe without Ks), roughness
+/// A .mtl material that does not refract: metallic 0, base colour Kd (each component
+/// at most 1; with map_Kd, Kd multiplies the texture as given), specular colour Ks (no specular lobe without Ks), roughness
 /// (2 / (Ns + 2))^(1/4) (GGX alpha = sqrt(2 / (Ns + 2)), Blinn-Phong's exponent matched,
 /// as in pbrt's conversion), ior Ni, opacity d (blend below 1), the normal map of map_Bump
 /// / bump / norm (its -bm scales it), emission Ke.
@@ -317,7 +328,7 @@ pub fn from_mtl(
         }
         Some(t) => ColorDesc::Texture(image(t, true, kd)?.0),
         // at most 1, a NaN kept for the check to find
-        None => ColorDesc::Rgb(kd.map(|x| if x > 1.0 { 1.0 } else { x })),
+        None => ColorDesc::Rgb(kd.map(at_most_one)),
     };
     let (normal_map, normal_scale) = match m
         .normal_texture
