@@ -194,7 +194,10 @@ fn mitsuba(
 
 fn rgb(path: &Path) -> Vec<f32> {
     let img = load_image(path, true).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect()
+    img.linear()
+        .iter()
+        .flat_map(|t| [t[0], t[1], t[2]])
+        .collect()
 }
 
 /// The bench Cornell box with its first sphere replaced by an icosphere of `level`

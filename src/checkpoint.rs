@@ -101,8 +101,9 @@ pub fn fnv1a64(hash: u64, bytes: &[u8]) -> u64 {
 /// FNV-1a's offset basis: the hash of nothing.
 pub const FNV1A64_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
 
-/// A hash of everything that decides a render's samples: the records both backends read
-/// and the parameters (camera, size, seed, sampler, light sampling, depth), as their
+/// A hash of everything that decides a render's samples: the records both backends read,
+/// the tables, the texel banks (their kinds and sizes, then their bytes) and the
+/// parameters (camera, size, seed, sampler, light sampling, depth), as their
 /// little-endian bytes, each array preceded by its length. The sample count is left out,
 /// so a resumed render may ask for more samples, except for samplers whose points depend
 /// on it (`SamplerKind::depends_on_spp`).
@@ -120,12 +121,27 @@ pub fn scene_hash(scene: &FlatScene) -> u64 {
         bytemuck::cast_slice(&scene.bvh),
         bytemuck::cast_slice(&scene.shape_data),
         bytemuck::cast_slice(&scene.textures),
-        bytemuck::cast_slice(&scene.texels),
+        bytemuck::cast_slice(&scene.tables),
     ];
-    parts.iter().fold(FNV1A64_BASIS, |h, part| {
-        let h = fnv1a64(h, &(part.len() as u64).to_le_bytes());
-        fnv1a64(h, part)
-    })
+    // the texel banks, when there are images: each bank's kind and size, then its bytes
+    // (a scene without images hashes as it did before images had banks)
+    let banks: Vec<[u32; 4]> = scene
+        .texels
+        .banks
+        .iter()
+        .map(|b| [b.kind as u32, b.width, b.height, b.layers])
+        .collect();
+    let texels = (!banks.is_empty())
+        .then(|| bytemuck::cast_slice(&banks))
+        .into_iter()
+        .chain(scene.texels.banks.iter().map(|b| &b.data[..]));
+    parts
+        .into_iter()
+        .chain(texels)
+        .fold(FNV1A64_BASIS, |h, part| {
+            let h = fnv1a64(h, &(part.len() as u64).to_le_bytes());
+            fnv1a64(h, part)
+        })
 }
 
 impl Checkpoint {

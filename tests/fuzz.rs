@@ -217,7 +217,7 @@ fn oversized_files_are_refused_before_they_are_read() {
             "[textures]\nt = { type = \"image\", path = \"many.ppm\" }\n",
             "textures.t.path",
             "many.ppm",
-            textures::MAX_TEXELS.to_string(),
+            textures::MAX_IMAGE_TEXELS.to_string(),
         ),
     ] {
         let e = wgtrace::load_scene_str(

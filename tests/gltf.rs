@@ -370,7 +370,11 @@ fn textures_keep_their_colour_space_factor_and_transform() {
     // glTF's u' = 2u + 0.5; v' = v (v down) -> wgtrace's v' = 1 - (1 - v) = v
     assert_eq!(&base.color1[..3], &[2.0, 0.0, 0.5]);
     assert_eq!(&base.params[..3], &[0.0, 1.0, 0.0]);
-    let texel = |t: u32, i: usize| s.texels[s.textures[t as usize].offset as usize + i];
+    let texel = |t: u32, i: u32| {
+        let tex = s.textures[t as usize];
+        let srgb = tex.flags & records::TEX_FLAG_SRGB != 0;
+        s.texels.texel(tex.bank, tex.layer, tex.x + i, tex.y, srgb)
+    };
     // 128 / 255: decoded from sRGB for the colour, taken as it is for the data
     assert!((texel(p.base_color_texture, 0)[1] - 0.2158605).abs() < 1e-5);
     assert!((texel(p.metallic_roughness_texture, 0)[1] - 128.0 / 255.0).abs() < 1e-6);

@@ -20,6 +20,7 @@ use wgtrace::scene::materials::MaterialKind;
 use wgtrace::scene::records::{
     record_layouts, SharedValue, BVH_STACK_LANES, BVH_STACK_SIZE, SHARED_CONSTANTS,
 };
+use wgtrace::scene::texels::MAX_BANKS;
 use wgtrace::{Overrides, Tuning};
 
 /// The assembled and validated module of `entry` for `spec`.
@@ -69,9 +70,11 @@ fn every_entry_shader_validates_and_binds_what_it_reads() {
             all_placed(Placement::Uniform),
             textured,
         ] {
+            // two texel banks: texel_load's switch
             let spec = ShaderSpec {
                 features,
                 placements,
+                banks: 2,
                 scene_code: String::new(),
             };
             for entry in ENTRY_SHADERS {
@@ -158,8 +161,12 @@ fn every_plan_the_scenes_reach_validates_and_binds_only_what_it_reads() {
         bound.insert(spec.trace_slots());
     }
     assert!(bound.len() > 4, "{bound:?}");
-    // the full shader reads everything
-    assert_eq!(ShaderSpec::full().trace_slots(), Slot::ALL.to_vec());
+    // the full shader reads everything (with every texel bank)
+    let every_bank = ShaderSpec {
+        banks: MAX_BANKS as u32,
+        ..ShaderSpec::full()
+    };
+    assert_eq!(every_bank.trace_slots(), Slot::ALL.to_vec());
     // nothing emits: no path is traced, and only the parameters and the sums are bound
     assert_eq!(
         ShaderSpec::of(FeatureSet::default()).trace_slots(),
@@ -177,7 +184,12 @@ fn every_plan_the_scenes_reach_validates_and_binds_only_what_it_reads() {
     .into_iter()
     .collect();
     let slots = |f: FeatureSet| ShaderSpec::of(f).trace_slots();
-    for absent in [Slot::Emitters, Slot::Textures, Slot::Texels] {
+    for absent in [
+        Slot::Emitters,
+        Slot::Textures,
+        Slot::Tables,
+        Slot::Texels(0),
+    ] {
         assert!(!slots(cornell).contains(&absent));
     }
     let no_bvh: FeatureSet = cornell
@@ -604,7 +616,12 @@ fn uniform_record_arrays_have_the_fixed_lengths_and_bindings() {
         &DeviceFit::portable(),
         &Tuning::parse("no-specialize").unwrap(),
     );
-    assert_eq!(full.shader, ShaderSpec::full_for(plan.shader.features));
+    // (with the scene's texel banks)
+    let full_for = ShaderSpec {
+        banks: plan.shader.banks,
+        ..ShaderSpec::full_for(plan.shader.features)
+    };
+    assert_eq!(full.shader, full_for);
     // the full shader leaves out alpha and normal maps for a scene without them, and
     // holds them for one with them
     assert!(ShaderSpec::OPTIONAL_IN_FULL
@@ -651,6 +668,7 @@ fn traversal_stacks_fit_workgroup_memory_one_column_per_invocation() {
             .with(Feature::Bvh, true)
             .with(Feature::Emission, true),
         placements: Placements::default(),
+        banks: 1,
         scene_code: String::new(),
     };
     for entry in ENTRY_SHADERS {

@@ -37,6 +37,12 @@ fn image_dir(test: &str) -> PathBuf {
     // and a 1 x 1 linear float image with a value above 1
     let hdr = image::Rgb32FImage::from_raw(1, 1, vec![2.5, 0.5, 0.25]).unwrap();
     hdr.save(dir.join("1x1.exr")).unwrap();
+    // and a 3 x 2 16-bit image: a ramp in red, green and blue
+    let wide = image::ImageBuffer::<image::Rgb<u16>, _>::from_fn(3, 2, |x, y| {
+        let v = (x + 3 * y) as u16 * 13107;
+        image::Rgb([v, 65535 - v, 30000])
+    });
+    wide.save(dir.join("3x2.png")).unwrap();
     dir
 }
 
@@ -183,7 +189,11 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
          f_perlin = { type = \"noise\", scale = 3, color = [1, 0.9, 0.8] }\n\
          g_turb = { type = \"noise\", kind = \"turbulence\", scale = 2 }\n\
          h_marble = { type = \"noise\", kind = \"marble\", scale = 5 }\n\
-         i_mirror = { type = \"image\", path = \"2x2.png\", wrap = \"mirror\" }",
+         i_mirror = { type = \"image\", path = \"2x2.png\", wrap = \"mirror\" }\n\
+         j_linear = { type = \"image\", path = \"2x2.png\", color_space = \"linear\" }\n\
+         k_half = { type = \"image\", path = \"3x2.png\" }\n\
+         l_half_linear = { type = \"image\", path = \"3x2.png\", color_space = \"linear\", wrap = \"clamp\" }\n\
+         m_float = { type = \"image\", path = \"1x1.exr\" }",
         &dir,
     );
     let mut rng = 11u32;
@@ -197,6 +207,8 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
             });
         }
     }
+    // 8-bit, half and float images: three texel banks, and the look-ups' switch over them
+    assert_eq!(s.texels.banks.len(), 3);
     let gpu = lookup_textures(&ctx, &s, &lookups).expect("texture kernel");
     let mut worst = 0.0f32;
     for (l, g) in lookups.iter().zip(&gpu) {
@@ -254,4 +266,179 @@ fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
     assert_close(pbr_specular(0), pbr_specular(1));
     let microfacet_specular = microfacet::Params::read(&at(2)).specular;
     assert_close(microfacet_specular, Vec3::new(1.0, 0.5, 1.0));
+}
+
+/// 16-bit images are half floats (decoded from sRGB first when they are colour); 8-bit ones
+/// keep their bytes, decoded at look-up.
+#[test]
+fn images_keep_their_precision_in_the_texel_banks() {
+    use wgtrace::scene::texels::TexelKind;
+    let dir = image_dir("precision");
+    let s = scene(
+        "a = { type = \"image\", path = \"2x2.png\" }\n\
+         b = { type = \"image\", path = \"3x2.png\", color_space = \"linear\" }\n\
+         c = { type = \"image\", path = \"3x2.png\" }",
+        &dir,
+    );
+    let kinds: Vec<TexelKind> = s.texels.banks.iter().map(|b| b.kind).collect();
+    assert_eq!(kinds, [TexelKind::Unorm8, TexelKind::Half]);
+    assert_eq!(
+        s.texels.banks[0].data.len(),
+        2 * 2 * 4,
+        "4 bytes per 8-bit texel"
+    );
+    // texel (1, 1) of the 16-bit ramp: 4 x 13107 / 65535 = 0.8, as a half float
+    let b = Bindings::new(&s, s.params(0, s.full_band()));
+    let at = |t: u32, uv: [f32; 2]| texture_value(&b, t, Vec2::from(uv), Vec3::ZERO);
+    let centre = [(1.0 + 0.5) / 3.0, 0.25];
+    let linear = at(1, centre);
+    assert!((linear.x - 0.8).abs() < 4e-4, "{linear}");
+    assert!((linear.y - 0.2).abs() < 2e-4, "{linear}");
+    let decoded = at(2, centre);
+    assert!((decoded.x - srgb_to_linear(0.8)).abs() < 4e-4, "{decoded}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The texel banks: images of one kind share pages of the largest one's size, shelf by
+/// shelf, never overlapping and always inside; pages fill banks up to their byte and layer
+/// caps; a scene past the banks is refused with what it needs.
+#[test]
+fn texel_blocks_pack_into_pages_and_banks_without_overlap() {
+    use wgtrace::scene::texels::{pack, Block, TexelKind, MAX_BANK_BYTES, MAX_BANK_LAYERS};
+    let sizes: [(u32, u32); 8] = [
+        (7, 5),
+        (3, 3),
+        (7, 2),
+        (1, 1),
+        (4, 5),
+        (2, 4),
+        (7, 5),
+        (5, 1),
+    ];
+    let data: Vec<Vec<u8>> = sizes
+        .iter()
+        .enumerate()
+        .map(|(i, &(w, h))| (0..w * h * 4).map(|k| (i as u32 * 31 + k) as u8).collect())
+        .collect();
+    let blocks: Vec<Block> = sizes
+        .iter()
+        .zip(&data)
+        .map(|(&(w, h), d)| Block {
+            kind: TexelKind::Unorm8,
+            width: w,
+            height: h,
+            data: d,
+        })
+        .collect();
+    let (regions, texels) = pack(&blocks).unwrap();
+    assert_eq!(texels.banks.len(), 1);
+    let bank = &texels.banks[0];
+    assert_eq!((bank.width, bank.height), (7, 5));
+    let mut covered = std::collections::HashSet::new();
+    for (i, (r, b)) in regions.iter().zip(&blocks).enumerate() {
+        assert!(r.x + b.width <= bank.width && r.y + b.height <= bank.height);
+        assert!(r.layer < bank.layers);
+        for y in 0..b.height {
+            for x in 0..b.width {
+                assert!(
+                    covered.insert((r.layer, r.x + x, r.y + y)),
+                    "block {i} overlaps"
+                );
+                let k = ((y * b.width + x) * 4) as usize;
+                let t = bank.texel(r.layer, r.x + x, r.y + y, false);
+                assert_eq!(t[0], b.data[k] as f32 / 255.0, "block {i} texel ({x}, {y})");
+            }
+        }
+    }
+    // fewer pages than blocks: the small ones share
+    assert!(bank.layers < blocks.len() as u32, "{} pages", bank.layers);
+    // a bank holds MAX_BANK_LAYERS pages at most: 1 x 1 pages of one texel each
+    let one = [0u8; 4];
+    let tiny: Vec<Block> = (0..MAX_BANK_LAYERS + 3)
+        .map(|_| Block {
+            kind: TexelKind::Unorm8,
+            width: 1,
+            height: 1,
+            data: &one,
+        })
+        .collect();
+    let (regions, texels) = pack(&tiny).unwrap();
+    assert_eq!(texels.banks.len(), 2);
+    assert_eq!(texels.banks[0].layers, MAX_BANK_LAYERS);
+    assert_eq!(regions.last().unwrap().bank, 1);
+    // and MAX_BANK_BYTES: a float page of 2^13 x 2^13 texels is 1 GiB, one to a bank; the
+    // blocks are not read before their pages are sized, so nine empty claims show the
+    // refusal without allocating
+    let side = 1u32 << 13;
+    assert_eq!(side as u64 * side as u64 * 16, MAX_BANK_BYTES);
+    let e = pack(
+        &(0..9)
+            .map(|_| Block {
+                kind: TexelKind::Float,
+                width: side,
+                height: side,
+                data: &[],
+            })
+            .collect::<Vec<_>>(),
+    )
+    .unwrap_err();
+    assert!(
+        e.contains("float texels need 9216 MiB") && e.contains("8 banks"),
+        "{e}"
+    );
+}
+
+/// A scene of sixteen 4096 x 4096 8-bit maps: 1 GiB of texels (eight times what one
+/// storage binding holds) renders on the GPU, each map's page read where it lies. Each
+/// map is a solid colour on an emissive square seen head-on: every pixel of a square is
+/// its map's colour.
+#[test]
+fn a_gigabyte_of_8_bit_texels_renders_on_the_gpu() {
+    let dir = common::tmp_dir("gigabyte");
+    let side = 4096usize;
+    let colour = |i: usize| [(16 * i) as u8, 255 - (16 * i) as u8, (40 + 8 * i) as u8];
+    let mut src = String::from(
+        "[render]\nwidth = 64\nheight = 64\nspp = 1\nmax_depth = 1\n\
+         [camera]\nprojection = \"orthographic\"\nheight = 4\n\
+         look_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n",
+    );
+    let mut objects = String::new();
+    let mut materials = String::from("[materials]\n");
+    for i in 0..16 {
+        // a binary PPM: read fast, and 4 bytes a texel once loaded
+        let mut ppm = format!("P6 {side} {side} 255\n").into_bytes();
+        ppm.extend(colour(i).iter().copied().cycle().take(side * side * 3));
+        std::fs::write(dir.join(format!("map{i}.ppm")), ppm).unwrap();
+        src += &format!("t{i} = {{ type = \"image\", path = \"map{i}.ppm\" }}\n");
+        materials += &format!("m{i} = {{ type = \"emissive\", radiance = \"t{i}\" }}\n");
+        let (x, y) = ((i % 4) as f32 - 2.0, 1.0 - (i / 4) as f32);
+        objects += &format!(
+            "[[objects]]\ntype = \"polygon\"\nmaterial = \"m{i}\"\n\
+             vertices = [[{x}, {y}, 0], [{}, {y}, 0], [{}, {}, 0], [{x}, {}, 0]]\n",
+            x + 1.0,
+            x + 1.0,
+            y + 1.0,
+            y + 1.0
+        );
+    }
+    let src = src + &materials + &objects;
+    let s = wgtrace::load_scene_str(&src, &dir.join("s.toml"), &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.texels.bytes(), 1 << 30, "sixteen 64 MiB pages");
+    assert_eq!(s.texels.banks.len(), 1);
+    let img = common::render_gpu(&s);
+    for py in 0..64usize {
+        for px in 0..64usize {
+            let i = py / 16 * 4 + px / 16;
+            let want = colour(i).map(|c| srgb_to_linear(c as f32 / 255.0));
+            let got = img.mean(py * 64 + px);
+            for c in 0..3 {
+                assert!(
+                    (got[c] - want[c]).abs() < 1e-5,
+                    "pixel ({px}, {py}) of map {i}: {got:?}, not {want:?}"
+                );
+            }
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }

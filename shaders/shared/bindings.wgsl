@@ -9,7 +9,10 @@
 //   accum       two vec4 per pixel of the band being rendered (pixel i row-major within
 //               the band): [2i] = (sum r, sum g, sum b, samples), [2i + 1] = (sum r^2,
 //               g^2, b^2, samples dropped as not finite)
-//   texels      image texels (linear RGB) and the Perlin noise tables
+//   tables      the Perlin noise tables and the image background's distribution
+//   texels0..7  the image texel banks: 2D array textures (8-bit, half or float texels),
+//               read through texel_load(bank, layer, x, y), generated for the scene's
+//               banks (src/scene/texels.rs)
 #import shared/types
 // Records written into this scene's shader as constants (empty for most scenes).
 #import generated/scene

@@ -82,9 +82,9 @@ fn background_radiance(d: vec3<f32>) -> vec3<f32> {
     return params.background.rgb;
 }
 
-// Scalar i of the image background's distribution (four to a texels entry).
+// Scalar i of the image background's distribution (four to a tables entry).
 fn env_cdf_at(i: u32) -> f32 {
-    return texels[params.env_cdf + (i >> 2u)][i & 3u];
+    return tables[params.env_cdf + (i >> 2u)][i & 3u];
 }
 
 // A point drawn from a piecewise-constant density over n equal intervals, given by its

@@ -30,29 +30,50 @@ fn wrap_texel(i: i32, n: i32, mode: u32) -> u32 {
     }
 }
 
-// Bilinear image lookup of (r, g, b, alpha) after the texture's uv transform (rows in
-// color1 and params); v = 0 is the bottom row of the image, texel centres at half
-// integers.
+// The sRGB transfer function undone (IEC 61966-2-1), per channel.
+fn srgb_to_linear(c: vec3<f32>) -> vec3<f32> {
+    return select(pow((c + 0.055) / 1.055, vec3<f32>(2.4)), c / 12.92, c <= vec3<f32>(0.04045));
+}
+
+// Texel (x, y) of an image texture: its block's texel in its bank and page (texel_load is
+// generated for the scene's banks: gpu::bindings::wgsl_texel_load), its colour decoded
+// from sRGB for an 8-bit sRGB image (TEX_FLAG_SRGB).
+fn image_texel(tex: Texture, x: u32, y: u32) -> vec4<f32> {
+    let t = texel_load(tex.bank, tex.layer, tex.x + x, tex.y + y);
+#ifdef HAS_SRGB_TEXTURE
+    let srgb = (tex.flags & TEX_FLAG_SRGB) != 0u;
+    return select(t, vec4<f32>(srgb_to_linear(t.rgb), t.a), srgb);
+#else
+    return t;
+#endif
+}
+
+
+// Image lookup of (r, g, b, alpha) after the texture's uv transform (rows in color1 and
+// params), wrapped per axis; v = 0 is the bottom row of the image, texel centres at half
+// integers. Bilinear, or the nearest texel (TEX_FLAG_NEAREST: the texel whose square
+// holds the point, as the same four-texel mix with weights 1, 0).
 fn image_rgba(tex: Texture, surface_uv: vec2<f32>) -> vec4<f32> {
     let q = vec3<f32>(surface_uv, 1.0);
     let uv = vec2<f32>(dot(tex.color1.xyz, q), dot(tex.params.xyz, q));
-    let mode = tex.flags & TEX_MODE_MASK;
+    let mode_s = tex.flags & TEX_MODE_MASK;
+    let mode_t = (tex.flags >> TEX_WRAP_T_SHIFT) & TEX_MODE_MASK;
+    let nearest = (tex.flags & TEX_FLAG_NEAREST) != 0u;
+    let centre = select(0.5, 0.0, nearest);
     let w = i32(tex.width);
     let h = i32(tex.height);
-    let x = wrap_uv(uv.x, mode) * f32(w) - 0.5;
-    let y = (1.0 - wrap_uv(uv.y, mode)) * f32(h) - 0.5;
+    let x = wrap_uv(uv.x, mode_s) * f32(w) - centre;
+    let y = (1.0 - wrap_uv(uv.y, mode_t)) * f32(h) - centre;
     let x0 = floor(x);
     let y0 = floor(y);
-    let fx = x - x0;
-    let fy = y - y0;
-    let xa = wrap_texel(i32(x0), w, mode);
-    let xb = wrap_texel(i32(x0) + 1, w, mode);
-    let ya = wrap_texel(i32(y0), h, mode);
-    let yb = wrap_texel(i32(y0) + 1, h, mode);
-    let row_a = tex.offset + ya * tex.width;
-    let row_b = tex.offset + yb * tex.width;
-    let top = mix(texels[row_a + xa], texels[row_a + xb], fx);
-    let bottom = mix(texels[row_b + xa], texels[row_b + xb], fx);
+    let fx = select(x - x0, 0.0, nearest);
+    let fy = select(y - y0, 0.0, nearest);
+    let xa = wrap_texel(i32(x0), w, mode_s);
+    let xb = wrap_texel(i32(x0) + 1, w, mode_s);
+    let ya = wrap_texel(i32(y0), h, mode_t);
+    let yb = wrap_texel(i32(y0) + 1, h, mode_t);
+    let top = mix(image_texel(tex, xa, ya), image_texel(tex, xb, ya), fx);
+    let bottom = mix(image_texel(tex, xa, yb), image_texel(tex, xb, yb), fx);
     return mix(top, bottom, fy);
 }
 
@@ -65,10 +86,10 @@ fn image_value(tex: Texture, uv: vec2<f32>) -> vec3<f32> {
 // permutations at lattice point i + d, dotted with the offset from it, times the Hermite
 // weights of that corner.
 fn perlin_corner(offset: u32, i: vec3<i32>, t: vec3<f32>, s: vec3<f32>, d: vec3<i32>) -> f32 {
-    let px = u32(texels[offset + 256u + u32((i.x + d.x) & 255)].x);
-    let py = u32(texels[offset + 256u + u32((i.y + d.y) & 255)].y);
-    let pz = u32(texels[offset + 256u + u32((i.z + d.z) & 255)].z);
-    let g = texels[offset + (px ^ py ^ pz)].xyz;
+    let px = u32(tables[offset + 256u + u32((i.x + d.x) & 255)].x);
+    let py = u32(tables[offset + 256u + u32((i.y + d.y) & 255)].y);
+    let pz = u32(tables[offset + 256u + u32((i.z + d.z) & 255)].z);
+    let g = tables[offset + (px ^ py ^ pz)].xyz;
     let df = vec3<f32>(d);
     let w = select(1.0 - s, s, d == vec3<i32>(1));
     return w.x * w.y * w.z * dot(g, t - df);

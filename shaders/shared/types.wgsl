@@ -53,9 +53,9 @@ struct Material {
 }
 
 // Constant: color0 | checker: cells of textures even / odd (color0 / color1 where
-// NO_TEXTURE), params.x cells per unit | image: width x height linear texels from
-// texels[offset], row 0 at the top | noise: color0 x Perlin noise of params.x x p, tables at
-// texels[offset].
+// NO_TEXTURE), params.x cells per unit | image: width x height texels of texel bank `bank`,
+// page `layer`, from page texel (x, y), row 0 at the top, read from uv set uv_set | noise:
+// color0 x Perlin noise of params.x x p, its tables at tables[offset].
 struct Texture {
     tag: u32,
     flags: u32,
@@ -63,8 +63,12 @@ struct Texture {
     odd: u32,
     width: u32,
     height: u32,
+    bank: u32,
+    layer: u32,
+    x: u32,
+    y: u32,
+    uv_set: u32,
     offset: u32,
-    pad: u32,
     color0: vec4<f32>,
     color1: vec4<f32>,
     params: vec4<f32>,
@@ -129,7 +133,7 @@ struct Params {
     light_sampling: u32,
     // BACKGROUND_*
     background_kind: u32,
-    // image background: its texture, the first texels entry of its distribution, and its
+    // image background: its texture, the first tables entry of its distribution, and its
     // index in the light list (or NO_LIGHT)
     env_texture: u32,
     env_cdf: u32,

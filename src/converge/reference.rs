@@ -121,7 +121,11 @@ fn given_reference(path: &Path, probe: &FlatScene) -> Result<Vec<f32>, ConvergeE
             ),
         ));
     }
-    Ok(img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect())
+    Ok(img
+        .linear()
+        .iter()
+        .flat_map(|t| [t[0], t[1], t[2]])
+        .collect())
 }
 
 /// The reference an earlier study left in the output folder, when it was rendered for
@@ -147,6 +151,10 @@ fn cached_reference(
         return Ok(None);
     }
     let img = crate::scene::textures::load_image(&exr, true).map_err(|e| file_err(&exr, e))?;
-    let rgb = img.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
+    let rgb = img
+        .linear()
+        .iter()
+        .flat_map(|t| [t[0], t[1], t[2]])
+        .collect();
     Ok(Some((rgb, info)))
 }

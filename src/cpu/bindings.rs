@@ -2,6 +2,7 @@
 
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{BvhNode, Emitter, Material, Params, Primitive, Texture};
+use crate::scene::texels::Texels;
 
 /// The resources of one dispatch, borrowed from the flattened scene.
 #[derive(Clone, Copy)]
@@ -13,7 +14,10 @@ pub struct Bindings<'a> {
     pub bvh: &'a [BvhNode],
     pub shape_data: &'a [[f32; 4]],
     pub textures: &'a [Texture],
-    pub texels: &'a [[f32; 4]],
+    /// The image texel banks (`scene::texels`): what the GPU binds as array textures.
+    pub texels: &'a Texels,
+    /// The Perlin tables and the image background's distribution.
+    pub tables: &'a [[f32; 4]],
     /// A material has alpha (mask or blend): rays pass through transparent surfaces (the
     /// shader's HAS_ALPHA).
     pub has_alpha: bool,
@@ -30,6 +34,7 @@ impl<'a> Bindings<'a> {
             shape_data: &scene.shape_data,
             textures: &scene.textures,
             texels: &scene.texels,
+            tables: &scene.tables,
             has_alpha: scene.materials.iter().any(|m| {
                 m.flags
                     & (crate::scene::records::MAT_FLAG_ALPHA_MASK

@@ -92,7 +92,7 @@ pub fn background_radiance(b: &Bindings, d: Vec3) -> Vec3 {
 
 /// Scalar i of the image background's distribution.
 pub fn env_cdf_at(b: &Bindings, i: u32) -> f32 {
-    b.texels[(b.params.env_cdf + (i >> 2)) as usize][(i & 3) as usize]
+    b.tables[(b.params.env_cdf + (i >> 2)) as usize][(i & 3) as usize]
 }
 
 /// A point drawn from a piecewise-constant density: x, the density at x, the interval.

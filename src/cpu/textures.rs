@@ -5,7 +5,8 @@ use glam::{IVec3, Vec2, Vec3, Vec4};
 use super::bindings::Bindings;
 use super::types::xyz;
 use crate::scene::records::{
-    Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_SOLID, TEX_IMAGE, TEX_MODE_MASK, TEX_NOISE,
+    Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_NEAREST, TEX_FLAG_SOLID, TEX_FLAG_SRGB, TEX_IMAGE,
+    TEX_MODE_MASK, TEX_NOISE, TEX_WRAP_T_SHIFT,
 };
 
 /// A texture coordinate folded into [0, 1] by the wrap mode (0 repeat, 1 clamp, 2 mirror).
@@ -32,32 +33,44 @@ pub fn wrap_texel(i: i32, n: i32, mode: u32) -> u32 {
     }
 }
 
-fn texel(b: &Bindings, i: u32) -> Vec3 {
-    xyz(b.texels[i as usize])
+/// Texel (x, y) of an image texture, from its bank; its colour decoded from sRGB for an
+/// 8-bit sRGB image (`TEX_FLAG_SRGB`).
+pub fn image_texel(b: &Bindings, tex: &Texture, x: u32, y: u32) -> Vec4 {
+    let srgb = tex.flags & TEX_FLAG_SRGB != 0;
+    Vec4::from(
+        b.texels
+            .texel(tex.bank, tex.layer, tex.x + x, tex.y + y, srgb),
+    )
 }
 
-/// Bilinear image lookup; v = 0 is the bottom row.
+/// Image lookup after the uv transform, wrapped per axis; v = 0 is the bottom row.
+/// Bilinear, or the nearest texel (`TEX_FLAG_NEAREST`, as the same mix with weights 1, 0).
 pub fn image_rgba(b: &Bindings, tex: &Texture, surface_uv: Vec2) -> Vec4 {
     let q = surface_uv.extend(1.0);
     let uv = Vec2::new(
         Vec3::from_slice(&tex.color1[..3]).dot(q),
         Vec3::from_slice(&tex.params[..3]).dot(q),
     );
-    let mode = tex.flags & TEX_MODE_MASK;
+    let mode_s = tex.flags & TEX_MODE_MASK;
+    let mode_t = (tex.flags >> TEX_WRAP_T_SHIFT) & TEX_MODE_MASK;
+    let nearest = tex.flags & TEX_FLAG_NEAREST != 0;
+    let centre = if nearest { 0.0 } else { 0.5 };
     let (w, h) = (tex.width as i32, tex.height as i32);
-    let x = wrap_uv(uv.x, mode) * w as f32 - 0.5;
-    let y = (1.0 - wrap_uv(uv.y, mode)) * h as f32 - 0.5;
+    let x = wrap_uv(uv.x, mode_s) * w as f32 - centre;
+    let y = (1.0 - wrap_uv(uv.y, mode_t)) * h as f32 - centre;
     let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let xa = wrap_texel(x0 as i32, w, mode);
-    let xb = wrap_texel(x0 as i32 + 1, w, mode);
-    let ya = wrap_texel(y0 as i32, h, mode);
-    let yb = wrap_texel(y0 as i32 + 1, h, mode);
-    let row_a = tex.offset + ya * tex.width;
-    let row_b = tex.offset + yb * tex.width;
-    let texel4 = |i: u32| Vec4::from(b.texels[i as usize]);
-    let top = texel4(row_a + xa).lerp(texel4(row_a + xb), fx);
-    let bottom = texel4(row_b + xa).lerp(texel4(row_b + xb), fx);
+    let (fx, fy) = if nearest {
+        (0.0, 0.0)
+    } else {
+        (x - x0, y - y0)
+    };
+    let xa = wrap_texel(x0 as i32, w, mode_s);
+    let xb = wrap_texel(x0 as i32 + 1, w, mode_s);
+    let ya = wrap_texel(y0 as i32, h, mode_t);
+    let yb = wrap_texel(y0 as i32 + 1, h, mode_t);
+    let t = |x: u32, y: u32| image_texel(b, tex, x, y);
+    let top = t(xa, ya).lerp(t(xb, ya), fx);
+    let bottom = t(xa, yb).lerp(t(xb, yb), fx);
     top.lerp(bottom, fy)
 }
 
@@ -69,12 +82,12 @@ pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec2) -> Vec3 {
 /// One corner of Perlin's gradient noise.
 pub fn perlin_corner(b: &Bindings, offset: u32, i: IVec3, t: Vec3, s: Vec3, d: IVec3) -> f32 {
     let perm =
-        |k: i32, lane: usize| b.texels[(offset + 256 + (k & 255) as u32) as usize][lane] as u32;
+        |k: i32, lane: usize| b.tables[(offset + 256 + (k & 255) as u32) as usize][lane] as u32;
     // wrapping, as WGSL's i32 addition (a saturated lattice index far away must not panic)
     let px = perm(i.x.wrapping_add(d.x), 0);
     let py = perm(i.y.wrapping_add(d.y), 1);
     let pz = perm(i.z.wrapping_add(d.z), 2);
-    let g = texel(b, offset + (px ^ py ^ pz));
+    let g = xyz(b.tables[(offset + (px ^ py ^ pz)) as usize]);
     let df = d.as_vec3();
     let w = Vec3::select(d.cmpeq(IVec3::ONE), s, Vec3::ONE - s);
     w.x * w.y * w.z * g.dot(t - df)

@@ -7,8 +7,10 @@
 use wgpu::util::DeviceExt;
 
 use super::codegen::texture_accessor;
+use super::error::GpuError;
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{BvhNode, Emitter, Material, Params, Primitive, Texture};
+use crate::scene::texels::{Bank, TexelKind, MAX_BANKS};
 
 /// Bytes of a read-only record array that is a uniform buffer: WebGPU's and lavapipe's
 /// `maxUniformBufferBindingSize` (Vulkan promises 16 KiB; desktop GPUs give 64 KiB). The
@@ -30,13 +32,15 @@ pub enum Slot {
     /// Transforms and triangle vertex attributes, indexed by `Primitive::data`.
     ShapeData,
     Textures,
-    /// Image texels (linear RGB) and the Perlin noise tables.
-    Texels,
+    /// The Perlin tables and the image background's distribution (`FlatScene::tables`).
+    Tables,
+    /// Image texel bank i (`scene::texels`), a 2D array texture of the bank's format.
+    Texels(u8),
 }
 
 impl Slot {
     /// Every slot, in binding order.
-    pub const ALL: [Slot; 9] = [
+    pub const ALL: [Slot; 9 + MAX_BANKS] = [
         Slot::Params,
         Slot::Primitives,
         Slot::Materials,
@@ -45,12 +49,20 @@ impl Slot {
         Slot::Bvh,
         Slot::ShapeData,
         Slot::Textures,
-        Slot::Texels,
+        Slot::Tables,
+        Slot::Texels(0),
+        Slot::Texels(1),
+        Slot::Texels(2),
+        Slot::Texels(3),
+        Slot::Texels(4),
+        Slot::Texels(5),
+        Slot::Texels(6),
+        Slot::Texels(7),
     ];
 
     /// The read-only record arrays a plan places (a storage or a uniform buffer, a
-    /// texture, or written into the shader); the texels are always a storage buffer (too
-    /// large).
+    /// texture, or written into the shader); the tables are a storage buffer, the texel
+    /// banks array textures.
     pub const RECORDS: [Slot; 6] = [
         Slot::Primitives,
         Slot::Materials,
@@ -76,7 +88,8 @@ impl Slot {
             Slot::Bvh => "bvh",
             Slot::ShapeData => "shape_data",
             Slot::Textures => "textures",
-            Slot::Texels => "texels",
+            Slot::Tables => "tables",
+            Slot::Texels(i) => TEXEL_BANK_NAMES[i as usize],
         }
     }
 
@@ -91,7 +104,8 @@ impl Slot {
             Slot::Emitters => ("Emitter", size_of::<Emitter>()),
             Slot::Bvh => ("BvhNode", size_of::<BvhNode>()),
             Slot::Textures => ("Texture", size_of::<Texture>()),
-            Slot::Accum | Slot::ShapeData | Slot::Texels => ("vec4<f32>", 16),
+            Slot::Accum | Slot::ShapeData | Slot::Tables => ("vec4<f32>", 16),
+            Slot::Texels(_) => ("texture_2d_array<f32>", 0),
         }
     }
 
@@ -105,7 +119,12 @@ impl Slot {
             Slot::Bvh => bytemuck::cast_slice(&scene.bvh),
             Slot::ShapeData => bytemuck::cast_slice(&scene.shape_data),
             Slot::Textures => bytemuck::cast_slice(&scene.textures),
-            Slot::Texels => bytemuck::cast_slice(&scene.texels),
+            Slot::Tables => bytemuck::cast_slice(&scene.tables),
+            Slot::Texels(i) => scene
+                .texels
+                .banks
+                .get(i as usize)
+                .map_or(&[], |b| &b.data[..]),
         }
     }
 
@@ -113,6 +132,50 @@ impl Slot {
     pub fn uniform_len(self) -> u64 {
         UNIFORM_BYTES / self.element().1 as u64
     }
+}
+
+/// The shaders' names of the texel banks.
+const TEXEL_BANK_NAMES: [&str; MAX_BANKS] = [
+    "texels0", "texels1", "texels2", "texels3", "texels4", "texels5", "texels6", "texels7",
+];
+
+/// The texture format of a bank of `kind`: `textureLoad` decodes it as the CPU's
+/// `TexelKind::decode` does.
+pub fn texel_format(kind: TexelKind) -> wgpu::TextureFormat {
+    match kind {
+        TexelKind::Unorm8 => wgpu::TextureFormat::Rgba8Unorm,
+        TexelKind::Half => wgpu::TextureFormat::Rgba16Float,
+        TexelKind::Float => wgpu::TextureFormat::Rgba32Float,
+    }
+}
+
+/// `texel_load(bank, layer, x, y)`, which image look-ups read texels through, for a
+/// shader with `banks` texel banks: a `switch` over them (none with one; zero with none).
+pub fn wgsl_texel_load(banks: u32) -> String {
+    let load = |i: u32| {
+        format!(
+            "textureLoad({}, vec2<u32>(x, y), layer, 0)",
+            TEXEL_BANK_NAMES[i as usize]
+        )
+    };
+    let body = match banks {
+        0 => "    return vec4<f32>(0.0);\n".to_string(),
+        1 => format!("    return {};\n", load(0)),
+        n => {
+            let mut body = "    switch bank {\n".to_string();
+            for i in 1..n {
+                body += &format!(
+                    "        case {i}u: {{\n            return {};\n        }}\n",
+                    load(i)
+                );
+            }
+            body + &format!(
+                "        default: {{\n            return {};\n        }}\n    }}\n",
+                load(0)
+            )
+        }
+    };
+    format!("fn texel_load(bank: u32, layer: u32, x: u32, y: u32) -> vec4<f32> {{\n{body}}}\n")
 }
 
 /// Where a read-only record array lives.
@@ -204,6 +267,14 @@ pub fn wgsl_declarations(placements: &Placements) -> String {
     let mut out = String::new();
     for slot in Slot::ALL {
         let (ty, _) = slot.element();
+        if let Slot::Texels(_) = slot {
+            out += &format!(
+                "@group(0) @binding({}) var {}: {ty};\n",
+                slot.binding(),
+                slot.name()
+            );
+            continue;
+        }
         if placements.get(slot) == Placement::Texture {
             out += &format!(
                 "@group(0) @binding({}) var {}: texture_storage_2d<rgba32uint, read>;\n",
@@ -239,6 +310,11 @@ fn binding_type(slot: Slot, placements: &Placements) -> wgpu::BindingType {
         min_binding_size: None,
     };
     match (slot, placements.get(slot)) {
+        (Slot::Texels(_), _) => wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+            view_dimension: wgpu::TextureViewDimension::D2Array,
+            multisampled: false,
+        },
         (Slot::Accum, _) => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
         (_, Placement::Uniform) => buffer(wgpu::BufferBindingType::Uniform),
         (_, Placement::Texture) => wgpu::BindingType::StorageTexture {
@@ -287,10 +363,35 @@ enum Records {
 
 /// Uploads the records of `slots`: a uniform buffer of [`UNIFORM_BYTES`] starting with
 /// them (the shader declares the array at that size), a texture (`record_texture`), or a
-/// storage buffer holding them (256
-/// zero bytes when there are none: WebGPU forbids empty bindings, and every record is
-/// smaller). The parameter buffer has `params_bytes` (at least one [`Params`]).
+/// storage buffer holding them (256 zero bytes when there are none: WebGPU forbids empty
+/// bindings, and every record is smaller); and the texel banks, as array textures
+/// (`bank_texture`). The parameter buffer has `params_bytes` (at least one [`Params`]).
+/// A device without the memory for them is an error naming what the scene needs, not a
+/// fault of the shared device.
 pub fn scene_buffers(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    slots: &[Slot],
+    placements: &Placements,
+    scene: &FlatScene,
+    params_bytes: u64,
+) -> Result<SceneBuffers, GpuError> {
+    let scope = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let buffers = upload(device, queue, slots, placements, scene, params_bytes);
+    match pollster::block_on(scope.pop()) {
+        None => Ok(buffers),
+        Some(e) => {
+            let bytes: u64 = slots.iter().map(|s| s.bytes(scene).len() as u64).sum();
+            Err(GpuError::OutOfMemory {
+                needed_mib: bytes.div_ceil(1 << 20),
+                texel_mib: scene.texels.bytes().div_ceil(1 << 20),
+                detail: e.to_string(),
+            })
+        }
+    }
+}
+
+fn upload(
     device: &wgpu::Device,
     queue: &wgpu::Queue,
     slots: &[Slot],
@@ -308,6 +409,13 @@ pub fn scene_buffers(
         .iter()
         .filter(|s| !matches!(s, Slot::Params | Slot::Accum))
         .map(|&slot| {
+            if let Slot::Texels(i) = slot {
+                let bank = &scene.texels.banks[i as usize];
+                return (
+                    slot,
+                    Records::Texture(bank_texture(device, queue, slot, bank)),
+                );
+            }
             let bytes = slot.bytes(scene);
             if placements.get(slot) == Placement::Texture {
                 return (
@@ -395,6 +503,67 @@ fn record_texture(
         write(whole, &last, 1);
     }
     texture.create_view(&Default::default())
+}
+
+/// A texel bank as a 2D array texture of its kind's format, written page by page.
+fn bank_texture(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    slot: Slot,
+    bank: &Bank,
+) -> wgpu::TextureView {
+    let size = wgpu::Extent3d {
+        width: bank.width,
+        height: bank.height,
+        depth_or_array_layers: bank.layers,
+    };
+    let texture = device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(slot.name()),
+        size,
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: texel_format(bank.kind),
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    let mut staged = 0;
+    for layer in 0..bank.layers {
+        queue.write_texture(
+            wgpu::TexelCopyTextureInfo {
+                texture: &texture,
+                mip_level: 0,
+                origin: wgpu::Origin3d {
+                    x: 0,
+                    y: 0,
+                    z: layer,
+                },
+                aspect: wgpu::TextureAspect::All,
+            },
+            bank.page(layer),
+            wgpu::TexelCopyBufferLayout {
+                offset: 0,
+                bytes_per_row: Some(bank.width * bank.kind.bytes() as u32),
+                rows_per_image: Some(bank.height),
+            },
+            wgpu::Extent3d {
+                depth_or_array_layers: 1,
+                ..size
+            },
+        );
+        // each write is staged in a buffer of its own until a submission takes it: hand
+        // them over every 256 MiB, so that a large bank is not staged whole
+        staged += bank.page_bytes();
+        if staged >= 1 << 28 {
+            queue.submit(std::iter::empty());
+            let _ = device.poll(wgpu::PollType::wait_indefinitely());
+            staged = 0;
+        }
+    }
+    texture.create_view(&wgpu::TextureViewDescriptor {
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        ..Default::default()
+    })
 }
 
 /// Group 0: the scene's buffers for `slots`, with `accum` as the sums.

@@ -16,14 +16,19 @@ pub enum GpuError {
     #[error("GPU buffer readback failed: {0}")]
     Readback(String),
     #[error(
-        "the scene's {what} buffer needs {needed_mib} MiB, more than this adapter's \
-         {limit_mib} MiB per storage binding; use fewer triangles or --backend cpu"
+        "the scene's {what} need {needed_mib} MiB, more than this adapter's {limit_mib} MiB \
+         per storage binding; {advice}, or render with --backend cpu"
     )]
     SceneTooLarge {
-        what: &'static str,
+        /// The records, with their count (`"BVH nodes (2,024,301)"`).
+        what: String,
         needed_mib: u64,
         limit_mib: u64,
+        /// What makes them fewer.
+        advice: &'static str,
     },
+    #[error("the scene's image texels do not fit this adapter: {0}; use smaller images or --backend cpu")]
+    TexelsTooLarge(String),
     #[error(
         "this render would run {iterations} loop iterations per shader invocation (its \
          group of paths; every primitive on every ray with --tune no-bvh, every light at \
@@ -34,6 +39,16 @@ pub enum GpuError {
     LoopLimit { iterations: u64, limit: u64 },
     #[error(transparent)]
     Shader(#[from] ShaderError),
+    #[error(
+        "the GPU has no memory for the scene: {needed_mib} MiB of records and texels, of \
+         which {texel_mib} MiB are image texels ({detail}); use smaller images or \
+         --backend cpu"
+    )]
+    OutOfMemory {
+        needed_mib: u64,
+        texel_mib: u64,
+        detail: String,
+    },
     #[error("the GPU device was lost ({0})")]
     Lost(String),
     #[error("the GPU reported an error: {0}")]

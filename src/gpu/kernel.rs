@@ -107,7 +107,7 @@ pub fn sample_lights(
 }
 
 /// Dispatches one invocation per input of entry point `entry` of `kernel.wgsl`, with the
-/// scene in group 0 (every slot bound) and the inputs and outputs at `bindings` of group 1.
+/// scene in group 0 (every slot bound, its texel banks only) and the inputs and outputs at `bindings` of group 1.
 fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
     ctx: &GpuContext,
     scene: &FlatScene,
@@ -126,7 +126,11 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         label: Some("kernel.wgsl"),
         source: wgpu::ShaderSource::Wgsl(spec.wgsl("kernel")?.into()),
     });
-    let slots = Slot::ALL;
+    // every slot but the texel banks the scene does not have
+    let slots: Vec<Slot> = Slot::ALL
+        .into_iter()
+        .filter(|s| !matches!(s, Slot::Texels(i) if u32::from(*i) >= spec.banks))
+        .collect();
     let scene_bgl = layout(device, &slots, &spec.placements);
     let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
         binding,
@@ -163,7 +167,7 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let buffers = scene_buffers(device, &ctx.queue, &slots, &spec.placements, scene, 0);
+    let buffers = scene_buffers(device, &ctx.queue, &slots, &spec.placements, scene, 0)?;
     let scene_group = bind_scene(device, &scene_bgl, &slots, &buffers, &accum);
     let params = scene.params(0, scene.full_band());
     ctx.queue

@@ -22,8 +22,12 @@ pub struct DeviceFit {
     /// Loop iterations one invocation may run before the driver cuts it short (llvmpipe),
     /// if it does.
     pub loop_limit: Option<u64>,
-    /// Rows a 2D texture may have (`max_texture_dimension_2d`).
+    /// Rows a 2D texture may have, and columns (`max_texture_dimension_2d`).
     pub texture_rows: u32,
+    /// Pages a texel bank may have (`max_texture_array_layers`).
+    pub texture_layers: u32,
+    /// Texel banks a shader may bind (`max_sampled_textures_per_shader_stage`).
+    pub texel_banks: u32,
 }
 
 impl DeviceFit {
@@ -39,6 +43,8 @@ impl DeviceFit {
                 .contains("llvmpipe")
                 .then_some(LLVMPIPE_LOOP_LIMIT),
             texture_rows: limits.max_texture_dimension_2d,
+            texture_layers: limits.max_texture_array_layers,
+            texel_banks: limits.max_sampled_textures_per_shader_stage,
         }
     }
 
@@ -57,16 +63,70 @@ impl DeviceFit {
     }
 
     /// Refuses a scene whose record arrays exceed one storage binding (wgpu's default error
-    /// handler would panic).
+    /// handler would panic), or whose texel banks exceed the device's textures, naming what
+    /// is too large and what to do.
     pub fn check_scene(&self, scene: &FlatScene) -> Result<(), GpuError> {
-        for slot in Slot::RECORDS.into_iter().chain([Slot::Texels]) {
+        for slot in Slot::RECORDS.into_iter().chain([Slot::Tables]) {
             let bytes = slot.bytes(scene).len() as u64;
             if bytes > self.storage_bytes {
+                let (what, count, advice) = match slot {
+                    Slot::Primitives => (
+                        "primitive records",
+                        scene.primitives.len(),
+                        "use fewer triangles (a decimated mesh)",
+                    ),
+                    Slot::Bvh => (
+                        "BVH nodes",
+                        scene.bvh_node_count(),
+                        "use fewer triangles (a decimated mesh)",
+                    ),
+                    Slot::ShapeData => (
+                        "vertex attributes and transforms",
+                        scene.shape_data.len(),
+                        "use fewer triangles (a decimated mesh) or fewer instances",
+                    ),
+                    Slot::Materials => ("materials", scene.materials.len(), "use fewer materials"),
+                    Slot::Emitters => ("lights", scene.emitters.len(), "use fewer emitting shapes"),
+                    Slot::Tables => (
+                        "image background's distribution (scalars / 4)",
+                        scene.tables.len(),
+                        "use a smaller background image",
+                    ),
+                    _ => ("textures", scene.textures.len(), "use fewer textures"),
+                };
                 return Err(GpuError::SceneTooLarge {
-                    what: slot.name(),
+                    what: format!("{what} ({count})"),
                     needed_mib: bytes.div_ceil(1 << 20),
                     limit_mib: self.storage_bytes >> 20,
+                    advice,
                 });
+            }
+        }
+        let banks = &scene.texels.banks;
+        if banks.len() as u32 > self.texel_banks {
+            return Err(GpuError::TexelsTooLarge(format!(
+                "{} texel banks, more than the {} textures it binds",
+                banks.len(),
+                self.texel_banks
+            )));
+        }
+        for b in banks {
+            if b.width.max(b.height) > self.texture_rows {
+                return Err(GpuError::TexelsTooLarge(format!(
+                    "{} pages of {} x {} texels, more than its {} per side",
+                    b.kind.name(),
+                    b.width,
+                    b.height,
+                    self.texture_rows
+                )));
+            }
+            if b.layers > self.texture_layers {
+                return Err(GpuError::TexelsTooLarge(format!(
+                    "a bank of {} {} pages, more than its {} layers",
+                    b.layers,
+                    b.kind.name(),
+                    self.texture_layers
+                )));
             }
         }
         Ok(())

@@ -8,7 +8,8 @@
 use std::collections::BTreeSet;
 
 use super::bindings::{
-    texture_rows, wgsl_accessors, wgsl_declarations, Placement, Placements, Slot, UNIFORM_BYTES,
+    texture_rows, wgsl_accessors, wgsl_declarations, wgsl_texel_load, Placement, Placements, Slot,
+    UNIFORM_BYTES,
 };
 use super::codegen;
 use super::error::GpuError;
@@ -53,6 +54,8 @@ pub enum Feature {
     /// surface is transparent.
     Alpha,
     ImageTexture,
+    /// 8-bit sRGB images: their texels' colour is decoded at look-up.
+    SrgbTexture,
     NoiseTexture,
     CheckerTexture,
     Jittered,
@@ -86,11 +89,12 @@ const GEOMETRY: [Feature; 10] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 14] = [
+const SHADING: [Feature; 15] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::Alpha,
     Feature::ImageTexture,
+    Feature::SrgbTexture,
     Feature::NoiseTexture,
     Feature::CheckerTexture,
     Feature::Jittered,
@@ -130,6 +134,7 @@ impl Feature {
             Feature::NormalMap => "HAS_NORMAL_MAP",
             Feature::Alpha => "HAS_ALPHA",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
+            Feature::SrgbTexture => "HAS_SRGB_TEXTURE",
             Feature::NoiseTexture => "HAS_NOISE_TEXTURE",
             Feature::CheckerTexture => "HAS_CHECKER_TEXTURE",
             Feature::Jittered => "HAS_JITTERED",
@@ -256,6 +261,13 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .any(|m| m.flags & (r::MAT_FLAG_ALPHA_MASK | r::MAT_FLAG_ALPHA_BLEND) != 0),
         )
         .with(Feature::ImageTexture, texture(r::TEX_IMAGE))
+        .with(
+            Feature::SrgbTexture,
+            scene
+                .textures
+                .iter()
+                .any(|t| t.tag == r::TEX_IMAGE && t.flags & r::TEX_FLAG_SRGB != 0),
+        )
         .with(Feature::NoiseTexture, texture(r::TEX_NOISE))
         .with(Feature::CheckerTexture, texture(r::TEX_CHECKER))
         .with(Feature::Jittered, scene.sampler == SamplerKind::Jittered)
@@ -285,14 +297,18 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
 pub struct ShaderSpec {
     pub features: FeatureSet,
     pub placements: Placements,
+    /// Image texel banks the scene has (`scene::texels`): `texel_load` reads these.
+    pub banks: u32,
     pub scene_code: String,
 }
 
 impl ShaderSpec {
-    /// A spec with `features`, every record array in a storage buffer, no scene code.
+    /// A spec with `features`, every record array in a storage buffer, one texel bank, no
+    /// scene code.
     pub fn of(features: FeatureSet) -> Self {
         ShaderSpec {
             features,
+            banks: 1,
             ..Default::default()
         }
     }
@@ -355,7 +371,9 @@ impl ShaderSpec {
     /// The assembled WGSL of entry point file `entry` (`trace` or `kernel`).
     pub fn wgsl(&self, entry: &str) -> Result<String, ShaderError> {
         let constants = codegen::constants();
-        let bindings = wgsl_declarations(&self.placements) + &wgsl_accessors(&self.placements);
+        let bindings = wgsl_declarations(&self.placements)
+            + &wgsl_accessors(&self.placements)
+            + &wgsl_texel_load(self.banks);
         let kinds: Vec<MaterialKind> = self
             .features
             .iter()
@@ -401,13 +419,18 @@ impl ShaderSpec {
                 Slot::Bvh => f(Feature::Bvh),
                 Slot::ShapeData => f(Feature::Transforms) || f(Feature::Triangle),
                 Slot::Textures => f(Feature::Textures) || f(Feature::EnvMap),
-                // texels are read by image and noise look-ups (of textured materials, and
-                // of the image background, which goes through the same texture_value),
-                // and by the background's distribution when lights are sampled
-                Slot::Texels => {
-                    let lookups = f(Feature::ImageTexture) || f(Feature::NoiseTexture);
+                // image texels are read by image look-ups (of textured materials, and of
+                // the image background, which goes through the same texture_value)
+                Slot::Texels(i) => {
+                    u32::from(i) < self.banks
+                        && (f(Feature::Textures) || f(Feature::EnvMap))
+                        && f(Feature::ImageTexture)
+                }
+                // the tables by noise look-ups, and by the background's distribution when
+                // lights are sampled
+                Slot::Tables => {
                     let env = f(Feature::EnvMap);
-                    (f(Feature::Textures) || env) && lookups
+                    (f(Feature::Textures) || env) && f(Feature::NoiseTexture)
                         || env && (f(Feature::Mis) || f(Feature::Mixture))
                 }
             })
@@ -465,6 +488,7 @@ impl GpuPlan {
         } else {
             ShaderSpec::full_for(scene_features(scene))
         };
+        shader.banks = scene.texels.banks.len() as u32;
         // the full shader reads every array from a storage buffer
         if tuning.specialize {
             for slot in Slot::RECORDS {

@@ -156,7 +156,7 @@ impl GpuRenderer {
             &plan.shader.placements,
             scene,
             stride * MAX_DISPATCHES_PER_SUBMISSION as u64,
-        );
+        )?;
         // wgpu zero-initialises new buffers, so the sums start at 0.
         let bands: Vec<BandBuffers> = bands
             .into_iter()

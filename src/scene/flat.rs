@@ -6,6 +6,7 @@ use glam::Vec3;
 
 use super::format::{LightSampling, SamplerKind};
 use super::records::{self, BvhNode, Emitter, Material, Params, Primitive, Texture};
+use super::texels::Texels;
 
 /// The first ray Russian roulette may stop: the fourth (after the camera ray and two
 /// bounces), as pbrt-v4 starts it after depth 1. A path then goes on with probability
@@ -74,8 +75,12 @@ pub struct FlatScene {
     pub use_bvh: bool,
     /// Texture records, in `[textures]` name order.
     pub textures: Vec<Texture>,
-    /// Image texels (linear RGB) and Perlin tables, indexed by `Texture::offset`.
-    pub texels: Vec<[f32; 4]>,
+    /// Image texels at their source precision, in banks (`scene::texels`), found by a
+    /// texture record's `bank`, `layer`, `x` and `y`.
+    pub texels: Texels,
+    /// The Perlin tables (at `Texture::offset`) and the image background's sampling
+    /// distribution (at `EnvironmentMap::cdf`), four f32 scalars to an entry.
+    pub tables: Vec<[f32; 4]>,
 }
 
 /// An equirectangular image background.
@@ -83,7 +88,7 @@ pub struct FlatScene {
 pub struct EnvironmentMap {
     /// Its texture record.
     pub texture: u32,
-    /// First `texels` entry of its sampling distribution.
+    /// First `tables` entry of its sampling distribution.
     pub cdf: u32,
     /// Its index in the light list (`records::NO_LIGHT` when it is black).
     pub light: u32,

@@ -9,12 +9,12 @@ use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
 use super::format::{LightDesc, ObjectDesc, Projection, SceneFile, TextureDesc, TransformDesc};
 use super::imported::ImportedScene;
-use super::lights::{env_distribution, light_list, punctual_lights, Environment};
+use super::lights::{env_distribution, light_list, punctual_lights};
 use super::materials::MaterialDesc;
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
-use super::textures::{texture_records, ImageData};
+use super::textures::{texture_records, ImageData, TextureData};
 
 /// Object-to-world matrix of a transform: translate * Rz * Ry * Rx * scale.
 pub fn transform_matrix(t: &TransformDesc) -> Affine3A {
@@ -411,6 +411,15 @@ pub struct Build {
     pub russian_roulette: bool,
 }
 
+/// Why a scene cannot be flattened.
+#[derive(Debug)]
+pub enum FlattenError {
+    /// The objects (by index) whose records degenerate in f32 (see `record_ok`).
+    Degenerate(Vec<usize>),
+    /// The texels do not fit the banks (`texels::pack`).
+    Texels(String),
+}
+
 /// What a scene's objects and textures bring from files, read before flattening.
 #[derive(Debug, Default)]
 pub struct SceneFiles {
@@ -432,7 +441,7 @@ pub fn flatten(
     file: &SceneFile,
     files: &SceneFiles,
     build: Build,
-) -> Result<FlatScene, Vec<usize>> {
+) -> Result<FlatScene, FlattenError> {
     let gltfs = || files.imported.iter().flatten();
     let texture_list: Vec<(String, &TextureDesc, Option<&ImageData>)> = file
         .textures
@@ -446,7 +455,33 @@ pub fn flatten(
         }))
         .collect();
     let texture_names: Vec<String> = texture_list.iter().map(|t| t.0.clone()).collect();
-    let (textures, texels) = texture_records(&texture_list);
+    let bg = &file.background;
+    let env_texture = bg.texture.as_ref().map(|name| {
+        texture_names
+            .iter()
+            .position(|n| n == name)
+            .expect("validated") as u32
+    });
+    let strength = bg.strength.unwrap_or(1.0);
+    let TextureData {
+        records: textures,
+        texels,
+        mut tables,
+    } = texture_records(&texture_list).map_err(FlattenError::Texels)?;
+    // the image background's distribution, after the noise tables
+    let env_cdf = tables.len() as u32;
+    let env_dist = env_texture.map(|i| {
+        let image = texture_list[i as usize]
+            .2
+            .expect("a background texture is an image");
+        let (scalars, integral) = env_distribution(image, strength);
+        tables.extend(scalars.chunks(4).map(|c| {
+            let mut v = [0.0; 4];
+            v[..c.len()].copy_from_slice(c);
+            v
+        }));
+        integral
+    });
     let material_list: Vec<(&String, &MaterialDesc)> = file
         .materials
         .iter()
@@ -462,7 +497,7 @@ pub fn flatten(
         unbounded,
         bounded,
         shape_data,
-    } = build_primitives(file, files, &material_names)?;
+    } = build_primitives(file, files, &material_names).map_err(FlattenError::Degenerate)?;
     let boxes: Vec<Aabb> = bounded
         .iter()
         .map(|p| world_bounds(p, &shape_data))
@@ -471,26 +506,8 @@ pub fn flatten(
     let num_unbounded = unbounded.len() as u32;
     let (mut primitives, bvh, bvh_depth) = order(unbounded, bounded, &boxes, use_bvh);
 
-    let bg = &file.background;
-    let env_texture = bg.texture.as_ref().map(|name| {
-        texture_names
-            .iter()
-            .position(|n| n == name)
-            .expect("validated") as u32
-    });
-    let mut texels = texels;
-    let mut env_cdf = 0;
-    let env = env_texture.map(|i| {
-        let (dist, integral) = env_distribution(&Environment {
-            texture: &textures[i as usize],
-            texels: &texels,
-            strength: bg.strength.unwrap_or(1.0),
-        });
-        env_cdf = texels.len() as u32;
-        texels.extend(dist);
-        // the scene's bounding radius, for the background's power
-        (integral, bounding_sphere(&boxes).1)
-    });
+    // the scene's bounding radius, for the background's power
+    let env = env_dist.map(|integral| (integral, bounding_sphere(&boxes).1));
     let (mut emitters, env_light) = light_list(
         &mut primitives,
         num_unbounded as usize,
@@ -536,7 +553,7 @@ pub fn flatten(
             cdf: env_cdf,
             light: env_light,
             rotation: [rotation.cos(), rotation.sin()],
-            strength: bg.strength.unwrap_or(1.0),
+            strength,
         }),
         primitives,
         materials,
@@ -550,6 +567,7 @@ pub fn flatten(
         use_bvh,
         textures,
         texels,
+        tables,
     })
 }
 

@@ -67,7 +67,7 @@ impl ImportedScene {
         self.textures
             .iter()
             .filter(|t| seen.insert(Arc::as_ptr(&t.image)))
-            .map(|t| t.image.texels.len() as u64)
+            .map(|t| t.image.texel_count())
             .sum()
     }
 

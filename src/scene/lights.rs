@@ -7,25 +7,19 @@ use glam::{Mat3, Vec3};
 use super::format::LightDesc;
 use super::materials::common::Surface;
 use super::records::{
-    self, Emitter, Material, Primitive, Texture, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
+    self, Emitter, Material, Primitive, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
     LIGHT_POINT, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_HIT, NO_LIGHT, PRIM_LIGHT_SHIFT,
 };
 use super::shapes::primitive_area;
+use super::textures::ImageData;
 
 /// Luminance of a linear RGB colour (Rec. 709 weights).
 pub fn luminance(c: [f32; 4]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
-/// The image background as the light builder sees it.
-pub struct Environment<'a> {
-    pub texture: &'a Texture,
-    pub texels: &'a [[f32; 4]],
-    pub strength: f32,
-}
-
-/// The sampling distribution of an equirectangular image, packed four scalars per texel
-/// entry: the marginal CDF over rows (height + 1 values, row 0 at the top = +y), then one
+/// The sampling distribution of an equirectangular image (at `strength`), as scalars:
+/// the marginal CDF over rows (height + 1 values, row 0 at the top = +y), then one
 /// conditional CDF per row (width + 1 values each). The density of texel (x, y) is
 /// proportional to the mean over the texel of the bilinear look-up's luminance (weights
 /// 1/8, 3/4, 1/8 per axis over it and its eight neighbours: the look-up's support, so every
@@ -33,10 +27,12 @@ pub struct Environment<'a> {
 /// largest luminance of the nine would spread a small sun's samples over nine texels:
 /// twice Mitsuba's noise per sample on the bench's heightfield.) Also returns the
 /// integral of luminance over the sphere, sum L sin(theta) dphi dtheta.
-pub fn env_distribution(env: &Environment) -> (Vec<[f32; 4]>, f64) {
-    let (w, h) = (env.texture.width as usize, env.texture.height as usize);
-    let image = &env.texels[env.texture.offset as usize..][..w * h];
-    let lum = |x: usize, y: usize| f64::from(luminance(image[y * w + x]));
+pub fn env_distribution(image: &ImageData, strength: f32) -> (Vec<f32>, f64) {
+    let (w, h) = (image.width as usize, image.height as usize);
+    let luminances: Vec<f64> = (0..w * h)
+        .map(|i| f64::from(luminance(image.texel(i))))
+        .collect();
+    let lum = |x: usize, y: usize| luminances[y * w + x];
     let (dphi, dtheta) = (
         2.0 * std::f64::consts::PI / w as f64,
         std::f64::consts::PI / h as f64,
@@ -67,15 +63,7 @@ pub fn env_distribution(env: &Environment) -> (Vec<[f32; 4]>, f64) {
     for r in rows {
         scalars.extend(r);
     }
-    let packed = scalars
-        .chunks(4)
-        .map(|c| {
-            let mut v = [0.0; 4];
-            v[..c.len()].copy_from_slice(c);
-            v
-        })
-        .collect();
-    (packed, integral * f64::from(env.strength))
+    (scalars, integral * f64::from(strength))
 }
 
 /// The records of the lights without a surface (`[[lights]]`, validated), each chosen

@@ -11,7 +11,7 @@ use toml::Spanned;
 
 use super::error::{self, Problem, SceneError};
 use super::flat::FlatScene;
-use super::flatten::{self, Build, SceneFiles};
+use super::flatten::{self, Build, FlattenError, SceneFiles};
 use super::format::{
     BackgroundDesc, CameraDesc, ColorSpace, LightSampling, ObjectDesc, Projection, RenderDesc,
     SamplerKind, SceneFile, TextureDesc,
@@ -114,9 +114,9 @@ pub fn load_str(
                 .map(move |w| format!("objects[{i}] ({path}): {w}"))
         })
         .collect();
-    let mut scene = flatten::flatten(&file, &files, build).map_err(|objects| {
-        invalid(
-            objects
+    let mut scene = flatten::flatten(&file, &files, build).map_err(|e| {
+        invalid(match e {
+            FlattenError::Degenerate(objects) => objects
                 .into_iter()
                 .map(|i| {
                     Problem::at(
@@ -128,7 +128,8 @@ pub fn load_str(
                     )
                 })
                 .collect(),
-        )
+            FlattenError::Texels(why) => vec![Problem::at(src, 0, "textures", why)],
+        })
     })?;
     scene.warnings = warnings;
     Ok(scene)
@@ -229,13 +230,14 @@ fn load_gltf_scene(
         imported: vec![Some(g)],
         images: Vec::new(),
     };
-    let mut scene = flatten::flatten(&file, &files, build).map_err(|_| {
-        invalid(vec![Problem::at(
-            "",
-            0,
-            "",
-            "a mesh degenerates in f32 under its node's transform",
-        )])
+    let mut scene = flatten::flatten(&file, &files, build).map_err(|e| {
+        let why = match e {
+            FlattenError::Degenerate(_) => {
+                "a mesh degenerates in f32 under its node's transform".to_string()
+            }
+            FlattenError::Texels(why) => why,
+        };
+        invalid(vec![Problem::at("", 0, "", why)])
     })?;
     scene.warnings = warnings;
     Ok(scene)
@@ -365,8 +367,12 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 format!("textures.{name}.path"),
                 |p| {
                     let img = textures::load_image(p, *color_space == ColorSpace::Srgb)?;
-                    let n = img.width as u64 * img.height as u64;
-                    count_toward(&texels, n, textures::MAX_TEXELS, "image texels")?;
+                    count_toward(
+                        &texels,
+                        img.texel_count(),
+                        textures::MAX_TEXELS,
+                        "image texels",
+                    )?;
                     Ok(img)
                 },
                 &mut problems,

@@ -19,6 +19,7 @@ pub mod mesh;
 pub mod mtl;
 pub mod records;
 pub mod shapes;
+pub mod texels;
 pub mod textures;
 pub mod validate;
 

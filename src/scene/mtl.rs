@@ -133,7 +133,7 @@ impl MtlTextures<'_> {
             None => {
                 let image = super::textures::load_image(&full, srgb)
                     .map_err(|e| format!("{}: {e}", full.display()))?;
-                self.texels += image.texels.len() as u64;
+                self.texels += image.texel_count();
                 if self.texels > MAX_TEXELS {
                     return Err(format!(
                         "{}: brings the file's texels past the {MAX_TEXELS} accepted",

@@ -103,9 +103,21 @@ shared_constants! {
     TEX_NOISE: u32 = 3;
     /// Checker flag: cells in space (x, y, z) rather than in uv.
     TEX_FLAG_SOLID: u32 = 4;
-    /// Image textures: wrap mode in `flags & 3` (0 repeat, 1 clamp, 2 mirror). Noise
-    /// textures: kind in `flags & 3` (0 Perlin, 1 turbulence, 2 marble).
+    /// Image textures: the wrap mode along u in `flags & 3`, along v in
+    /// `(flags >> TEX_WRAP_T_SHIFT) & 3`. Noise textures: kind in `flags & 3` (0 Perlin,
+    /// 1 turbulence, 2 marble).
     TEX_MODE_MASK: u32 = 3;
+    TEX_WRAP_T_SHIFT: u32 = 2;
+    /// Wrap modes of image textures.
+    WRAP_REPEAT: u32 = 0;
+    WRAP_CLAMP: u32 = 1;
+    WRAP_MIRROR: u32 = 2;
+    /// Image flag: the nearest texel, not the bilinear mix of four (glTF's NEAREST
+    /// magnification filter).
+    TEX_FLAG_NEAREST: u32 = 16;
+    /// Image flag: an 8-bit image whose colour is sRGB-encoded: each texel is decoded
+    /// before filtering (`scene::texels`).
+    TEX_FLAG_SRGB: u32 = 32;
     /// A material colour or checker cell with no texture.
     NO_TEXTURE: u32 = u32::MAX;
 
@@ -192,8 +204,8 @@ pub const ATTRIBUTE_ENTRIES: u32 = 4;
 pub const TANGENT_ENTRIES: u32 = 3;
 /// `Primitive::data` of a primitive with no extra data.
 pub const NO_DATA: u32 = u32::MAX;
-/// `texels` entries of the Perlin tables: 256 random unit vectors, then 256 rows of the
-/// three permutations (x, y, z) stored as floats.
+/// Texels of the Perlin tables (one row of float texels): 256 random unit vectors, then
+/// 256 of the three permutations (x, y, z) stored as floats.
 pub const NOISE_TABLE_ENTRIES: u32 = 512;
 /// Most lights a scene may have (the index must fit the flag bits above the shift).
 pub const MAX_LIGHTS: u32 = (1 << (32 - PRIM_LIGHT_SHIFT)) - 2;
@@ -265,8 +277,10 @@ impl Default for Material {
 
 /// A tagged texture: constant (`color0`); checker (cells of `even`/`odd` textures, or of
 /// `color0`/`color1` where those are `NO_TEXTURE`; `params.x` = cells per unit); image
-/// (`width` x `height` texels from `texels[offset]`, row 0 at the top, linear RGB); noise
-/// (`color0` x Perlin noise of `params.x` x p, tables at `texels[offset]`).
+/// (`width` x `height` texels of texel bank `bank`, page `layer`, from page texel (`x`,
+/// `y`), row 0 at the top; its uv transform's rows in `color1` and `params`, its factor in
+/// `color0`, read from uv set `uv_set`; see `scene::texels`); noise (`color0` x Perlin
+/// noise of `params.x` x p, its tables at `tables[offset]`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Texture {
@@ -276,8 +290,12 @@ pub struct Texture {
     pub odd: u32,
     pub width: u32,
     pub height: u32,
+    pub bank: u32,
+    pub layer: u32,
+    pub x: u32,
+    pub y: u32,
+    pub uv_set: u32,
     pub offset: u32,
-    pub pad: u32,
     pub color0: [f32; 4],
     pub color1: [f32; 4],
     pub params: [f32; 4],
@@ -292,8 +310,12 @@ impl Default for Texture {
             odd: NO_TEXTURE,
             width: 0,
             height: 0,
+            bank: 0,
+            layer: 0,
+            x: 0,
+            y: 0,
+            uv_set: 0,
             offset: 0,
-            pad: 0,
             color0: [0.0; 4],
             color1: [0.0; 4],
             params: [0.0; 4],
@@ -373,7 +395,7 @@ pub struct Params {
     pub background_kind: u32,
     /// Image background: its texture.
     pub env_texture: u32,
-    /// Image background: first `texels` entry of its sampling distribution.
+    /// Image background: the first `tables` entry of its sampling distribution.
     pub env_cdf: u32,
     /// Image background: its index in the light list, else `NO_LIGHT`.
     pub env_light: u32,
@@ -624,8 +646,12 @@ shared_record!(Texture {
     odd,
     width,
     height,
+    bank,
+    layer,
+    x,
+    y,
+    uv_set,
     offset,
-    pad,
     color0,
     color1,
     params

@@ -1,39 +1,85 @@
-//! Textures: image files decoded to linear RGB, the Perlin noise tables, and the texture
-//! records both backends read.
+//! Textures: image files decoded at their source precision, the Perlin noise tables, and
+//! the texture records both backends read (their texels placed by `scene::texels`).
 
 use std::path::Path;
 
 use super::format::{CheckerMapping, NoiseKind, TextureDesc, WrapMode};
 use super::materials::common::ColorDesc;
 use super::records::{self, Texture, NOISE_TABLE_ENTRIES, NO_TEXTURE, TEX_FLAG_SOLID};
+pub use super::texels::srgb_to_linear;
+use super::texels::{pack, srgb_texel, Block, TexelKind, Texels};
 
-/// An image in linear RGB, row 0 at the top.
-#[derive(Debug, Clone)]
+/// An image at its source precision, row 0 at the top: `width` x `height` texels of
+/// `kind` (four channels: r, g, b, alpha); an 8-bit one's colour sRGB-encoded when `srgb`
+/// is set (its texture decodes it at look-up).
+#[derive(Debug, Clone, PartialEq)]
 pub struct ImageData {
     pub width: u32,
     pub height: u32,
-    pub texels: Vec<[f32; 4]>,
+    pub kind: TexelKind,
+    pub srgb: bool,
+    pub data: Vec<u8>,
 }
 
-/// The sRGB transfer function undone (IEC 61966-2-1).
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
+impl ImageData {
+    /// Texel i (row-major) as linear (r, g, b, alpha).
+    pub fn texel(&self, i: usize) -> [f32; 4] {
+        if self.srgb {
+            srgb_texel(&self.data, i)
+        } else {
+            self.kind.decode(&self.data, i)
+        }
+    }
+
+    /// Texel (x, y), linear.
+    pub fn at(&self, x: u32, y: u32) -> [f32; 4] {
+        self.texel(y as usize * self.width as usize + x as usize)
+    }
+
+    /// Every texel, linear (r, g, b, alpha).
+    pub fn linear(&self) -> Vec<[f32; 4]> {
+        (0..self.width as usize * self.height as usize)
+            .map(|i| self.texel(i))
+            .collect()
+    }
+
+    /// Its number of texels.
+    pub fn texel_count(&self) -> u64 {
+        self.width as u64 * self.height as u64
+    }
+
+    /// Bytes its texels take on either backend.
+    pub fn bytes(&self) -> u64 {
+        self.data.len() as u64
+    }
+
+    /// The block the texel banks place.
+    pub fn block(&self) -> Block<'_> {
+        Block {
+            kind: self.kind,
+            width: self.width,
+            height: self.height,
+            data: &self.data,
+        }
     }
 }
 
 /// Largest side of an image texture.
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
 
-/// Most texels of all a scene's images together (2^26: 1 GiB as linear RGBA floats).
-pub const MAX_TEXELS: u64 = 1 << 26;
+/// Most texels of one image (2^26: 1 GiB as floats, one texel bank).
+pub const MAX_IMAGE_TEXELS: u64 = 1 << 26;
 
-/// Reads an image file with the `image` crate: float formats (HDR, EXR) are linear
-/// already, 8- and 16-bit ones are sRGB-decoded when `srgb` is set. Its size is read
-/// from the header first: a side over [`MAX_TEXTURE_SIDE`] or more than [`MAX_TEXELS`]
-/// texels is refused before decoding. Texels hold (r, g, b, alpha).
+/// Most texels of all a scene's images together (2^31: 8 GiB of 8-bit images, every
+/// texel bank wgtrace binds).
+pub const MAX_TEXELS: u64 = 1 << 31;
+
+/// Reads an image file with the `image` crate, keeping its precision: 8-bit images as
+/// 8 bits per channel (sRGB-encoded when `srgb` is set, decoded at look-up), 16-bit ones
+/// as half floats (sRGB-decoded first when `srgb` is set), float ones (HDR, EXR, linear
+/// already) as floats. Its size is read from the header first: a side over
+/// [`MAX_TEXTURE_SIDE`] or more than [`MAX_IMAGE_TEXELS`] texels is refused before
+/// decoding.
 pub fn load_image(path: &Path, srgb: bool) -> Result<ImageData, String> {
     let reader = || {
         image::ImageReader::open(path)
@@ -57,38 +103,54 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     reader: impl Fn() -> Result<image::ImageReader<R>, String>,
     srgb: bool,
 ) -> Result<ImageData, String> {
+    use image::ColorType as C;
     let (w, h) = reader()?.into_dimensions().map_err(|e| e.to_string())?;
-    if w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE || w as u64 * h as u64 > MAX_TEXELS {
+    if w > MAX_TEXTURE_SIDE || h > MAX_TEXTURE_SIDE || w as u64 * h as u64 > MAX_IMAGE_TEXELS {
         return Err(format!(
-            "is {w}x{h}, more than the {MAX_TEXTURE_SIDE} per side and {MAX_TEXELS} texels \
-             accepted"
+            "is {w}x{h}, more than the {MAX_TEXTURE_SIDE} per side and {MAX_IMAGE_TEXELS} \
+             texels accepted"
         ));
     }
     let img = reader()?.decode().map_err(|e| e.to_string())?;
-    let linear = !srgb
-        || matches!(
-            img.color(),
-            image::ColorType::Rgb32F | image::ColorType::Rgba32F
-        );
-    let rgba = img.to_rgba32f();
-    let (width, height) = rgba.dimensions();
+    let (width, height) = (img.width(), img.height());
     if width == 0 || height == 0 {
         return Err("is empty".into());
     }
-    let texels = rgba
-        .pixels()
-        .map(|p| {
-            let c = |v: f32| if linear { v } else { srgb_to_linear(v) };
-            [c(p[0]), c(p[1]), c(p[2]), p[3]]
-        })
-        .collect::<Vec<_>>();
-    if !texels.iter().flatten().all(|x| x.is_finite() && *x >= 0.0) {
-        return Err("has a negative or non-finite texel".into());
-    }
+    let (kind, data) = match img.color() {
+        C::L8 | C::La8 | C::Rgb8 | C::Rgba8 => (TexelKind::Unorm8, img.into_rgba8().into_raw()),
+        C::L16 | C::La16 | C::Rgb16 | C::Rgba16 => {
+            let c = |v: u16, colour: bool| {
+                let x = v as f32 / 65535.0;
+                let x = if srgb && colour { srgb_to_linear(x) } else { x };
+                half::f16::from_f32(x).to_le_bytes()
+            };
+            let data = img
+                .into_rgba16()
+                .pixels()
+                .flat_map(|p| {
+                    [c(p[0], true), c(p[1], true), c(p[2], true), c(p[3], false)]
+                        .into_iter()
+                        .flatten()
+                })
+                .collect();
+            (TexelKind::Half, data)
+        }
+        _ => {
+            let rgba = img.into_rgba32f();
+            if !rgba.iter().all(|x| x.is_finite() && *x >= 0.0) {
+                return Err("has a negative or non-finite texel".into());
+            }
+            let data = rgba.iter().flat_map(|x| x.to_le_bytes()).collect();
+            (TexelKind::Float, data)
+        }
+    };
     Ok(ImageData {
         width,
         height,
-        texels,
+        kind,
+        // a 16-bit image is decoded from sRGB above, a float one is linear
+        srgb: srgb && kind == TexelKind::Unorm8,
+        data,
     })
 }
 
@@ -141,21 +203,56 @@ pub fn color_slot(c: &ColorDesc, names: &[String]) -> ([f32; 4], u32) {
     }
 }
 
-/// Texture records and texels, in the order of `textures`: (name, texture, its image when
-/// it is one).
+/// What texture records read: their images' texels and their tables.
+pub struct TextureData {
+    pub records: Vec<Texture>,
+    pub texels: Texels,
+    pub tables: Vec<[f32; 4]>,
+}
+
+/// Texture records, the texels of their images and the tables they read, in the order of
+/// `textures`: (name, texture, its image when it is one). An image several textures look
+/// up (a glTF file's, with other factors or transforms) is placed once; the Perlin tables,
+/// which every noise texture reads, are the first tables. Errors when the texels do not
+/// fit the banks ([`pack`]).
 pub fn texture_records(
     textures: &[(String, &TextureDesc, Option<&ImageData>)],
-) -> (Vec<Texture>, Vec<[f32; 4]>) {
+) -> Result<TextureData, String> {
     let names: Vec<String> = textures.iter().map(|t| t.0.clone()).collect();
-    let mut texels: Vec<[f32; 4]> = Vec::new();
-    // an image several textures look up (a glTF file's, with other factors or
-    // transforms) is written once
-    let mut written: std::collections::HashMap<*const ImageData, u32> = Default::default();
-    let mut noise_offset = None;
+    let mut images: Vec<&ImageData> = Vec::new();
+    let image_of: Vec<Option<usize>> = textures
+        .iter()
+        .map(|&(_, t, image)| match (t, image) {
+            (TextureDesc::Image { .. }, Some(img)) => {
+                Some(match images.iter().position(|i| std::ptr::eq(*i, img)) {
+                    Some(k) => k,
+                    None => {
+                        images.push(img);
+                        images.len() - 1
+                    }
+                })
+            }
+            (TextureDesc::Image { .. }, None) => {
+                panic!("images are loaded before flattening")
+            }
+            _ => None,
+        })
+        .collect();
+    let blocks: Vec<Block> = images.iter().map(|i| i.block()).collect();
+    let (regions, texels) = pack(&blocks)?;
+    let tables = if textures
+        .iter()
+        .any(|t| matches!(t.1, TextureDesc::Noise { .. }))
+    {
+        noise_tables()
+    } else {
+        Vec::new()
+    };
     let rgb = |c: [f32; 3]| [c[0], c[1], c[2], 0.0];
     let records = textures
         .iter()
-        .map(|&(_, t, image)| match t {
+        .zip(&image_of)
+        .map(|(&(_, t, _), image)| match t {
             TextureDesc::Constant { color } => Texture {
                 tag: records::TEX_CONSTANT,
                 color0: rgb(*color),
@@ -190,50 +287,48 @@ pub fn texture_records(
                 transform,
                 ..
             } => {
-                let image = image.expect("images are loaded before flattening");
-                let offset = *written.entry(image as *const ImageData).or_insert_with(|| {
-                    let offset = texels.len() as u32;
-                    texels.extend_from_slice(&image.texels);
-                    offset
-                });
+                let k = image.expect("an image texture has its image");
+                let (img, region) = (images[k], regions[k]);
                 let [row0, row1] =
                     transform.map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |t| t.rows());
+                let mode = match wrap {
+                    WrapMode::Repeat => records::WRAP_REPEAT,
+                    WrapMode::Clamp => records::WRAP_CLAMP,
+                    WrapMode::Mirror => records::WRAP_MIRROR,
+                };
+                let srgb = if img.srgb { records::TEX_FLAG_SRGB } else { 0 };
                 Texture {
                     color0: rgb(*factor),
                     color1: [row0[0], row0[1], row0[2], 0.0],
                     params: [row1[0], row1[1], row1[2], 0.0],
                     tag: records::TEX_IMAGE,
-                    flags: match wrap {
-                        WrapMode::Repeat => 0,
-                        WrapMode::Clamp => 1,
-                        WrapMode::Mirror => 2,
-                    },
-                    width: image.width,
-                    height: image.height,
-                    offset,
+                    flags: mode | mode << records::TEX_WRAP_T_SHIFT | srgb,
+                    width: img.width,
+                    height: img.height,
+                    bank: region.bank,
+                    layer: region.layer,
+                    x: region.x,
+                    y: region.y,
                     ..Default::default()
                 }
             }
-            TextureDesc::Noise { scale, kind, color } => {
-                let offset = *noise_offset.get_or_insert_with(|| {
-                    let offset = texels.len() as u32;
-                    texels.extend(noise_tables());
-                    offset
-                });
-                Texture {
-                    tag: records::TEX_NOISE,
-                    flags: match kind {
-                        NoiseKind::Perlin => 0,
-                        NoiseKind::Turbulence => 1,
-                        NoiseKind::Marble => 2,
-                    },
-                    offset,
-                    color0: rgb(*color),
-                    params: [*scale, 0.0, 0.0, 0.0],
-                    ..Default::default()
-                }
-            }
+            TextureDesc::Noise { scale, kind, color } => Texture {
+                tag: records::TEX_NOISE,
+                flags: match kind {
+                    NoiseKind::Perlin => 0,
+                    NoiseKind::Turbulence => 1,
+                    NoiseKind::Marble => 2,
+                },
+                offset: 0,
+                color0: rgb(*color),
+                params: [*scale, 0.0, 0.0, 0.0],
+                ..Default::default()
+            },
         })
         .collect();
-    (records, texels)
+    Ok(TextureData {
+        records,
+        texels,
+        tables,
+    })
 }

@@ -177,7 +177,7 @@ impl Loader<'_> {
         };
         let img =
             textures::decode_image(&bytes, srgb).map_err(|e| GltfError::new(key.clone(), e))?;
-        self.texels += img.width as u64 * img.height as u64;
+        self.texels += img.texel_count();
         if self.texels > textures::MAX_TEXELS {
             return Err(GltfError::new(
                 key,
