@@ -29,6 +29,9 @@ struct KernelHit {
     ns: vec4<f32>,
     // uv in .xy, the candidate's (u, v) in .zw
     uv: vec4<f32>,
+    // the second uv set in .xy
+    uv1: vec4<f32>,
+    color: vec4<f32>,
 }
 
 @group(1) @binding(0) var<storage, read> rays: array<KernelRay>;
@@ -45,22 +48,25 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     let ray = Ray(rays[i].origin.xyz, rays[i].dir.xyz);
     let cand = intersect_scene(ray, FAR);
     let occ = select(0u, 1u, occluded(ray, FAR)) | select(0u, 2u, occluded(ray, 0.999 * cand.t));
-    var out = KernelHit(cand.t, cand.prim, 0u, occ, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    var out = KernelHit(cand.t, cand.prim, 0u, occ, vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
     if (cand.prim != NO_HIT) {
         let h = surface_at(ray, cand);
         out.front_face = select(0u, 1u, h.front_face);
         out.p = vec4<f32>(h.p, h.err);
         out.ng = vec4<f32>(h.ng, 0.0);
         out.ns = vec4<f32>(h.ns, 0.0);
-        out.uv = vec4<f32>(h.uv, cand.u, cand.v);
+        out.uv = vec4<f32>(h.uv.xy, cand.u, cand.v);
+        out.uv1 = vec4<f32>(h.uv.zw, 0.0, 0.0);
+        out.color = h.color;
     }
     hits[i] = out;
 }
 
 // Texture look-ups for tests: texture `index` at (uv, p), one per invocation.
 struct TextureLookup {
-    // uv in .xy, texture index in .z (as a float)
+    // uv sets 0 (.xy) and 1 (.zw)
     uv: vec4<f32>,
+    // the point in .xyz, the texture index in .w (as a float)
     p: vec4<f32>,
 }
 
@@ -75,7 +81,7 @@ fn textures_main(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let l = lookups[i];
-    colors[i] = vec4<f32>(texture_value(u32(l.uv.z), l.uv.xy, l.p.xyz), 0.0);
+    colors[i] = vec4<f32>(texture_value(u32(l.p.w), l.uv, l.p.xyz), 0.0);
 }
 
 struct MaterialQuery {
@@ -91,6 +97,9 @@ struct MaterialQuery {
     // the hit's uv in .xy, the sample in .zw
     uv: vec4<f32>,
     wi: vec4<f32>,
+    // the hit's second uv set in .xy
+    uv1: vec4<f32>,
+    color: vec4<f32>,
 }
 
 struct MaterialReply {
@@ -120,7 +129,7 @@ fn materials_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let q = material_queries[i];
     let ray = Ray(q.origin.xyz, q.dir.xyz);
-    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, q.uv.xy, q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0));
+    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, vec4<f32>(q.uv.xy, q.uv1.xy), q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0), q.color);
     let mat = material_at(material_record(q.material), hit);
     let s = scatter(mat, ray, hit, q.uv.zw);
     var flags = select(0u, 1u, s.ok) | select(0u, 2u, s.delta);

@@ -1042,12 +1042,192 @@ fn textures_on_a_second_uv_set_and_the_specular_texture_are_read() {
         p: Vec3::ZERO,
         ng: Vec3::Z,
         ns: Vec3::Z,
-        uv: glam::Vec2::splat(0.5),
+        uv: glam::Vec4::splat(0.5),
         front_face: true,
         material: 0,
         err: 0.0,
         tangent: glam::Vec4::ZERO,
+        color: glam::Vec4::ONE,
     };
     let at = pbr::Params::read(&wgtrace::cpu::materials::material_at(&b, &mat, &hit));
     assert!((at.specular - 0.5 * 64.0 / 255.0).abs() < 1e-6, "{:?}", at);
+}
+
+/// COLOR_0 (float VEC3, normalized u8 VEC4, normalized u16 VEC3 with a stride) multiplies
+/// the base colour and opacity; a material's texture reads the uv set it names (here
+/// TEXCOORD_1, beside TEXCOORD_0); its sampler's wrapS, wrapT and NEAREST apply. The
+/// records say so, the CPU's hits interpolate them, and the GPU's hits agree ray by ray.
+#[test]
+fn vertex_colours_second_uv_sets_and_sampler_modes_are_read() {
+    use gltf_writer::{FLOAT, UNSIGNED_SHORT};
+    use wgtrace::cpu::bindings::Bindings;
+    use wgtrace::cpu::intersect::{intersect_scene, surface_at};
+    use wgtrace::cpu::types::{Ray, FAR};
+    let mut w = GltfWriter::new();
+    let img = image::RgbaImage::from_fn(2, 2, |x, y| {
+        image::Rgba([100 * x as u8, 100 * y as u8, 50, 255])
+    });
+    // CLAMP_TO_EDGE in u, MIRRORED_REPEAT in v, NEAREST magnification
+    let sampler = json!({ "magFilter": 9728, "minFilter": 9728, "wrapS": 33071, "wrapT": 33648 });
+    let t = w.png_texture(&img, Some(sampler)).unwrap();
+    // base colour from TEXCOORD_1, metallic-roughness from TEXCOORD_0: two sets
+    let m = w.material(json!({ "pbrMetallicRoughness": {
+        "baseColorTexture": { "index": t, "texCoord": 1 },
+        "metallicRoughnessTexture": { "index": t }, "metallicFactor": 0.0 } }));
+    let corners = [
+        [-1.0f32, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ];
+    let uv0 = [[0.0f32, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+    // the second set: u twice over, v upside down
+    let uv1 = uv0.map(|[u, v]| [2.0 * u, 1.0 - v]);
+    let colours = [
+        [1.0f32, 0.0, 0.0, 1.0],
+        [0.0, 1.0, 0.0, 0.5],
+        [0.0, 0.0, 1.0, 1.0],
+        [1.0, 1.0, 1.0, 0.25],
+    ];
+    let mut primitives = Vec::new();
+    for (k, dz) in [0.0f32, -2.0, -4.0].into_iter().enumerate() {
+        let p: Vec<[f32; 3]> = corners.iter().map(|c| [c[0], c[1], c[2] + dz]).collect();
+        let pos = w.positions(&p);
+        let (t0, t1) = (w.vec2(&uv0), w.vec2(&uv1));
+        let colour = match k {
+            0 => w.vec3(&colours.map(|c| [c[0], c[1], c[2]])),
+            1 => {
+                let bytes: Vec<u8> = colours
+                    .iter()
+                    .flatten()
+                    .map(|x| (x * 255.0) as u8)
+                    .collect();
+                let v = w.view(&bytes, None);
+                let a = w.accessor(v, 0, 5121, 4, "VEC4", None);
+                w.json["accessors"][a]["normalized"] = json!(true);
+                a
+            }
+            _ => {
+                // VEC3 of u16 in 8-byte strides, as glTF's 4-byte alignment asks
+                let bytes: Vec<u8> = colours
+                    .iter()
+                    .flat_map(|c| {
+                        let q = |x: f32| ((x * 65535.0) as u16).to_le_bytes();
+                        [q(c[0]), q(c[1]), q(c[2]), [0, 0]].concat()
+                    })
+                    .collect();
+                let v = w.view(&bytes, Some(8));
+                let a = w.accessor(v, 0, UNSIGNED_SHORT, 4, "VEC3", None);
+                w.json["accessors"][a]["normalized"] = json!(true);
+                a
+            }
+        };
+        let idx = w.indices_u32(&[0, 1, 2, 0, 2, 3]);
+        primitives.push(GltfWriter::primitive(
+            &[
+                ("POSITION", pos),
+                ("TEXCOORD_0", t0),
+                ("TEXCOORD_1", t1),
+                ("COLOR_0", colour),
+            ],
+            Some(idx),
+            Some(m),
+        ));
+    }
+    assert_eq!(FLOAT, 5126);
+    let mesh = w.mesh(primitives);
+    let n = w.node(json!({ "mesh": mesh }));
+    w.scene(&[n]);
+    let s = load(
+        &w.to_gltf_external(&dir("attributes"), "attributes")
+            .unwrap(),
+    );
+    let tex = s.textures[pbr::Params::read(&s.materials[0]).base_color_texture as usize];
+    assert_eq!(tex.uv_set, 1, "the second uv set");
+    assert_eq!(
+        tex.flags & (records::TEX_MODE_MASK | records::TEX_MODE_MASK << records::TEX_WRAP_T_SHIFT),
+        records::WRAP_CLAMP | records::WRAP_MIRROR << records::TEX_WRAP_T_SHIFT
+    );
+    assert_ne!(tex.flags & records::TEX_FLAG_NEAREST, 0);
+    let both = records::PRIM_FLAG_UV1 | records::PRIM_FLAG_COLORS;
+    assert!(s.primitives.iter().all(|p| p.flags & both == both));
+    // the CPU's hits: interpolated second uvs and colours, the same for the three encodings
+    let b = Bindings::new(&s, s.params(0, s.full_band()));
+    for (k, z) in [0.0f32, -2.0, -4.0].into_iter().enumerate() {
+        // (0.5, 0.25) on the quad: its uv0 is (0.75, 0.625) in wgtrace's v-up
+        let ray = Ray {
+            origin: Vec3::new(0.5, 0.25, z + 0.5),
+            dir: Vec3::NEG_Z,
+        };
+        let c = intersect_scene(&b, &ray, FAR);
+        let h = surface_at(&b, &ray, &c);
+        let (u, v) = (0.75f32, 0.625f32);
+        // the file's set 1 is (2 u, 1 - v_file) where set 0 is (u, v_file); wgtrace reads
+        // v as 1 - v_file, so its set 1 is (2 u, 1 - v) of its set 0's (u, v)
+        let want_uv1 = [2.0 * u, 1.0 - v];
+        assert!(
+            (h.uv.z - want_uv1[0]).abs() < 1e-5 && (h.uv.w - want_uv1[1]).abs() < 1e-5,
+            "{k}: {}",
+            h.uv
+        );
+        // (0.5, 0.25) lies in the triangle of corners 0, 1, 2: barycentric weights
+        let wgt = [0.25, 0.125, 0.625, 0.0];
+        let want: [f32; 4] =
+            std::array::from_fn(|ch| (0..4).map(|i| wgt[i] * colours[i][ch]).sum());
+        let tol = if k == 1 { 3e-3 } else { 1e-4 };
+        // a VEC3 colour has alpha 1
+        let alpha = if k == 1 { want[3] } else { 1.0 };
+        for (ch, want) in [want[0], want[1], want[2], alpha].into_iter().enumerate() {
+            assert!(
+                (h.color[ch] - want).abs() < tol,
+                "{k}: {} vs {want}",
+                h.color
+            );
+        }
+    }
+    // the GPU's hits, ray by ray
+    let ctx = common::gpu_context();
+    let mut rng = 5u32;
+    let rays: Vec<Ray> = (0..512)
+        .map(|_| {
+            let o = Vec3::new(
+                common::random_f32(&mut rng) * 2.4 - 1.2,
+                common::random_f32(&mut rng) * 2.4 - 1.2,
+                1.0,
+            );
+            Ray {
+                origin: o,
+                dir: Vec3::new(0.05, -0.03, -1.0).normalize(),
+            }
+        })
+        .collect();
+    let kernel: Vec<_> = rays.iter().map(common::to_kernel).collect();
+    let gpu = wgtrace::gpu::kernel::intersect_rays(&ctx, &s, &kernel).unwrap();
+    let mut hits = 0;
+    for (r, g) in rays.iter().zip(&gpu) {
+        let c = intersect_scene(&b, r, FAR);
+        assert_eq!(g.prim, c.prim);
+        if c.prim == records::NO_HIT {
+            continue;
+        }
+        hits += 1;
+        let h = surface_at(&b, r, &c);
+        for k in 0..2 {
+            assert!(
+                (g.uv1[k] - h.uv[2 + k]).abs() < 1e-5,
+                "{r:?}: {:?} vs {}",
+                g.uv1,
+                h.uv
+            );
+        }
+        for k in 0..4 {
+            assert!(
+                (g.color[k] - h.color[k]).abs() < 1e-5,
+                "{r:?}: {:?} vs {}",
+                g.color,
+                h.color
+            );
+        }
+    }
+    assert!(hits > 200, "{hits} hits");
 }

@@ -85,6 +85,8 @@ fn cpu_hit(scene: &FlatScene, r: &Ray) -> KernelHit {
         out.ng = h.ng.extend(0.0).to_array();
         out.ns = h.ns.extend(0.0).to_array();
         out.uv = [h.uv.x, h.uv.y, c.u, c.v];
+        out.uv1 = [h.uv.z, h.uv.w, 0.0, 0.0];
+        out.color = h.color.to_array();
     }
     out
 }
@@ -140,6 +142,15 @@ fn agree(g: &KernelHit, c: &KernelHit) -> Result<(), String> {
         (
             "candidate uv",
             rel(g.uv[2], c.uv[2], 1e-3) && rel(g.uv[3], c.uv[3], 1e-3),
+        ),
+        (
+            "second uv set",
+            uv_distance(g.uv1[0], c.uv1[0]) <= 1e-3 * (1.0 + c.uv1[0].abs())
+                && rel(g.uv1[1], c.uv1[1], 1e-3),
+        ),
+        (
+            "vertex colour",
+            (0..4).all(|k| rel(g.color[k], c.color[k], 1e-5)),
         ),
     ];
     match checks.iter().find(|(_, ok)| !ok) {
@@ -398,8 +409,12 @@ fn gpu_materials_match_cpu_query_by_query() {
                     common::random_f32(&mut rng),
                 ],
                 wi: common::random_unit(&mut rng).extend(0.0).to_array(),
+                // the table's scenes have one uv set and no vertex colours
+                color: [1.0; 4],
                 ..Default::default()
             });
+            let q = queries.last_mut().unwrap();
+            q.uv1 = [q.uv[0], q.uv[1], 0.0, 0.0];
         }
     }
     let gpu = shade_materials(&ctx, &s, &queries).expect("kernel dispatch");
@@ -412,11 +427,12 @@ fn gpu_materials_match_cpu_query_by_query() {
             p: Vec3::from_slice(&q.p[..3]),
             ng: Vec3::from_slice(&q.ng[..3]),
             ns: Vec3::from_slice(&q.ns[..3]),
-            uv: glam::Vec2::new(q.uv[0], q.uv[1]),
+            uv: glam::Vec4::new(q.uv[0], q.uv[1], q.uv1[0], q.uv1[1]),
             front_face: q.front_face != 0,
             material: q.material,
             err: 0.0,
             tangent: glam::Vec4::ZERO,
+            color: glam::Vec4::from(q.color),
         };
         let mat = material_at(&b, &s.materials[q.material as usize], &hit);
         let sc = scatter(&mat, &ray, &hit, [q.uv[2], q.uv[3]]);

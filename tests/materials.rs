@@ -12,7 +12,7 @@
 mod common;
 
 use common::{material, TestMaterial, MATERIALS};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use wgtrace::cpu::bsdf::{fresnel_dielectric, ggx_d, schlick, smith_lambda};
 use wgtrace::cpu::materials::{bsdf_eval, bsdf_pdf, material_eval, scatter};
 use wgtrace::cpu::types::{Hit, Ray};
@@ -29,11 +29,12 @@ fn hit_at_origin(d: Vec3, origin: Vec3) -> (Ray, Hit) {
         p: Vec3::ZERO,
         ng: Vec3::Z,
         ns: Vec3::Z,
-        uv: Vec2::ZERO,
+        uv: glam::Vec4::ZERO,
         front_face: ray.dir.z < 0.0,
         material: 0,
         err: 0.0,
         tangent: glam::Vec4::ZERO,
+        color: glam::Vec4::ONE,
     };
     (ray, hit)
 }

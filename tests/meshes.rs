@@ -435,3 +435,64 @@ proptest! {
         let _ = wgtrace::load_scene_str(&src, &dir.join("s.toml"), &Overrides::default());
     }
 }
+
+/// Vertex colours of OBJ (`v x y z r g b`) and PLY (`red`, `green`, `blue`, 8-bit here)
+/// files are display colours, decoded from sRGB, that multiply the material's colour: a
+/// white-lit Lambertian quad of one vertex colour shows albedo x colour exactly (every
+/// cosine-weighted sample of a uniform sky weighs the albedo), on both backends.
+#[test]
+fn obj_and_ply_vertex_colours_multiply_the_material_colour() {
+    use wgtrace::scene::texels::srgb_to_linear;
+    let dir = dir("colours");
+    let quad = [[-1.0f32, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    let obj: String = quad
+        .iter()
+        .map(|[x, y]| format!("v {x} {y} 0 0.5 0.25 1\n"))
+        .collect::<String>()
+        + "f 1 2 3 4\n";
+    std::fs::write(dir.join("c.obj"), obj).unwrap();
+    let mut ply = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+         property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
+         element face 1\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    for [x, y] in quad {
+        ply += &format!("{x} {y} 0 200 100 50\n");
+    }
+    ply += "4 0 1 2 3\n";
+    std::fs::write(dir.join("c.ply"), ply).unwrap();
+    let albedo = 0.8f32;
+    let want = |c: [f32; 3]| c.map(|x| albedo * srgb_to_linear(x));
+    for (file, colour) in [
+        ("c.obj", want([0.5, 0.25, 1.0])),
+        ("c.ply", want([200.0 / 255.0, 100.0 / 255.0, 50.0 / 255.0])),
+    ] {
+        let src = format!(
+            "[render]\nwidth = 16\nheight = 16\nspp = 4\nmax_depth = 2\n\
+             [camera]\nprojection = \"orthographic\"\nheight = 1.5\n\
+             look_from = [0, 0, 3]\nlook_at = [0, 0, 0]\n[background]\ncolor = [1, 1, 1]\n\
+             [materials]\nm = {{ type = \"lambertian\", albedo = [{albedo}, {albedo}, {albedo}] }}\n\
+             [[objects]]\ntype = \"mesh\"\npath = \"{file}\"\nmaterial = \"m\"\n"
+        );
+        let s = wgtrace::load_scene_str(&src, &dir.join("s.toml"), &Overrides::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert!(s
+            .primitives
+            .iter()
+            .all(|p| p.flags & wgtrace::scene::records::PRIM_FLAG_COLORS != 0));
+        for (backend, img) in [
+            ("gpu", common::render_gpu(&s)),
+            ("cpu", common::render_cpu(&s)),
+        ] {
+            for i in 0..img.pixel_count() {
+                let got = img.mean(i);
+                for k in 0..3 {
+                    assert!(
+                        (got[k] - colour[k]).abs() < 1e-5,
+                        "{file} on the {backend}, pixel {i}: {got:?}, not {colour:?}"
+                    );
+                }
+            }
+        }
+    }
+}

@@ -4,7 +4,7 @@
 
 mod common;
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4Swizzles};
 use wgtrace::cpu::bindings::Bindings;
 use wgtrace::cpu::intersect::{
     intersect_box, intersect_cylinder, intersect_plane, intersect_scene, surface_at,
@@ -55,7 +55,7 @@ fn assert_hit(s: &FlatScene, r: Ray, t: f32, n: Vec3, front: bool) -> Hit {
         "{r:?}: p = {}",
         h.p
     );
-    assert!(h.uv.is_finite() && h.err.is_finite() && h.err >= 0.0);
+    assert!(h.uv.xy().is_finite() && h.err.is_finite() && h.err >= 0.0);
     h
 }
 
@@ -88,7 +88,7 @@ fn plane_hits_both_sides_misses_parallel_and_maps_uv() {
         true,
     );
     // uv = uv_scale x coordinates in the tangent frame: length 0.5 x |(3, 4)| = 2.5
-    assert!(close(h.uv.length(), 2.5, 1e-5), "uv {}", h.uv);
+    assert!(close(h.uv.xy().length(), 2.5, 1e-5), "uv {}", h.uv.xy());
     assert_hit(
         &s,
         ray([0.0, -3.0, 0.0], [0.0, 1.0, 0.0]),
@@ -127,7 +127,7 @@ fn box_slab_test_from_outside_inside_and_along_axes() {
         for sign in [1.0f32, -1.0] {
             let n = Vec3::AXES[axis] * sign;
             let h = assert_hit(&s, ray(n * 10.0, -n), 10.0 - half, n, true);
-            assert!(h.uv.cmpge(Vec2::ZERO).all() && h.uv.cmple(Vec2::ONE).all());
+            assert!(h.uv.xy().cmpge(Vec2::ZERO).all() && h.uv.xy().cmple(Vec2::ONE).all());
             // from the center: leaves through the same face, seen from inside
             assert_hit(&s, ray(Vec3::ZERO, n), half, n, false);
         }
@@ -144,9 +144,9 @@ fn box_slab_test_from_outside_inside_and_along_axes() {
         true,
     );
     assert!(
-        (h.uv - Vec2::new(0.75, 0.75)).abs().max_element() < 1e-6,
+        (h.uv.xy() - Vec2::new(0.75, 0.75)).abs().max_element() < 1e-6,
         "uv {}",
-        h.uv
+        h.uv.xy()
     );
     // t-range
     let r = ray([5.0, 0.0, 0.0], [-1.0, 0.0, 0.0]);
@@ -166,7 +166,11 @@ fn sphere_normal_side_and_longitude_latitude_uv() {
         Vec3::Y,
         true,
     );
-    assert!(close(h.uv.y, 1.0, 1e-6), "north pole v = {}", h.uv.y);
+    assert!(
+        close(h.uv.xy().y, 1.0, 1e-6),
+        "north pole v = {}",
+        h.uv.xy().y
+    );
     let h = assert_hit(
         &s,
         ray(c + Vec3::new(10.0, 0.0, 0.0), [-1.0, 0.0, 0.0]),
@@ -175,12 +179,12 @@ fn sphere_normal_side_and_longitude_latitude_uv() {
         true,
     );
     assert!(
-        close(h.uv.x, 0.5, 1e-6) && close(h.uv.y, 0.5, 1e-6),
+        close(h.uv.xy().x, 0.5, 1e-6) && close(h.uv.xy().y, 0.5, 1e-6),
         "uv {}",
-        h.uv
+        h.uv.xy()
     );
     let h = assert_hit(&s, ray(c, [0.0, 0.0, -1.0]), 2.0, -Vec3::Z, false);
-    assert!(close(h.uv.x, 0.75, 1e-6), "u at -z = {}", h.uv.x);
+    assert!(close(h.uv.xy().x, 0.75, 1e-6), "u at -z = {}", h.uv.xy().x);
     assert_miss(&s, ray(c + Vec3::new(2.01, 0.0, 10.0), [0.0, 0.0, -1.0]));
 }
 
@@ -195,9 +199,9 @@ fn triangle_uvs_interpolate_vertex_uvs_or_default_to_barycentrics() {
         true,
     );
     assert!(
-        (h.uv - Vec2::new(0.25, 0.25)).abs().max_element() < 1e-6,
+        (h.uv.xy() - Vec2::new(0.25, 0.25)).abs().max_element() < 1e-6,
         "{}",
-        h.uv
+        h.uv.xy()
     );
     let with_uvs = tri.replace("material", "uvs = [[1, 1], [0, 1], [1, 0]]\nmaterial");
     let h = assert_hit(
@@ -209,9 +213,9 @@ fn triangle_uvs_interpolate_vertex_uvs_or_default_to_barycentrics() {
     );
     // weights (0.5, 0.25, 0.25) of (1, 1), (0, 1), (1, 0)
     assert!(
-        (h.uv - Vec2::new(0.75, 0.75)).abs().max_element() < 1e-6,
+        (h.uv.xy() - Vec2::new(0.75, 0.75)).abs().max_element() < 1e-6,
         "{}",
-        h.uv
+        h.uv.xy()
     );
 }
 
@@ -221,9 +225,9 @@ fn polygon_uvs_are_planar() {
     for (x, y) in [(1.0, 0.5), (3.0, 1.5), (3.9, 0.1)] {
         let h = assert_hit(&s, ray([x, y, 3.0], [0.0, 0.0, -1.0]), 3.0, Vec3::Z, true);
         assert!(
-            (h.uv - Vec2::new(x, y)).abs().max_element() < 1e-5,
+            (h.uv.xy() - Vec2::new(x, y)).abs().max_element() < 1e-5,
             "{} at ({x}, {y})",
-            h.uv
+            h.uv.xy()
         );
     }
 }
@@ -256,7 +260,7 @@ fn cylinder_side_caps_axis_rays_inside_rays_and_uv() {
         Vec3::X,
         true,
     );
-    assert!(close(h.uv.y, 0.75, 1e-5), "height v = {}", h.uv.y);
+    assert!(close(h.uv.xy().y, 0.75, 1e-5), "height v = {}", h.uv.xy().y);
     // along the axis: the caps
     assert_hit(
         &s,
@@ -272,7 +276,11 @@ fn cylinder_side_caps_axis_rays_inside_rays_and_uv() {
         Vec3::Y,
         true,
     );
-    assert!(close(h.uv.y, 0.4, 1e-5), "cap radius v = {}", h.uv.y);
+    assert!(
+        close(h.uv.xy().y, 0.4, 1e-5),
+        "cap radius v = {}",
+        h.uv.xy().y
+    );
     // from inside: the side and the caps from the back
     assert_hit(
         &s,
@@ -301,7 +309,7 @@ fn cylinder_side_caps_axis_rays_inside_rays_and_uv() {
         Vec3::Z,
         false,
     );
-    assert!(close(h.uv.y, 0.5, 1e-5));
+    assert!(close(h.uv.xy().y, 0.5, 1e-5));
     // a tilted axis: the side normal is perpendicular to the axis
     let tilted = scene("[[objects]]\ntype = \"cylinder\"\nbase = [0, 0, 0]\ntop = [1, 1, 1]\nradius = 0.25\nmaterial = \"m\"\n");
     let (_, h) = trace(&tilted, ray([0.5, 0.5, 5.0], [0.0, 0.0, -1.0])).expect("hits");
@@ -323,7 +331,7 @@ fn disk_in_any_orientation_with_polar_uv() {
     let n = Vec3::new(1.0, 1.0, 0.0).normalize();
     let c = Vec3::ONE;
     let h = assert_hit(&s, ray(c + 3.0 * n, -n), 3.0, n, true);
-    assert!(h.uv.y.abs() < 1e-5, "center v = {}", h.uv.y);
+    assert!(h.uv.xy().y.abs() < 1e-5, "center v = {}", h.uv.xy().y);
     let h = assert_hit(
         &s,
         ray(c + Vec3::new(0.0, 0.0, 1.0) - 3.0 * n, n),
@@ -331,7 +339,7 @@ fn disk_in_any_orientation_with_polar_uv() {
         n,
         false,
     );
-    assert!(close(h.uv.y, 0.5, 1e-5), "v = {}", h.uv.y);
+    assert!(close(h.uv.xy().y, 0.5, 1e-5), "v = {}", h.uv.xy().y);
     assert_miss(&s, ray(c + Vec3::new(0.0, 0.0, 2.1) + 3.0 * n, -n));
     // in the disk's plane: parallel, a miss
     assert_miss(&s, ray(c - 5.0 * Vec3::Z, Vec3::Z));
@@ -456,9 +464,9 @@ fn transformed_analytic_shapes_are_exact() {
         true,
     );
     assert!(
-        (h.uv - Vec2::splat(0.5)).abs().max_element() < 1e-5,
+        (h.uv.xy() - Vec2::splat(0.5)).abs().max_element() < 1e-5,
         "uv {}",
-        h.uv
+        h.uv.xy()
     );
 }
 
@@ -480,9 +488,9 @@ fn a_mirrored_triangle_keeps_its_default_uvs_on_the_same_corners() {
     // near the mirror image of vertex 1, whose uv is (1, 0)
     let (_, h) = trace(&s, ray([-1.9, 0.05, 5.0], [0.0, 0.0, -1.0])).expect("hits");
     assert!(
-        (h.uv - Vec2::new(0.95, 0.025)).abs().max_element() < 1e-5,
+        (h.uv.xy() - Vec2::new(0.95, 0.025)).abs().max_element() < 1e-5,
         "uv {}",
-        h.uv
+        h.uv.xy()
     );
 }
 
@@ -533,9 +541,9 @@ fn mesh_has_smooth_normals_and_file_uvs() {
         worst_ns = worst_ns.min(h.ns.dot(radial));
         worst_ng = worst_ng.min(h.ng.dot(radial));
         assert!(
-            h.uv.cmpge(Vec2::ZERO).all() && h.uv.cmple(Vec2::ONE).all(),
+            h.uv.xy().cmpge(Vec2::ZERO).all() && h.uv.xy().cmple(Vec2::ONE).all(),
             "uv {}",
-            h.uv
+            h.uv.xy()
         );
     }
     // interpolated normals follow the sphere far more closely than the facets do

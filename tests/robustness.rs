@@ -471,11 +471,12 @@ fn microfacet_roughness_near_zero_is_finite_and_continuous() {
         p: Vec3::ZERO,
         ng: Vec3::Y,
         ns: Vec3::Y,
-        uv: glam::Vec2::ZERO,
+        uv: glam::Vec4::ZERO,
         front_face: true,
         material: 0,
         err: 1e-6,
         tangent: glam::Vec4::ZERO,
+        color: glam::Vec4::ONE,
     };
     let mut last_spread = 0.0f64;
     for alpha in [1.0f32, 1e-2, 1e-3, 1e-4, 1e-6, 0.0] {

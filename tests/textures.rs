@@ -5,7 +5,7 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use glam::{Vec2, Vec3};
+use glam::{Vec3, Vec4};
 use wgtrace::cpu::bindings::Bindings;
 use wgtrace::cpu::materials::material_at;
 use wgtrace::cpu::textures::{perlin, texture_value};
@@ -48,7 +48,12 @@ fn image_dir(test: &str) -> PathBuf {
 
 fn value(s: &FlatScene, index: u32, uv: [f32; 2], p: [f32; 3]) -> Vec3 {
     let b = Bindings::new(s, s.params(0, s.full_band()));
-    texture_value(&b, index, Vec2::from(uv), Vec3::from(p))
+    texture_value(
+        &b,
+        index,
+        Vec4::new(uv[0], uv[1], uv[0], uv[1]),
+        Vec3::from(p),
+    )
 }
 
 #[track_caller]
@@ -193,7 +198,10 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
          j_linear = { type = \"image\", path = \"2x2.png\", color_space = \"linear\" }\n\
          k_half = { type = \"image\", path = \"3x2.png\" }\n\
          l_half_linear = { type = \"image\", path = \"3x2.png\", color_space = \"linear\", wrap = \"clamp\" }\n\
-         m_float = { type = \"image\", path = \"1x1.exr\" }",
+         m_float = { type = \"image\", path = \"1x1.exr\" }\n\
+         n_axes = { type = \"image\", path = \"3x2.png\", wrap = [\"clamp\", \"mirror\"] }\n\
+         o_nearest = { type = \"image\", path = \"2x2.png\", filter = \"nearest\", uv_set = 1 }\n\
+         p_set1 = { type = \"image\", path = \"3x2.png\", uv_set = 1, wrap = [\"mirror\", \"clamp\"] }",
         &dir,
     );
     let mut rng = 11u32;
@@ -202,8 +210,8 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
         for _ in 0..2000 {
             let mut r = || common::random_f32(&mut rng) * 6.0 - 3.0;
             lookups.push(TextureLookup {
-                uv: [r(), r(), t as f32, 0.0],
-                p: [r(), r(), r(), 0.0],
+                uv: [r(), r(), r(), r()],
+                p: [r(), r(), r(), t as f32],
             });
         }
     }
@@ -211,12 +219,13 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
     assert_eq!(s.texels.banks.len(), 3);
     let gpu = lookup_textures(&ctx, &s, &lookups).expect("texture kernel");
     let mut worst = 0.0f32;
+    let b = Bindings::new(&s, s.params(0, s.full_band()));
     for (l, g) in lookups.iter().zip(&gpu) {
-        let c = value(
-            &s,
-            l.uv[2] as u32,
-            [l.uv[0], l.uv[1]],
-            [l.p[0], l.p[1], l.p[2]],
+        let c = texture_value(
+            &b,
+            l.p[3] as u32,
+            Vec4::from(l.uv),
+            Vec3::from_slice(&l.p[..3]),
         );
         let d = (Vec3::from_slice(g) - c).abs().max_element();
         worst = worst.max(d);
@@ -224,7 +233,7 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
         assert!(
             d < 1e-4,
             "texture {}: gpu {g:?} vs cpu {c} at {l:?}",
-            l.uv[2]
+            l.p[3]
         );
     }
     eprintln!(
@@ -253,11 +262,12 @@ fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
         p: Vec3::ZERO,
         ng: Vec3::Z,
         ns: Vec3::Z,
-        uv: Vec2::splat(0.5),
+        uv: Vec4::splat(0.5),
         front_face: true,
         material: 0,
         err: 0.0,
         tangent: glam::Vec4::ZERO,
+        color: Vec4::ONE,
     };
     // materials are numbered in name order: a, b, c
     let at = |i: usize| material_at(&b, &s.materials[i], &hit);
@@ -289,7 +299,9 @@ fn images_keep_their_precision_in_the_texel_banks() {
     );
     // texel (1, 1) of the 16-bit ramp: 4 x 13107 / 65535 = 0.8, as a half float
     let b = Bindings::new(&s, s.params(0, s.full_band()));
-    let at = |t: u32, uv: [f32; 2]| texture_value(&b, t, Vec2::from(uv), Vec3::ZERO);
+    let at = |t: u32, uv: [f32; 2]| {
+        texture_value(&b, t, Vec4::new(uv[0], uv[1], uv[0], uv[1]), Vec3::ZERO)
+    };
     let centre = [(1.0 + 0.5) / 3.0, 0.25];
     let linear = at(1, centre);
     assert!((linear.x - 0.8).abs() < 4e-4, "{linear}");
@@ -440,5 +452,63 @@ fn a_gigabyte_of_8_bit_texels_renders_on_the_gpu() {
             }
         }
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Wrap modes apply per axis (u, then v); `filter = "nearest"` reads the texel the point
+/// lies in; `uv_set = 1` reads the surface's second uv set.
+#[test]
+fn images_wrap_per_axis_filter_nearest_and_read_their_uv_set() {
+    let dir = image_dir("axes");
+    let s = scene(
+        "a = { type = \"image\", path = \"2x2.png\", wrap = [\"clamp\", \"repeat\"] }\n\
+         b = { type = \"image\", path = \"2x2.png\", filter = \"nearest\" }\n\
+         c = { type = \"image\", path = \"2x2.png\", uv_set = 1 }",
+        &dir,
+    );
+    let b = Bindings::new(&s, s.params(0, s.full_band()));
+    let at = |t: u32, uv: [f32; 4]| texture_value(&b, t, Vec4::from(uv), Vec3::ZERO);
+    let grey = Vec3::splat(srgb_to_linear(128.0 / 255.0));
+    // u clamped: far left is the left column; v repeated: 1.75 is 0.75 (the top row)
+    assert_close(at(0, [-3.0, 1.75, 0.0, 0.0]), Vec3::X);
+    // u past the right edge clamps to the right column; v = -0.25 repeats to 0.75
+    assert_close(at(0, [7.0, -0.25, 0.0, 0.0]), Vec3::ONE);
+    // nearest: anywhere in a texel's square is that texel, no mix
+    for (uv, want) in [
+        ([0.01, 0.99], Vec3::X),
+        ([0.49, 0.51], Vec3::X),
+        ([0.51, 0.51], Vec3::ONE),
+        ([0.99, 0.01], grey),
+        ([0.3, 0.2], Vec3::ZERO),
+    ] {
+        assert_close(at(1, [uv[0], uv[1], 0.0, 0.0]), want);
+    }
+    // uv_set = 1 reads .zw: the bottom-right texel's centre there, whatever .xy holds
+    assert_close(at(2, [0.25, 0.75, 0.75, 0.25]), grey);
+    assert_close(at(2, [0.75, 0.25, 0.25, 0.75]), Vec3::X);
+    let invalid = wgtrace::load_scene_str(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n\
+         t = { type = \"image\", path = \"2x2.png\", uv_set = 2 }\n",
+        &dir.join("t.toml"),
+        &Default::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        invalid.contains("textures.t.uv_set: must be 0 or 1, got 2"),
+        "{invalid}"
+    );
+    let bad_wrap = wgtrace::load_scene_str(
+        "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n\
+         t = { type = \"image\", path = \"2x2.png\", wrap = [\"clamp\", \"sideways\"] }\n",
+        &dir.join("t.toml"),
+        &Default::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        bad_wrap.contains("t.toml:5:") && bad_wrap.contains("unknown variant `sideways`"),
+        "{bad_wrap}"
+    );
     std::fs::remove_dir_all(&dir).ok();
 }

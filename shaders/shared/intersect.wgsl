@@ -631,6 +631,9 @@ struct Surface {
     uv: vec2<f32>,
     err: f32,
     tangent: vec4<f32>,
+    // a triangle's second uv set (PRIM_FLAG_UV1) and vertex colour (PRIM_FLAG_COLORS)
+    uv1: vec2<f32>,
+    color: vec4<f32>,
 }
 
 // Angle of q about the unit axis n, in the onb_tangents frame, as a fraction in [0, 1].
@@ -645,7 +648,7 @@ fn angle_uv(q: vec3<f32>, n: vec3<f32>) -> f32 {
 // surface to within a few ulps of the primitive's own magnitudes whatever the distance
 // travelled; err bounds that (16 ulps, 8 for triangles).
 fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
-    var s = Surface(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.0), 0.0, vec4<f32>(0.0));
+    var s = Surface(vec3<f32>(0.0), vec3<f32>(0.0, 0.0, 1.0), vec3<f32>(0.0, 0.0, 1.0), vec2<f32>(0.0), 0.0, vec4<f32>(0.0), vec2<f32>(0.0), vec4<f32>(1.0));
     switch prim.tag {
 #ifdef HAS_SPHERE
         case PRIM_SPHERE: {
@@ -695,6 +698,21 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
                     let nv = w.x * a0.xyz + w.y * a1.xyz + w.z * a2.xyz;
                     let turned = (prim.flags & PRIM_FLAG_SHADING_NORMALS) != 0u && dot(nv, s.ng) < 0.0;
                     s.tangent = vec4<f32>(w.x * t0.xyz + w.y * t1.xyz + w.z * t2.xyz, select(t0.w, -t0.w, turned));
+                }
+#endif
+                // the second uv set and the vertex colours follow the tangents
+                var extra = prim.data + ATTRIBUTE_ENTRIES + select(0u, TANGENT_ENTRIES, (prim.flags & PRIM_FLAG_TANGENTS) != 0u);
+#ifdef HAS_UV1
+                if ((prim.flags & PRIM_FLAG_UV1) != 0u) {
+                    let u01 = shape_data[extra];
+                    let u2 = shape_data[extra + 1u];
+                    s.uv1 = w.x * u01.xy + w.y * u01.zw + w.z * u2.xy;
+                    extra += UV1_ENTRIES;
+                }
+#endif
+#ifdef HAS_VERTEX_COLORS
+                if ((prim.flags & PRIM_FLAG_COLORS) != 0u) {
+                    s.color = w.x * shape_data[extra] + w.y * shape_data[extra + 1u] + w.z * shape_data[extra + 2u];
                 }
 #endif
             }
@@ -801,5 +819,10 @@ fn surface_at(ray: Ray, cand: Candidate) -> Hit {
 #else
     s = surface_local(prim, ray, cand);
 #endif
-    return Hit(s.p, s.ng, s.ns, s.uv, dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent);
+#ifdef HAS_UV1
+    let uv1 = select(s.uv, s.uv1, (prim.flags & PRIM_FLAG_UV1) != 0u);
+#else
+    let uv1 = s.uv;
+#endif
+    return Hit(s.p, s.ng, s.ns, vec4<f32>(s.uv, uv1), dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent, s.color);
 }

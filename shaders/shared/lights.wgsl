@@ -74,7 +74,8 @@ fn background_radiance(d: vec3<f32>) -> vec3<f32> {
 #ifdef HAS_ENV_MAP
         case BACKGROUND_IMAGE: {
             let ut = env_coords(d);
-            return texture_value(params.env_texture, vec2<f32>(ut.x, 1.0 - ut.y), d) * params.env.z;
+            let st = vec2<f32>(ut.x, 1.0 - ut.y);
+            return texture_value(params.env_texture, vec4<f32>(st, st), d) * params.env.z;
         }
 #endif
         default: {}

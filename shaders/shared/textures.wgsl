@@ -49,12 +49,21 @@ fn image_texel(tex: Texture, x: u32, y: u32) -> vec4<f32> {
 }
 
 
-// Image lookup of (r, g, b, alpha) after the texture's uv transform (rows in color1 and
-// params), wrapped per axis; v = 0 is the bottom row of the image, texel centres at half
-// integers. Bilinear, or the nearest texel (TEX_FLAG_NEAREST: the texel whose square
-// holds the point, as the same four-texel mix with weights 1, 0).
-fn image_rgba(tex: Texture, surface_uv: vec2<f32>) -> vec4<f32> {
-    let q = vec3<f32>(surface_uv, 1.0);
+// The texture's uv set of a surface's two (set 0 in .xy, set 1 in .zw).
+fn uv_of(tex: Texture, uv: vec4<f32>) -> vec2<f32> {
+#ifdef HAS_UV1
+    return select(uv.xy, uv.zw, tex.uv_set != 0u);
+#else
+    return uv.xy;
+#endif
+}
+
+// Image lookup of (r, g, b, alpha) at its uv set after the texture's uv transform (rows in
+// color1 and params), wrapped per axis; v = 0 is the bottom row of the image, texel
+// centres at half integers. Bilinear, or the nearest texel (TEX_FLAG_NEAREST: the texel
+// whose square holds the point, as the same four-texel mix with weights 1, 0).
+fn image_rgba(tex: Texture, surface_uv: vec4<f32>) -> vec4<f32> {
+    let q = vec3<f32>(uv_of(tex, surface_uv), 1.0);
     let uv = vec2<f32>(dot(tex.color1.xyz, q), dot(tex.params.xyz, q));
     let mode_s = tex.flags & TEX_MODE_MASK;
     let mode_t = (tex.flags >> TEX_WRAP_T_SHIFT) & TEX_MODE_MASK;
@@ -78,7 +87,7 @@ fn image_rgba(tex: Texture, surface_uv: vec2<f32>) -> vec4<f32> {
 }
 
 // An image texture's colour: the bilinear texels times its factor (color0).
-fn image_value(tex: Texture, uv: vec2<f32>) -> vec3<f32> {
+fn image_value(tex: Texture, uv: vec4<f32>) -> vec3<f32> {
     return image_rgba(tex, uv).rgb * tex.color0.rgb;
 }
 
@@ -152,7 +161,7 @@ fn checker_odd(tex: Texture, uv: vec2<f32>, p: vec3<f32>) -> bool {
 }
 
 // A texture that is not a checker.
-fn texture_leaf(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
+fn texture_leaf(index: u32, uv: vec4<f32>, p: vec3<f32>) -> vec3<f32> {
     let tex = textures[index];
     switch tex.tag {
 #ifdef HAS_IMAGE_TEXTURE
@@ -171,16 +180,17 @@ fn texture_leaf(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
     }
 }
 
-// The colour of texture `index` at surface coordinates uv and point p. A checker's cells
+// The colour of texture `index` at surface coordinates uv (both sets) and point p; a
+// checker's cells follow uv set 0. A checker's cells
 // are colours or textures that are not checkers (the scene loader enforces it), so this
 // needs no recursion.
-fn texture_value(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
+fn texture_value(index: u32, uv: vec4<f32>, p: vec3<f32>) -> vec3<f32> {
 #ifdef HAS_CHECKER_TEXTURE
     let tex = textures[index];
     if (tex.tag != TEX_CHECKER) {
         return texture_leaf(index, uv, p);
     }
-    let odd = checker_odd(tex, uv, p);
+    let odd = checker_odd(tex, uv.xy, p);
     let cell = select(tex.even, tex.odd, odd);
     if (cell == NO_TEXTURE) {
         return select(tex.color0.rgb, tex.color1.rgb, odd);
@@ -192,7 +202,7 @@ fn texture_value(index: u32, uv: vec2<f32>, p: vec3<f32>) -> vec3<f32> {
 }
 
 // A texture's alpha at uv: an image's own, else 1.
-fn texture_alpha(index: u32, uv: vec2<f32>) -> f32 {
+fn texture_alpha(index: u32, uv: vec4<f32>) -> f32 {
     let tex = textures[index];
     if (tex.tag == TEX_IMAGE) {
         return image_rgba(tex, uv).a;

@@ -176,8 +176,9 @@ struct Hit {
     ng: vec3<f32>,
     // shading normal, on the same side as ng (interpolated vertex normals, else ng)
     ns: vec3<f32>,
-    // surface coordinates for textures
-    uv: vec2<f32>,
+    // surface coordinates for textures: uv set 0 in .xy, set 1 in .zw (set 0's where the
+    // surface has one set)
+    uv: vec4<f32>,
     // true when the ray arrives on the front side
     front_face: bool,
     material: u32,
@@ -186,4 +187,7 @@ struct Hit {
     // interpolated vertex tangent (xyz, not unit) and bitangent sign (w) of a triangle
     // with tangents (HAS_NORMAL_MAP), else zero
     tangent: vec4<f32>,
+    // interpolated vertex colour (linear rgb, alpha) of a triangle with vertex colours
+    // (HAS_VERTEX_COLORS), else 1
+    color: vec4<f32>,
 }

@@ -7,9 +7,10 @@ use super::bindings::Bindings;
 use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
-    BvhNode, Primitive, BVH_COUNT_BITS, BVH_COUNT_MASK, BVH_STACK_SIZE, PRIM_BOX, PRIM_CYLINDER,
-    PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS,
-    PRIM_FLAG_TRANSFORM, PRIM_PLANE, PRIM_SPHERE, PRIM_TRIANGLE,
+    BvhNode, Primitive, ATTRIBUTE_ENTRIES, BVH_COUNT_BITS, BVH_COUNT_MASK, BVH_STACK_SIZE,
+    PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_COLORS,
+    PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS, PRIM_FLAG_TRANSFORM, PRIM_FLAG_UV1, PRIM_PLANE,
+    PRIM_SPHERE, PRIM_TRIANGLE, TANGENT_ENTRIES, UV1_ENTRIES,
 };
 
 /// Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `ray.dir` is unit length.
@@ -548,6 +549,10 @@ pub struct Surface {
     pub uv: Vec2,
     pub err: f32,
     pub tangent: Vec4,
+    /// A triangle's second uv set (`PRIM_FLAG_UV1`) and vertex colour
+    /// (`PRIM_FLAG_COLORS`).
+    pub uv1: Vec2,
+    pub color: Vec4,
 }
 
 /// Angle of q about the unit axis n, as a fraction in [0, 1].
@@ -565,6 +570,8 @@ pub fn surface_local(b: &Bindings, prim: &Primitive, ray: &Ray, cand: &Candidate
         uv: Vec2::ZERO,
         err: 0.0,
         tangent: Vec4::ZERO,
+        uv1: Vec2::ZERO,
+        color: Vec4::ONE,
     };
     match prim.tag {
         PRIM_SPHERE => {
@@ -610,6 +617,28 @@ pub fn surface_local(b: &Bindings, prim: &Primitive, ray: &Ray, cand: &Candidate
                     let nv = w.x * a0.truncate() + w.y * a1.truncate() + w.z * a2.truncate();
                     let turned = prim.flags & PRIM_FLAG_SHADING_NORMALS != 0 && nv.dot(s.ng) < 0.0;
                     s.tangent = t.extend(if turned { -t0.w } else { t0.w });
+                }
+                // the second uv set and the vertex colours follow the tangents
+                let mut extra = prim.data
+                    + ATTRIBUTE_ENTRIES
+                    + if prim.flags & PRIM_FLAG_TANGENTS != 0 {
+                        TANGENT_ENTRIES
+                    } else {
+                        0
+                    };
+                if prim.flags & PRIM_FLAG_UV1 != 0 {
+                    let (u01, u2) = (row(b, extra), row(b, extra + 1));
+                    let (a, c, e) = (
+                        Vec2::new(u01.x, u01.y),
+                        Vec2::new(u01.z, u01.w),
+                        Vec2::new(u2.x, u2.y),
+                    );
+                    s.uv1 = w.x * a + w.y * c + w.z * e;
+                    extra += UV1_ENTRIES;
+                }
+                if prim.flags & PRIM_FLAG_COLORS != 0 {
+                    s.color =
+                        w.x * row(b, extra) + w.y * row(b, extra + 1) + w.z * row(b, extra + 2);
                 }
             }
         }
@@ -711,14 +740,20 @@ pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
     } else {
         surface_local(b, prim, ray, cand)
     };
+    let uv1 = if prim.flags & PRIM_FLAG_UV1 != 0 {
+        s.uv1
+    } else {
+        s.uv
+    };
     Hit {
         p: s.p,
         ng: s.ng,
         ns: s.ns,
-        uv: s.uv,
+        uv: s.uv.extend(uv1.x).extend(uv1.y),
         front_face: ray.dir.dot(s.ng) < 0.0,
         material: prim.material,
         err: s.err,
         tangent: s.tangent,
+        color: s.color,
     }
 }

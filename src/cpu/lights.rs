@@ -84,7 +84,8 @@ pub fn background_radiance(b: &Bindings, d: Vec3) -> Vec3 {
         BACKGROUND_GRADIENT => xyz(p.background).lerp(xyz(p.background_top), 0.5 * (d.y + 1.0)),
         BACKGROUND_IMAGE => {
             let ut = env_coords(b, d);
-            texture_value(b, p.env_texture, Vec2::new(ut.x, 1.0 - ut.y), d) * p.env[2]
+            let st = Vec4::new(ut.x, 1.0 - ut.y, ut.x, 1.0 - ut.y);
+            texture_value(b, p.env_texture, st, d) * p.env[2]
         }
         _ => xyz(p.background),
     }

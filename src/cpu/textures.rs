@@ -43,10 +43,20 @@ pub fn image_texel(b: &Bindings, tex: &Texture, x: u32, y: u32) -> Vec4 {
     )
 }
 
-/// Image lookup after the uv transform, wrapped per axis; v = 0 is the bottom row.
+/// The texture's uv set of a surface's two (set 0 in `.xy`, set 1 in `.zw`).
+pub fn uv_of(tex: &Texture, uv: Vec4) -> Vec2 {
+    if tex.uv_set != 0 {
+        Vec2::new(uv.z, uv.w)
+    } else {
+        Vec2::new(uv.x, uv.y)
+    }
+}
+
+/// Image lookup at its uv set after the uv transform, wrapped per axis; v = 0 is the
+/// bottom row.
 /// Bilinear, or the nearest texel (`TEX_FLAG_NEAREST`, as the same mix with weights 1, 0).
-pub fn image_rgba(b: &Bindings, tex: &Texture, surface_uv: Vec2) -> Vec4 {
-    let q = surface_uv.extend(1.0);
+pub fn image_rgba(b: &Bindings, tex: &Texture, surface_uv: Vec4) -> Vec4 {
+    let q = uv_of(tex, surface_uv).extend(1.0);
     let uv = Vec2::new(
         Vec3::from_slice(&tex.color1[..3]).dot(q),
         Vec3::from_slice(&tex.params[..3]).dot(q),
@@ -75,7 +85,7 @@ pub fn image_rgba(b: &Bindings, tex: &Texture, surface_uv: Vec2) -> Vec4 {
 }
 
 /// An image texture's colour: the bilinear texels times its factor (`color0`).
-pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec2) -> Vec3 {
+pub fn image_value(b: &Bindings, tex: &Texture, uv: Vec4) -> Vec3 {
     image_rgba(b, tex, uv).truncate() * Vec3::from_slice(&tex.color0[..3])
 }
 
@@ -145,7 +155,7 @@ pub fn checker_odd(tex: &Texture, uv: Vec2, p: Vec3) -> bool {
 }
 
 /// A texture that is not a checker.
-pub fn texture_leaf(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
+pub fn texture_leaf(b: &Bindings, index: u32, uv: Vec4, p: Vec3) -> Vec3 {
     let tex = &b.textures[index as usize];
     match tex.tag {
         TEX_IMAGE => image_value(b, tex, uv),
@@ -154,13 +164,14 @@ pub fn texture_leaf(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
     }
 }
 
-/// The colour of texture `index` at (uv, p).
-pub fn texture_value(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
+/// The colour of texture `index` at (uv, p): uv holds both uv sets; a checker's cells
+/// follow set 0.
+pub fn texture_value(b: &Bindings, index: u32, uv: Vec4, p: Vec3) -> Vec3 {
     let tex = &b.textures[index as usize];
     if tex.tag != TEX_CHECKER {
         return texture_leaf(b, index, uv, p);
     }
-    let odd = checker_odd(tex, uv, p);
+    let odd = checker_odd(tex, Vec2::new(uv.x, uv.y), p);
     let cell = if odd { tex.odd } else { tex.even };
     if cell == NO_TEXTURE {
         return xyz(if odd { tex.color1 } else { tex.color0 });
@@ -169,7 +180,7 @@ pub fn texture_value(b: &Bindings, index: u32, uv: Vec2, p: Vec3) -> Vec3 {
 }
 
 /// A texture's alpha at uv: an image's own, else 1.
-pub fn texture_alpha(b: &Bindings, index: u32, uv: Vec2) -> f32 {
+pub fn texture_alpha(b: &Bindings, index: u32, uv: Vec4) -> f32 {
     let tex = &b.textures[index as usize];
     if tex.tag == TEX_IMAGE {
         image_rgba(b, tex, uv).w

@@ -1,6 +1,6 @@
 //! Mirrors the non-record structs of `shaders/shared/types.wgsl`.
 
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 
 pub use crate::scene::records::{FAR, NO_HIT};
 
@@ -33,7 +33,8 @@ pub struct Hit {
     pub ng: Vec3,
     /// Shading normal, on the same side as `ng`.
     pub ns: Vec3,
-    pub uv: Vec2,
+    /// uv set 0 in `.xy`, set 1 in `.zw` (set 0's where the surface has one set).
+    pub uv: Vec4,
     pub front_face: bool,
     pub material: u32,
     /// Bound on the absolute error of each coordinate of p.
@@ -41,4 +42,7 @@ pub struct Hit {
     /// Interpolated vertex tangent (xyz, not unit) and bitangent sign (w) of a triangle
     /// with tangents, else zero.
     pub tangent: Vec4,
+    /// Interpolated vertex colour (linear rgb, alpha) of a triangle with vertex colours,
+    /// else 1.
+    pub color: Vec4,
 }

@@ -50,6 +50,10 @@ pub enum Feature {
     Textures,
     /// Tangent-space normal maps (pbr's `normal_map`), with the vertex tangents they need.
     NormalMap,
+    /// Triangles with a second uv set, which textures may read (`uv_set = 1`).
+    SecondUv,
+    /// Triangles with vertex colours, which multiply their material's colour and opacity.
+    VertexColors,
     /// Materials with alpha (pbr's `alpha_mode` mask or blend): rays pass through where a
     /// surface is transparent.
     Alpha,
@@ -89,9 +93,11 @@ const GEOMETRY: [Feature; 10] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 15] = [
+const SHADING: [Feature; 17] = [
     Feature::Textures,
     Feature::NormalMap,
+    Feature::SecondUv,
+    Feature::VertexColors,
     Feature::Alpha,
     Feature::ImageTexture,
     Feature::SrgbTexture,
@@ -132,6 +138,8 @@ impl Feature {
             Feature::Material(kind) => kind.define(),
             Feature::Textures => "HAS_TEXTURES",
             Feature::NormalMap => "HAS_NORMAL_MAP",
+            Feature::SecondUv => "HAS_UV1",
+            Feature::VertexColors => "HAS_VERTEX_COLORS",
             Feature::Alpha => "HAS_ALPHA",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
             Feature::SrgbTexture => "HAS_SRGB_TEXTURE",
@@ -215,6 +223,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     let prim = |tag: u32| scene.primitives.iter().any(|p| p.tag == tag);
     let kind = |k: MaterialKind| scene.materials.iter().any(|m| m.tag == k.tag());
     let texture = |tag: u32| scene.textures.iter().any(|t| t.tag == tag);
+    let flag = |f: u32| scene.primitives.iter().any(|p| p.flags & f != 0);
     let bounded = scene.primitives.len() > scene.num_unbounded as usize;
     // lights are sampled only toward surfaces with a lobe that has a density (the
     // materials' own answer, `nee_applies`), and only when there are lights
@@ -260,6 +269,13 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .iter()
                 .any(|m| m.flags & (r::MAT_FLAG_ALPHA_MASK | r::MAT_FLAG_ALPHA_BLEND) != 0),
         )
+        // a texture of uv set 1 reads set 0 where no triangle has a second one: the code
+        // is there for it all the same, as the CPU's is
+        .with(
+            Feature::SecondUv,
+            flag(r::PRIM_FLAG_UV1) || scene.textures.iter().any(|t| t.uv_set != 0),
+        )
+        .with(Feature::VertexColors, flag(r::PRIM_FLAG_COLORS))
         .with(Feature::ImageTexture, texture(r::TEX_IMAGE))
         .with(
             Feature::SrgbTexture,
@@ -321,8 +337,14 @@ impl ShaderSpec {
     /// Features the full shader of `--tune no-specialize` holds only for a scene that
     /// uses them: alpha adds two closest-hit searches (the shadow rays' `shadowed`,
     /// which llvmpipe inlines at each call) to a shader that serves every other scene,
-    /// and llvmpipe's compile of it went from 153 s to 232 s with them.
-    pub const OPTIONAL_IN_FULL: [Feature; 2] = [Feature::Alpha, Feature::NormalMap];
+    /// and llvmpipe's compile of it went from 153 s to 232 s with them; a second uv set
+    /// and vertex colours add reads to every triangle hit.
+    pub const OPTIONAL_IN_FULL: [Feature; 4] = [
+        Feature::Alpha,
+        Feature::NormalMap,
+        Feature::SecondUv,
+        Feature::VertexColors,
+    ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):
     /// every feature but the optional ones the scene does not use; storage buffers

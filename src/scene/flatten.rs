@@ -108,12 +108,13 @@ impl Builder {
         self.bounded.push(prim);
     }
 
-    /// A triangle; `attributes` = per-vertex (normal, uv) when it has any, `tangents` the
-    /// corners' tangents and bitangent signs (for normal maps; only with attributes).
+    /// A triangle; `attributes` = its corners' normals, uvs and the rest when it has any,
+    /// `tangents` the corners' tangents and bitangent signs (for normal maps; only with
+    /// attributes).
     fn push_triangle(
         &mut self,
         v: [Vec3; 3],
-        attributes: Option<([Vec3; 3], [Vec2; 3])>,
+        attributes: Option<Corners>,
         tangents: Option<[Vec4; 3]>,
         smooth: bool,
         material: u32,
@@ -133,7 +134,7 @@ impl Builder {
             c: v4(v[2], 0.0),
             ..Default::default()
         };
-        if let Some((n, uv)) = attributes {
+        if let Some(Corners { n, uv, uv1, color }) = attributes {
             prim.flags |= records::PRIM_FLAG_ATTRIBUTES;
             if smooth {
                 prim.flags |= records::PRIM_FLAG_SHADING_NORMALS;
@@ -147,6 +148,15 @@ impl Builder {
                 prim.flags |= records::PRIM_FLAG_TANGENTS;
                 self.shape_data.extend(t.map(|t| t.to_array()));
             }
+            if let Some(u) = uv1 {
+                prim.flags |= records::PRIM_FLAG_UV1;
+                self.shape_data.push([u[0].x, u[0].y, u[1].x, u[1].y]);
+                self.shape_data.push([u[2].x, u[2].y, 0.0, 0.0]);
+            }
+            if let Some(c) = color {
+                prim.flags |= records::PRIM_FLAG_COLORS;
+                self.shape_data.extend(c.map(|c| c.to_array()));
+            }
         }
         self.bounded.push(prim);
     }
@@ -157,7 +167,7 @@ impl Builder {
         &mut self,
         at: &ObjectTransform,
         mut v: [Vec3; 3],
-        mut attributes: Option<([Vec3; 3], [Vec2; 3])>,
+        mut attributes: Option<Corners>,
         mut tangents: Option<[Vec4; 3]>,
         smooth: bool,
         material: u32,
@@ -165,9 +175,9 @@ impl Builder {
         v = v.map(|p| at.m.transform_point3(p));
         if at.mirrored && attributes.is_none() {
             // the default uvs must follow the corners being swapped below
-            attributes = Some(([Vec3::ZERO; 3], [Vec2::ZERO, Vec2::X, Vec2::Y]));
+            attributes = Some(Corners::uvs([Vec2::ZERO, Vec2::X, Vec2::Y]));
         }
-        if let Some((n, _)) = attributes.as_mut() {
+        if let Some(Corners { n, .. }) = attributes.as_mut() {
             for k in n.iter_mut() {
                 let m = at.normal_m * *k;
                 *k = if m.length_squared() > 0.0 {
@@ -188,9 +198,15 @@ impl Builder {
         }
         if at.mirrored {
             v.swap(1, 2);
-            if let Some((n, uv)) = attributes.as_mut() {
-                n.swap(1, 2);
-                uv.swap(1, 2);
+            if let Some(c) = attributes.as_mut() {
+                c.n.swap(1, 2);
+                c.uv.swap(1, 2);
+                if let Some(u) = c.uv1.as_mut() {
+                    u.swap(1, 2);
+                }
+                if let Some(k) = c.color.as_mut() {
+                    k.swap(1, 2);
+                }
             }
             if let Some(t) = tangents.as_mut() {
                 t.swap(1, 2);
@@ -233,7 +249,7 @@ impl Builder {
             }
             ObjectDesc::Triangle { vertices, uvs, .. } => {
                 let v = vertices.map(Vec3::from);
-                let attributes = uvs.map(|uv| ([Vec3::ZERO; 3], uv.map(Vec2::from)));
+                let attributes = uvs.map(|uv| Corners::uvs(uv.map(Vec2::from)));
                 self.push_placed_triangle(&at, v, attributes, None, false, material);
             }
             ObjectDesc::Polygon { vertices, .. } => self.push_polygon(&at, vertices, material),
@@ -327,7 +343,7 @@ impl Builder {
         let uv = |p: Vec3| Vec2::new((p - pts[0]).dot(t), (p - pts[0]).dot(b));
         for i in 1..pts.len() - 1 {
             let v = [pts[0], pts[i], pts[i + 1]];
-            let attributes = Some(([Vec3::ZERO; 3], v.map(uv)));
+            let attributes = Some(Corners::uvs(v.map(uv)));
             self.push_placed_triangle(at, v, attributes, None, false, material);
         }
     }
@@ -348,25 +364,52 @@ impl Builder {
     /// A mesh's triangles, with its vertex normals (smooth shading) and uvs when it has them.
     fn push_mesh(&mut self, at: &ObjectTransform, mesh: &MeshData, material: u32) {
         let smooth = !mesh.normals.is_empty();
-        let has_attributes = smooth || !mesh.uvs.is_empty();
+        let has_attributes =
+            smooth || !mesh.uvs.is_empty() || !mesh.uvs1.is_empty() || !mesh.colors.is_empty();
         self.bounded.reserve(mesh.triangles.len());
         for (i, t) in mesh.triangles.iter().enumerate() {
             let v = t.map(|i| mesh.positions[i as usize]);
             let attributes = has_attributes.then(|| {
-                let n = if smooth {
-                    t.map(|i| mesh.normals[i as usize])
-                } else {
-                    [Vec3::ZERO; 3]
-                };
-                let uv = if mesh.uvs.is_empty() {
-                    [Vec2::ZERO, Vec2::X, Vec2::Y]
-                } else {
-                    t.map(|i| mesh.uvs[i as usize])
-                };
-                (n, uv)
+                let corner = |list: &[Vec2]| t.map(|i| list[i as usize]);
+                Corners {
+                    n: if smooth {
+                        t.map(|i| mesh.normals[i as usize])
+                    } else {
+                        [Vec3::ZERO; 3]
+                    },
+                    uv: if mesh.uvs.is_empty() {
+                        [Vec2::ZERO, Vec2::X, Vec2::Y]
+                    } else {
+                        corner(&mesh.uvs)
+                    },
+                    uv1: (!mesh.uvs1.is_empty()).then(|| corner(&mesh.uvs1)),
+                    color: (!mesh.colors.is_empty()).then(|| t.map(|i| mesh.colors[i as usize])),
+                }
             });
             let tangents = mesh.tangents.get(i).copied().filter(|_| has_attributes);
             self.push_placed_triangle(at, v, attributes, tangents, smooth, material);
+        }
+    }
+}
+
+/// A triangle's per-corner attributes: normals (zero without shading normals), uvs, and
+/// a second uv set and vertex colours when its mesh has them.
+#[derive(Clone, Copy, Debug)]
+struct Corners {
+    n: [Vec3; 3],
+    uv: [Vec2; 3],
+    uv1: Option<[Vec2; 3]>,
+    color: Option<[Vec4; 3]>,
+}
+
+impl Corners {
+    /// Uvs alone.
+    fn uvs(uv: [Vec2; 3]) -> Self {
+        Corners {
+            n: [Vec3::ZERO; 3],
+            uv,
+            uv1: None,
+            color: None,
         }
     }
 }

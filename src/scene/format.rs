@@ -218,12 +218,17 @@ pub enum TextureDesc {
     },
     /// An image file (PNG, JPEG, HDR, EXR, PPM), `path` relative to the scene file; 8- and
     /// 16-bit images are sRGB-decoded to linear unless `color_space = "linear"` (data such
-    /// as roughness); bilinear filtering. `factor` multiplies the texels; `transform` maps
-    /// the surface's uv before the look-up.
+    /// as roughness); bilinear filtering, or the nearest texel. `factor` multiplies the
+    /// texels; `transform` maps the surface's uv (of set `uv_set`) before the look-up;
+    /// `wrap` says what lies outside [0, 1], for both axes or each.
     Image {
         path: String,
         #[serde(default)]
-        wrap: WrapMode,
+        wrap: Wrap,
+        #[serde(default)]
+        filter: Filter,
+        #[serde(default)]
+        uv_set: u32,
         #[serde(default = "white")]
         factor: [f32; 3],
         #[serde(default)]
@@ -312,6 +317,59 @@ pub enum WrapMode {
     Repeat,
     Clamp,
     Mirror,
+}
+
+/// An image's wrap modes: one for both axes (`wrap = "clamp"`), or one per axis, u then v
+/// (`wrap = ["clamp", "repeat"]`, glTF's wrapS and wrapT).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Wrap(pub [WrapMode; 2]);
+
+impl Default for Wrap {
+    fn default() -> Self {
+        Wrap([WrapMode::Repeat; 2])
+    }
+}
+
+impl<'de> Deserialize<'de> for Wrap {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Modes;
+        impl<'de> serde::de::Visitor<'de> for Modes {
+            type Value = Wrap;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a wrap mode, or an array of two (u, then v)")
+            }
+            fn visit_str<E: serde::de::Error>(self, s: &str) -> Result<Wrap, E> {
+                use serde::de::IntoDeserializer;
+                let mode = WrapMode::deserialize(s.into_deserializer())?;
+                Ok(Wrap([mode; 2]))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<Wrap, A::Error> {
+                use serde::de::Error;
+                let u = a
+                    .next_element()?
+                    .ok_or_else(|| A::Error::invalid_length(0, &self))?;
+                let v = a
+                    .next_element()?
+                    .ok_or_else(|| A::Error::invalid_length(1, &self))?;
+                if a.next_element::<WrapMode>()?.is_some() {
+                    return Err(A::Error::invalid_length(3, &self));
+                }
+                Ok(Wrap([u, v]))
+            }
+        }
+        d.deserialize_any(Modes)
+    }
+}
+
+/// How an image is read between texel centres.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Filter {
+    /// The bilinear mix of the four nearest texels.
+    #[default]
+    Bilinear,
+    /// The texel the point falls in (glTF's NEAREST magnification filter).
+    Nearest,
 }
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize)]

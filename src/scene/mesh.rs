@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use super::texels::srgb_to_linear;
 use glam::{DVec2, DVec3, Vec2, Vec3, Vec4};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
@@ -18,6 +19,11 @@ pub struct MeshData {
     /// Each triangle's corner tangents (xyz) and bitangent signs (w), for normal maps:
     /// empty, or one per triangle.
     pub tangents: Vec<[Vec4; 3]>,
+    /// A second uv set per vertex (glTF's), for textures that read it: empty, or one per
+    /// position.
+    pub uvs1: Vec<Vec2>,
+    /// Vertex colours (linear rgb, alpha) per vertex: empty, or one per position.
+    pub colors: Vec<Vec4>,
 }
 
 /// Largest OBJ file read (2 GiB): the whole file is parsed in memory.
@@ -89,6 +95,23 @@ pub fn is_ply(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("ply"))
 }
 
+/// A vertex colour of an OBJ or PLY file as the renderer's: such colours are display
+/// colours (as MeshLab and Blender write them), so rgb is decoded from sRGB; alpha is
+/// linear.
+pub fn display_color(c: [f64; 4]) -> Vec4 {
+    let lin = |x: f64| srgb_to_linear(x as f32);
+    Vec4::new(lin(c[0]), lin(c[1]), lin(c[2]), c[3] as f32)
+}
+
+/// The vertex colours of an OBJ model (tobj's, rgb per vertex), decoded
+/// ([`display_color`]); none when the model has none.
+pub fn obj_colors(m: &tobj::Mesh) -> Vec<Vec4> {
+    m.vertex_color
+        .chunks_exact(3)
+        .map(|c| display_color([c[0].into(), c[1].into(), c[2].into(), 1.0]))
+        .collect()
+}
+
 /// Every object of an OBJ file as one mesh (polygons are triangulated).
 fn load_obj(path: &Path) -> Result<MeshData, String> {
     let options = tobj::LoadOptions {
@@ -100,6 +123,7 @@ fn load_obj(path: &Path) -> Result<MeshData, String> {
     let (models, _materials) = read_obj(path, &options)?;
     let with_normals = models.iter().all(|m| !m.mesh.normals.is_empty());
     let with_uvs = models.iter().all(|m| !m.mesh.texcoords.is_empty());
+    let with_colors = models.iter().all(|m| !m.mesh.vertex_color.is_empty());
     let mut mesh = MeshData::default();
     for model in &models {
         let m = &model.mesh;
@@ -114,6 +138,9 @@ fn load_obj(path: &Path) -> Result<MeshData, String> {
             mesh.uvs
                 .extend(m.texcoords.chunks_exact(2).map(Vec2::from_slice));
         }
+        if with_colors {
+            mesh.colors.extend(obj_colors(m));
+        }
         mesh.triangles.extend(
             m.indices
                 .chunks_exact(3)
@@ -124,12 +151,24 @@ fn load_obj(path: &Path) -> Result<MeshData, String> {
 }
 
 /// A PLY `vertex` element: position, and the normal and texture coordinates when the file
-/// declares them (any scalar type).
-#[derive(Default)]
+/// declares them (any scalar type), and the colour (`red`, `green`, `blue`, `alpha`:
+/// integers scaled to [0, 1] by their type's largest value, floats as they are).
 struct PlyVertex {
     p: [f64; 3],
     n: [f64; 3],
     uv: [f64; 2],
+    c: [f64; 4],
+}
+
+impl Default for PlyVertex {
+    fn default() -> Self {
+        PlyVertex {
+            p: [0.0; 3],
+            n: [0.0; 3],
+            uv: [0.0; 2],
+            c: [1.0; 4],
+        }
+    }
 }
 
 impl PropertyAccess for PlyVertex {
@@ -138,6 +177,18 @@ impl PropertyAccess for PlyVertex {
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        if let Some(k) = ["red", "green", "blue", "alpha"]
+            .iter()
+            .position(|&c| c == name)
+        {
+            return match ply_unit(&property) {
+                Some(v) => {
+                    self.c[k] = v;
+                    PropertyAccessResult::Set
+                }
+                None => PropertyAccessResult::Ignored,
+            };
+        }
         let Some(value) = ply_scalar(&property) else {
             return PropertyAccessResult::Ignored;
         };
@@ -201,6 +252,19 @@ impl PropertyAccess for PlySkip {
     fn new() -> Self {
         PlySkip
     }
+}
+
+/// A colour channel in [0, 1]: an unsigned integer over its type's largest value, a float
+/// as it is.
+fn ply_unit(p: &Property) -> Option<f64> {
+    Some(match *p {
+        Property::UChar(v) => f64::from(v) / 255.0,
+        Property::UShort(v) => f64::from(v) / 65535.0,
+        Property::UInt(v) => f64::from(v) / f64::from(u32::MAX),
+        Property::Float(v) => v.into(),
+        Property::Double(v) => v,
+        _ => return None,
+    })
 }
 
 fn ply_scalar(p: &Property) -> Option<f64> {
@@ -276,6 +340,7 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
     let normals = declares("vertex", &["nx", "ny", "nz"]);
     let uv_names = PLY_UV.map(|names| names.iter().any(|n| declares("vertex", &[n])));
     let uvs = uv_names[0] && uv_names[1];
+    let colors = declares("vertex", &["red", "green", "blue"]);
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
     for (name, def) in &header.elements {
@@ -316,6 +381,9 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
             .map(|v| DVec2::from(v.uv).as_vec2())
             .collect();
     }
+    if colors {
+        mesh.colors = vertices.iter().map(|v| display_color(v.c)).collect();
+    }
     let n = mesh.positions.len() as i64;
     for (k, face) in faces.iter().enumerate() {
         if let Some(&i) = face.indices.iter().find(|&&i| i < 0 || i >= n) {
@@ -351,8 +419,11 @@ pub fn check(mesh: MeshData) -> Result<MeshData, String> {
     }
     let n = mesh.positions.len();
     let matches = |len: usize| len == 0 || len == n;
-    if !matches(mesh.normals.len()) || !matches(mesh.uvs.len()) {
+    if !matches(mesh.normals.len()) || !matches(mesh.uvs.len()) || !matches(mesh.uvs1.len()) {
         return Err("has normals or texture coordinates that do not match its positions".into());
+    }
+    if !matches(mesh.colors.len()) {
+        return Err("has vertex colours that do not match its positions".into());
     }
     if mesh.triangles.iter().flatten().any(|&i| i as usize >= n) {
         return Err("has a face index beyond its vertex list".into());
@@ -360,8 +431,16 @@ pub fn check(mesh: MeshData) -> Result<MeshData, String> {
     if !mesh.positions.iter().all(|p| p.is_finite())
         || !mesh.normals.iter().all(|p| p.is_finite())
         || !mesh.uvs.iter().all(|p| p.is_finite())
+        || !mesh.uvs1.iter().all(|p| p.is_finite())
     {
         return Err("has a non-finite coordinate".into());
+    }
+    if !mesh
+        .colors
+        .iter()
+        .all(|c| c.is_finite() && c.cmpge(Vec4::ZERO).all())
+    {
+        return Err("has a negative or non-finite vertex colour".into());
     }
     Ok(mesh)
 }

@@ -7,11 +7,11 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec2, Vec3};
 
-use super::format::{ColorSpace, TextureDesc, WrapMode};
+use super::format::{ColorSpace, Filter, TextureDesc, Wrap};
 use super::imported::{ImportedScene, ImportedTexture, Instance};
 use super::materials::common::ColorDesc;
 use super::materials::{dielectric, imported_key, lambertian, pbr, MaterialDesc};
-use super::mesh::{check, generate_tangents, read_obj, MeshData, MAX_MESH_FILE_BYTES};
+use super::mesh::{check, generate_tangents, obj_colors, read_obj, MeshData, MAX_MESH_FILE_BYTES};
 use super::textures::{ImageData, MAX_TEXELS};
 
 /// An OBJ file with the materials of its .mtl, as an imported scene: one mesh per object
@@ -65,12 +65,13 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
             positions: m.positions.chunks_exact(3).map(Vec3::from_slice).collect(),
             normals: m.normals.chunks_exact(3).map(Vec3::from_slice).collect(),
             uvs: m.texcoords.chunks_exact(2).map(Vec2::from_slice).collect(),
+            colors: obj_colors(m),
             triangles: m
                 .indices
                 .chunks_exact(3)
                 .map(|t| [t[0], t[1], t[2]])
                 .collect(),
-            tangents: Vec::new(),
+            ..Default::default()
         };
         let material = match m.material_id.filter(|&id| id < materials.len()) {
             Some(id) => id,
@@ -149,7 +150,9 @@ impl MtlTextures<'_> {
             name: name.clone(),
             desc: TextureDesc::Image {
                 path: file,
-                wrap: WrapMode::Repeat,
+                wrap: Wrap::default(),
+                filter: Filter::Bilinear,
+                uv_set: 0,
                 factor,
                 color_space: if srgb {
                     ColorSpace::Srgb

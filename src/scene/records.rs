@@ -58,6 +58,13 @@ shared_constants! {
     /// the attributes hold each corner's tangent (xyz) and bitangent sign (w), for normal
     /// maps.
     PRIM_FLAG_TANGENTS: u32 = 16;
+    /// Primitive flag (triangles with attributes): `UV1_ENTRIES` more entries (after the
+    /// tangents, if any) hold each corner's second uv set.
+    PRIM_FLAG_UV1: u32 = 32;
+    /// Primitive flag (triangles with attributes): `COLOR_ENTRIES` more entries (after the
+    /// second uv set, if any) hold each corner's vertex colour (linear rgb, alpha), which
+    /// multiplies the material's colour and opacity.
+    PRIM_FLAG_COLORS: u32 = 64;
     /// Most surfaces a ray passes through where they are transparent (alpha) before it
     /// stops at the next one, whatever it is: a bound on the loop, never met in practice.
     MAX_ALPHA_SKIPS: u32 = 16;
@@ -192,16 +199,22 @@ shared_constants! {
     /// A BVH node's exit distance is widened by 1 + 2 gamma(3), gamma(n) = n eps /
     /// (1 - n eps) with eps = 2^-24, so rounding never culls a box a ray touches.
     BOX_WIDEN: f32 = 1.0 + 3.0 * f32::EPSILON;
+    /// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
+    /// (v0, v1, v2, 0).
+    ATTRIBUTE_ENTRIES: u32 = 4;
+    /// `shape_data` entries of one triangle's tangents (after its attributes): (t0, w0),
+    /// (t1, w1), (t2, w2).
+    TANGENT_ENTRIES: u32 = 3;
+    /// `shape_data` entries of one triangle's second uv set: (u0, v0, u1, v1),
+    /// (u2, v2, 0, 0).
+    UV1_ENTRIES: u32 = 2;
+    /// `shape_data` entries of one triangle's vertex colours: one (r, g, b, alpha) per
+    /// corner.
+    COLOR_ENTRIES: u32 = 3;
 }
 
 /// `shape_data` entries of one transform: world-to-object rows, then object-to-world rows.
 pub const TRANSFORM_ENTRIES: u32 = 6;
-/// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
-/// (v0, v1, v2, 0).
-pub const ATTRIBUTE_ENTRIES: u32 = 4;
-/// `shape_data` entries of one triangle's tangents (after its attributes): (t0, w0),
-/// (t1, w1), (t2, w2).
-pub const TANGENT_ENTRIES: u32 = 3;
 /// `Primitive::data` of a primitive with no extra data.
 pub const NO_DATA: u32 = u32::MAX;
 /// Texels of the Perlin tables (one row of float texels): 256 random unit vectors, then
@@ -457,10 +470,14 @@ pub struct KernelHit {
     pub ns: [f32; 4],
     /// uv in `.xy`, the candidate's own (u, v) in `.zw`.
     pub uv: [f32; 4],
+    /// The second uv set in `.xy`.
+    pub uv1: [f32; 4],
+    /// The vertex colour.
+    pub color: [f32; 4],
 }
 
-/// One texture look-up of the kernel's `textures_main`: uv in `.xy`, the texture index in
-/// `.z` (as a float); the point in `p.xyz`.
+/// One texture look-up of the kernel's `textures_main`: uv sets 0 and 1 in `uv`, the
+/// point in `p.xyz`, the texture index in `p.w` (as a float).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TextureLookup {
@@ -487,6 +504,10 @@ pub struct MaterialQuery {
     /// The hit's uv in `.xy`, the sample in `.zw`.
     pub uv: [f32; 4],
     pub wi: [f32; 4],
+    /// The hit's second uv set in `.xy`.
+    pub uv1: [f32; 4],
+    /// The hit's vertex colour.
+    pub color: [f32; 4],
 }
 
 /// What `materials_main` reports for one query: the material at the hit (`material_at`)
@@ -716,7 +737,9 @@ shared_record!(KernelHit {
     p,
     ng,
     ns,
-    uv
+    uv,
+    uv1,
+    color
 });
 shared_record!(MaterialQuery {
     material,
@@ -729,7 +752,9 @@ shared_record!(MaterialQuery {
     ng,
     ns,
     uv,
-    wi
+    wi,
+    uv1,
+    color
 });
 shared_record!(MaterialReply {
     flags,

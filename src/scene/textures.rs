@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::format::{CheckerMapping, NoiseKind, TextureDesc, WrapMode};
+use super::format::{CheckerMapping, Filter, NoiseKind, TextureDesc, WrapMode};
 use super::materials::common::ColorDesc;
 use super::records::{self, Texture, NOISE_TABLE_ENTRIES, NO_TEXTURE, TEX_FLAG_SOLID};
 pub use super::texels::srgb_to_linear;
@@ -283,6 +283,8 @@ pub fn texture_records(
             }
             TextureDesc::Image {
                 wrap,
+                filter,
+                uv_set,
                 factor,
                 transform,
                 ..
@@ -291,18 +293,23 @@ pub fn texture_records(
                 let (img, region) = (images[k], regions[k]);
                 let [row0, row1] =
                     transform.map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |t| t.rows());
-                let mode = match wrap {
+                let [s, t] = wrap.0.map(|w| match w {
                     WrapMode::Repeat => records::WRAP_REPEAT,
                     WrapMode::Clamp => records::WRAP_CLAMP,
                     WrapMode::Mirror => records::WRAP_MIRROR,
-                };
+                });
                 let srgb = if img.srgb { records::TEX_FLAG_SRGB } else { 0 };
+                let nearest = match filter {
+                    Filter::Bilinear => 0,
+                    Filter::Nearest => records::TEX_FLAG_NEAREST,
+                };
                 Texture {
                     color0: rgb(*factor),
                     color1: [row0[0], row0[1], row0[2], 0.0],
                     params: [row1[0], row1[1], row1[2], 0.0],
                     tag: records::TEX_IMAGE,
-                    flags: mode | mode << records::TEX_WRAP_T_SHIFT | srgb,
+                    flags: s | t << records::TEX_WRAP_T_SHIFT | srgb | nearest,
+                    uv_set: *uv_set,
                     width: img.width,
                     height: img.height,
                     bank: region.bank,

@@ -247,10 +247,18 @@ impl Validator<'_> {
                 path,
                 factor,
                 transform,
+                uv_set,
                 ..
             } => {
                 if path.is_empty() {
                     self.push(at, &format!("{key}.path"), "must name an image file".into());
+                }
+                if *uv_set > 1 {
+                    self.push(
+                        at,
+                        &format!("{key}.uv_set"),
+                        format!("must be 0 or 1, got {uv_set}"),
+                    );
                 }
                 self.nonnegative3(&format!("{key}.factor"), *factor, at);
                 if let Some(t) = transform {

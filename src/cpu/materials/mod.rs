@@ -88,7 +88,7 @@ pub fn emitted(mat: &Material, hit: &Hit) -> Vec3 {
 
 /// The material at a hit with its textured colours looked up (the record's rules:
 /// `color` clamped to 1, `color2` where `MAT_FLAG_COLOR2_CLAMPED` says, `emission` as it
-/// is), then its own textures.
+/// is), then its own textures; the vertex colour multiplies `color` (at most 1).
 pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     let mut mat = *m;
     // the .w of each colour is a scalar of its own
@@ -112,7 +112,10 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
             .extend(mat.emission[3])
             .to_array();
     }
-    material_textures(b, &mat, hit)
+    let mut mat = material_textures(b, &mat, hit);
+    let c = (Vec3::from_slice(&mat.color[..3]) * hit.color.truncate()).min(Vec3::ONE);
+    mat.color = c.extend(mat.color[3]).to_array();
+    mat
 }
 
 /// The hit with its shading normal from the surface's tangent-space normal map
@@ -146,7 +149,7 @@ pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
         return false;
     }
     let s = Surface::read(m);
-    let mut alpha = s.opacity;
+    let mut alpha = s.opacity * hit.color.w;
     if m.tex_color != NO_TEXTURE {
         alpha *= texture_alpha(b, m.tex_color, hit.uv);
     }

@@ -15,7 +15,7 @@ impl Loader<'_> {
         a: &gltf::Accessor,
         n: usize,
         key: &str,
-        dims: Dimensions,
+        dims: &[Dimensions],
         types: &[DataType],
     ) -> Result<()> {
         let count = self.check_accessor(a, key, dims, types)?;
@@ -35,7 +35,7 @@ impl Loader<'_> {
         &self,
         a: &gltf::Accessor,
         key: &str,
-        dims: Dimensions,
+        dims: &[Dimensions],
         types: &[DataType],
     ) -> Result<usize> {
         let at = |what: &str| format!("{key} (accessors[{}]{what})", a.index());
@@ -47,13 +47,17 @@ impl Loader<'_> {
                 format!("is {count}; wgtrace reads 1 to {max}"),
             ));
         }
-        if a.dimensions() != dims || !types.contains(&a.data_type()) {
+        if !dims.contains(&a.dimensions()) || !types.contains(&a.data_type()) {
             return Err(GltfError::new(
                 at(""),
                 format!(
-                    "is {:?} of {:?}; expected {dims:?} of {types:?}",
+                    "is {:?} of {:?}; expected {} of {types:?}",
                     a.dimensions(),
-                    a.data_type()
+                    a.data_type(),
+                    dims.iter()
+                        .map(|d| format!("{d:?}"))
+                        .collect::<Vec<_>>()
+                        .join(" or ")
                 ),
             ));
         }

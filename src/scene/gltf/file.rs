@@ -49,6 +49,7 @@ pub fn load_gltf(path: &Path, prefix: &str) -> Result<ImportedScene> {
         mesh_ids: HashMap::new(),
         material_ids: HashMap::new(),
         texture_keys: Vec::new(),
+        uv_sets: Vec::new(),
         images: HashMap::new(),
         texels: 0,
     }

@@ -16,13 +16,14 @@ use crate::scene::mesh::MAX_TRIANGLES;
 use crate::scene::textures::ImageData;
 
 /// A texture of the scene format made from one glTF texture look-up: the texture, its
-/// colour space, its factor, its uv set and its transform.
+/// colour space, its factor, its uv slot (0 or 1: which of its primitive's two uv sets)
+/// and its transform.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct TextureKey {
     pub(super) texture: usize,
     pub(super) srgb: bool,
     pub(super) factor: [f32; 3],
-    pub(super) uv_set: u32,
+    pub(super) uv_slot: u32,
     pub(super) transform: Option<UvTransformDesc>,
 }
 
@@ -37,6 +38,9 @@ pub(super) struct Loader<'a> {
     /// glTF material index (None: the default material) -> index in `out.materials`.
     pub(super) material_ids: HashMap<Option<usize>, usize>,
     pub(super) texture_keys: Vec<TextureKey>,
+    /// The glTF uv sets (TEXCOORD_n) of the material being read, in slot order: a texture
+    /// reading set n reads its primitive's uv slot `uv_sets.position(n)`.
+    pub(super) uv_sets: Vec<u32>,
     /// (image, sRGB) -> decoded image.
     pub(super) images: HashMap<(usize, bool), Arc<ImageData>>,
     /// Total texels decoded.

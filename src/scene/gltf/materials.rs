@@ -36,6 +36,16 @@ impl Loader<'_> {
 
     fn material_desc(&mut self, m: &gltf::Material) -> Result<MaterialDesc> {
         let key = format!("materials[{}]", m.index().expect("not the default"));
+        let (sets, dropped) = uv_sets(m);
+        if let Some(d) = dropped {
+            self.out.warnings.push(format!(
+                "{key}: its textures read TEXCOORD_{d} besides TEXCOORD_{} and TEXCOORD_{}; \
+                 wgtrace gives a primitive two uv sets, and reads those textures from \
+                 TEXCOORD_{}",
+                sets[0], sets[1], sets[0]
+            ));
+        }
+        self.uv_sets = sets;
         let transmission = match m.transmission() {
             Some(t) => {
                 let factor = t.transmission_factor();
@@ -65,4 +75,44 @@ impl Loader<'_> {
             None => Ok(desc),
         }
     }
+}
+
+/// The glTF uv sets a material's textures read (occlusion's apart: it is not used), in
+/// slot order: the lowest first, then the next; and a third one, which is left out (its
+/// textures read slot 0).
+pub(super) fn uv_sets(m: &gltf::Material) -> (Vec<u32>, Option<u32>) {
+    let set = |info: gltf::texture::Info| {
+        info.texture_transform()
+            .and_then(|t| t.tex_coord())
+            .unwrap_or(info.tex_coord())
+    };
+    let pbr = m.pbr_metallic_roughness();
+    let mut sets: Vec<u32> = [
+        pbr.base_color_texture(),
+        pbr.metallic_roughness_texture(),
+        m.emissive_texture(),
+        m.specular().and_then(|s| s.specular_color_texture()),
+        m.specular().and_then(|s| s.specular_texture()),
+    ]
+    .into_iter()
+    .flatten()
+    .map(set)
+    .collect();
+    if let Some(n) = m.normal_texture() {
+        sets.push(normal_tex_coord(&n));
+    }
+    sets.sort_unstable();
+    sets.dedup();
+    let dropped = sets.get(2).copied();
+    sets.truncate(2);
+    (sets, dropped)
+}
+
+/// The uv set a normal texture reads (the crate gives its KHR_texture_transform only as
+/// JSON).
+pub(super) fn normal_tex_coord(n: &gltf::material::NormalTexture) -> u32 {
+    n.extension_value("KHR_texture_transform")
+        .and_then(|e| e.get("texCoord"))
+        .and_then(|c| c.as_u64())
+        .map_or(n.tex_coord(), |c| c as u32)
 }

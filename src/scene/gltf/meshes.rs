@@ -7,6 +7,7 @@ use gltf::accessor::{DataType, Dimensions};
 
 use super::error::{GltfError, Result};
 use super::loader::Loader;
+use super::materials::{normal_tex_coord, uv_sets};
 use crate::scene::imported::Instance;
 use crate::scene::mesh::{self, MeshData};
 
@@ -24,17 +25,10 @@ impl Loader<'_> {
             let id = match self.mesh_ids.get(&(mesh.index(), prim.index())) {
                 Some(&id) => id,
                 None => {
-                    // each primitive has one uv set: the one its material's textures read
-                    // (a material that reads two gets the first, with a note)
-                    let sets = uv_sets(&prim.material());
-                    let uv_set = sets.first().copied().unwrap_or(0);
-                    if sets.iter().any(|&s| s != uv_set) {
-                        self.out.warnings.push(format!(
-                            "{key}: its material's textures read TEXCOORD_{uv_set} and \
-                             another set; wgtrace gives a primitive one: TEXCOORD_{uv_set}"
-                        ));
-                    }
-                    let data = self.primitive(&prim, &key, uv_set)?;
+                    // a primitive has the uv sets its material's textures read, in slot
+                    // order (TEXCOORD_0 when they read none)
+                    let (sets, _) = uv_sets(&prim.material());
+                    let data = self.primitive(&prim, &key, &sets)?;
                     self.out.meshes.push(data);
                     let id = self.out.meshes.len() - 1;
                     self.mesh_ids.insert((mesh.index(), prim.index()), id);
@@ -51,35 +45,66 @@ impl Loader<'_> {
         Ok(())
     }
 
-    /// A triangle primitive's vertices, normals and uv set `uv_set` (the one its
-    /// material's textures read), indexed or not.
-    fn primitive(&self, prim: &gltf::Primitive, key: &str, uv_set: u32) -> Result<MeshData> {
+    /// A triangle primitive's vertices, normals, vertex colours and the uv sets `sets`
+    /// (those its material's textures read: slot 0's, then slot 1's), indexed or not.
+    fn primitive(&self, prim: &gltf::Primitive, key: &str, sets: &[u32]) -> Result<MeshData> {
         use gltf::Semantic;
-        let uv_name = format!("TEXCOORD_{uv_set}");
         let attr = |name: &str| format!("{key}.attributes.{name}");
+        let slots: Vec<u32> = if sets.is_empty() {
+            vec![0]
+        } else {
+            sets.to_vec()
+        };
         let positions = prim.get(&Semantic::Positions).ok_or_else(|| {
             GltfError::new(attr("POSITION"), "is missing (a primitive needs positions)")
         })?;
         let n = self.check_accessor(
             &positions,
             &attr("POSITION"),
-            Dimensions::Vec3,
+            &[Dimensions::Vec3],
             &[DataType::F32],
         )?;
         if let Some(a) = prim.get(&Semantic::Normals) {
-            self.check_count(&a, n, &attr("NORMAL"), Dimensions::Vec3, &[DataType::F32])?;
+            self.check_count(
+                &a,
+                n,
+                &attr("NORMAL"),
+                &[Dimensions::Vec3],
+                &[DataType::F32],
+            )?;
         }
         let uv_types = [DataType::F32, DataType::U8, DataType::U16];
-        if let Some(a) = prim.get(&Semantic::TexCoords(uv_set)) {
-            self.check_count(&a, n, &attr(&uv_name), Dimensions::Vec2, &uv_types)?;
+        for &set in &slots {
+            if let Some(a) = prim.get(&Semantic::TexCoords(set)) {
+                let name = attr(&format!("TEXCOORD_{set}"));
+                self.check_count(&a, n, &name, &[Dimensions::Vec2], &uv_types)?;
+            }
+        }
+        let colors = prim.get(&Semantic::Colors(0));
+        if let Some(a) = &colors {
+            let dims = [Dimensions::Vec3, Dimensions::Vec4];
+            let types = [DataType::F32, DataType::U8, DataType::U16];
+            self.check_count(a, n, &attr("COLOR_0"), &dims, &types)?;
+            if a.data_type() != DataType::F32 && !a.normalized() {
+                return Err(GltfError::new(
+                    attr("COLOR_0"),
+                    "is an integer accessor that is not normalized (glTF requires it)",
+                ));
+            }
         }
         let tangents = prim.get(&Semantic::Tangents);
         if let Some(a) = &tangents {
-            self.check_count(a, n, &attr("TANGENT"), Dimensions::Vec4, &[DataType::F32])?;
+            self.check_count(
+                a,
+                n,
+                &attr("TANGENT"),
+                &[Dimensions::Vec4],
+                &[DataType::F32],
+            )?;
         }
         if let Some(a) = prim.indices() {
             let types = [DataType::U8, DataType::U16, DataType::U32];
-            self.check_accessor(&a, &format!("{key}.indices"), Dimensions::Scalar, &types)?;
+            self.check_accessor(&a, &format!("{key}.indices"), &[Dimensions::Scalar], &types)?;
         }
         let reader = prim.reader(|b| self.buffers.get(b.index()).map(Vec::as_slice));
         let unreadable = |what: String| {
@@ -103,13 +128,29 @@ impl Loader<'_> {
                 .map(Vec3::from)
                 .collect();
         }
-        if prim.get(&Semantic::TexCoords(uv_set)).is_some() {
-            mesh.uvs = reader
-                .read_tex_coords(uv_set)
-                .ok_or_else(|| unreadable(attr(&uv_name)))?
+        for (slot, &set) in slots.iter().enumerate() {
+            if prim.get(&Semantic::TexCoords(set)).is_none() {
+                continue;
+            }
+            let uvs = reader
+                .read_tex_coords(set)
+                .ok_or_else(|| unreadable(attr(&format!("TEXCOORD_{set}"))))?
                 .into_f32()
                 // glTF's v runs down the image, wgtrace's up
                 .map(|[u, v]| Vec2::new(u, 1.0 - v))
+                .collect();
+            if slot == 0 {
+                mesh.uvs = uvs;
+            } else {
+                mesh.uvs1 = uvs;
+            }
+        }
+        if colors.is_some() {
+            mesh.colors = reader
+                .read_colors(0)
+                .ok_or_else(|| unreadable(attr("COLOR_0")))?
+                .into_rgba_f32()
+                .map(Vec4::from)
                 .collect();
         }
         let indices: Vec<u32> = match reader.read_indices() {
@@ -146,40 +187,21 @@ impl Loader<'_> {
                     .map(|tri| tri.map(|i| t[i as usize]))
                     .collect();
             } else {
-                // glTF: a normal-mapped mesh without tangents gets MikkTSpace's
-                mesh::generate_tangents(&mut mesh);
+                // glTF: a normal-mapped mesh without tangents gets MikkTSpace's, over the
+                // uv set its normal texture reads
+                let normal_slot = prim
+                    .material()
+                    .normal_texture()
+                    .is_some_and(|n| sets.get(1) == Some(&normal_tex_coord(&n)));
+                if normal_slot && !mesh.uvs1.is_empty() {
+                    std::mem::swap(&mut mesh.uvs, &mut mesh.uvs1);
+                    mesh::generate_tangents(&mut mesh);
+                    std::mem::swap(&mut mesh.uvs, &mut mesh.uvs1);
+                } else {
+                    mesh::generate_tangents(&mut mesh);
+                }
             }
         }
         Ok(mesh)
     }
-}
-
-/// The uv sets a material's textures read (occlusion's apart: it is not used), in the
-/// order base colour, metallic-roughness, emissive, specular colour, specular, normal.
-fn uv_sets(m: &gltf::Material) -> Vec<u32> {
-    let set = |info: gltf::texture::Info| {
-        info.texture_transform()
-            .and_then(|t| t.tex_coord())
-            .unwrap_or(info.tex_coord())
-    };
-    let pbr = m.pbr_metallic_roughness();
-    let mut sets: Vec<u32> = [
-        pbr.base_color_texture(),
-        pbr.metallic_roughness_texture(),
-        m.emissive_texture(),
-        m.specular().and_then(|s| s.specular_color_texture()),
-        m.specular().and_then(|s| s.specular_texture()),
-    ]
-    .into_iter()
-    .flatten()
-    .map(set)
-    .collect();
-    if let Some(n) = m.normal_texture() {
-        let ext = n
-            .extension_value("KHR_texture_transform")
-            .and_then(|e| e.get("texCoord"))
-            .and_then(|c| c.as_u64());
-        sets.push(ext.map_or(n.tex_coord(), |c| c as u32));
-    }
-    sets
 }

@@ -8,8 +8,9 @@ use std::sync::Arc;
 use super::error::{GltfError, Result};
 use super::file::{check_uri, source_error};
 use super::loader::{Loader, TextureKey};
+use super::materials::normal_tex_coord;
 use super::reader::MaterialReader;
-use crate::scene::format::{ColorSpace, TextureDesc, UvTransformDesc, WrapMode};
+use crate::scene::format::{ColorSpace, Filter, TextureDesc, UvTransformDesc, Wrap, WrapMode};
 use crate::scene::imported::ImportedTexture;
 use crate::scene::materials::common::ColorDesc;
 use crate::scene::textures::{self, ImageData};
@@ -38,8 +39,14 @@ impl Loader<'_> {
             }
         }
         let uv_set = t.and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
-        self.texture_lookup(info.texture(), uv_set, transform, srgb, factor)
-            .map_err(|e| GltfError::new(e.key, format!("{} (the image of {key})", e.message)))
+        self.texture_lookup(
+            info.texture(),
+            self.uv_slot(uv_set),
+            transform,
+            srgb,
+            factor,
+        )
+        .map_err(|e| GltfError::new(e.key, format!("{} (the image of {key})", e.message)))
     }
 
     /// A normal texture's look-up: the crate gives its KHR_texture_transform only as JSON.
@@ -86,17 +93,26 @@ impl Loader<'_> {
             }
             None => None,
         };
-        let uv_set = ext
-            .and_then(|e| e.get("texCoord"))
-            .and_then(|c| c.as_u64())
-            .map_or(n.tex_coord(), |c| c as u32);
-        self.texture_lookup(n.texture(), uv_set, transform, false, [1.0; 3])
+        let uv_set = normal_tex_coord(n);
+        self.texture_lookup(
+            n.texture(),
+            self.uv_slot(uv_set),
+            transform,
+            false,
+            [1.0; 3],
+        )
+    }
+
+    /// The slot of its primitive's uv sets that glTF uv set `set` of the material being
+    /// read is in (slot 0 for a set left out: see `materials::uv_sets`).
+    fn uv_slot(&self, set: u32) -> u32 {
+        self.uv_sets.iter().position(|&s| s == set).unwrap_or(0) as u32
     }
 
     fn texture_lookup(
         &mut self,
         tex: gltf::Texture,
-        uv_set: u32,
+        uv_slot: u32,
         transform: Option<UvTransformDesc>,
         srgb: bool,
         factor: [f32; 3],
@@ -105,7 +121,7 @@ impl Loader<'_> {
             texture: tex.index(),
             srgb,
             factor,
-            uv_set,
+            uv_slot,
             transform,
         };
         if let Some(i) = self.texture_keys.iter().position(|t| *t == k) {
@@ -113,18 +129,17 @@ impl Loader<'_> {
         }
         let source = tex.source();
         let image = self.image(&source, srgb)?;
-        if tex.sampler().wrap_t() != tex.sampler().wrap_s() {
-            self.out.warnings.push(format!(
-                "samplers[{}]: wrapT {:?} differs from wrapS {:?}; wgtrace wraps both as wrapS",
-                tex.sampler().index().unwrap_or(0),
-                tex.sampler().wrap_t(),
-                tex.sampler().wrap_s()
-            ));
-        }
-        let wrap = match tex.sampler().wrap_s() {
+        let sampler = tex.sampler();
+        let mode = |w: gltf::texture::WrappingMode| match w {
             gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
             gltf::texture::WrappingMode::MirroredRepeat => WrapMode::Mirror,
             gltf::texture::WrappingMode::Repeat => WrapMode::Repeat,
+        };
+        let wrap = Wrap([mode(sampler.wrap_s()), mode(sampler.wrap_t())]);
+        // the magnification filter: wgtrace has no mipmaps, so minFilter does not apply
+        let filter = match sampler.mag_filter() {
+            Some(gltf::texture::MagFilter::Nearest) => Filter::Nearest,
+            _ => Filter::Bilinear,
         };
         let name = format!(
             "{}textures[{}]#{}",
@@ -137,6 +152,8 @@ impl Loader<'_> {
             desc: TextureDesc::Image {
                 path: String::new(),
                 wrap,
+                filter,
+                uv_set: uv_slot,
                 factor,
                 color_space: if srgb {
                     ColorSpace::Srgb
