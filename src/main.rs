@@ -165,8 +165,8 @@ struct RenderArgs {
     /// without one, a view that frames the scene).
     #[arg(long, value_name = "NAME")]
     camera: Option<String>,
-    /// A uniform background of this radiance (replaces the scene's [background], and a
-    /// glTF file's default of 1 when it has no light).
+    /// A uniform background of this radiance (replaces the scene's [background], and the
+    /// studio environment of a glTF file without punctual lights; 0,0,0 for none).
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     background: Option<[f32; 3]>,
     /// Rewrite the output file every N passes, to watch the render converge.

@@ -142,14 +142,19 @@ fn the_node_hierarchy_places_meshes_by_matrix_and_trs_and_instances_each_use() {
     assert!(corners
         .iter()
         .any(|c| (*c - Vec3::new(1.0, 1.0, -5.0)).length() < 1e-6));
-    // no camera: a view that frames the scene, said on stderr; no light: background 1
+    // no camera: a view that frames the scene, said on stderr; no punctual light: the
+    // studio environment, in the light list
     assert!(
         scene.warnings.iter().any(|w| w.contains("frames")),
         "{:?}",
         scene.warnings
     );
-    assert!(scene.warnings.iter().any(|w| w.contains("radiance 1")));
-    assert_eq!(scene.background, [1.0; 3]);
+    assert!(scene
+        .warnings
+        .iter()
+        .any(|w| w.contains("the studio environment lights it")));
+    let env = scene.env.expect("the studio environment");
+    assert_ne!(env.light, records::NO_LIGHT);
     let o = Overrides {
         background: Some([0.25, 0.5, 1.0]),
         ..Default::default()
@@ -157,6 +162,7 @@ fn the_node_hierarchy_places_meshes_by_matrix_and_trs_and_instances_each_use() {
     let path = d.join("nodes.gltf");
     let s = wgtrace::load_scene(&path, &o).unwrap();
     assert_eq!(s.background, [0.25, 0.5, 1.0]);
+    assert!(s.env.is_none(), "--background replaces it");
 }
 
 #[test]
@@ -361,8 +367,9 @@ fn textures_keep_their_colour_space_factor_and_transform() {
     let mat = s.materials[0];
     assert_eq!(
         s.textures.len(),
-        2,
-        "base colour (sRGB); metallic-roughness and normal (linear, one look-up)"
+        3,
+        "the studio environment; base colour (sRGB); metallic-roughness and normal \
+         (linear, one look-up)"
     );
     let (p, surface) = (pbr::Params::read(&mat), Surface::read(&mat));
     let base = s.textures[p.base_color_texture as usize];
@@ -845,10 +852,11 @@ fn alpha_mask_and_blend_let_the_background_through() {
         height: Some(16),
         spp: Some(spp),
         max_depth: Some(1),
+        background: Some([1.0; 3]),
         ..Default::default()
     };
     let s = wgtrace::load_scene(&path, &o).unwrap();
-    assert_eq!(s.background, [1.0; 3], "no light: the uniform background");
+    assert_eq!(s.background, [1.0; 3]);
     for (name, img) in [
         ("cpu", common::render_cpu(&s)),
         ("gpu", common::render_gpu(&s)),
@@ -1230,4 +1238,61 @@ fn vertex_colours_second_uv_sets_and_sampler_modes_are_read() {
         }
     }
     assert!(hits > 200, "{hits} hits");
+}
+
+/// A file without punctual lights is lit by the studio environment, in the light list,
+/// whether or not it has emissive parts (they add to it); one with a punctual light is not.
+/// The environment's own claims hold: a white diffuse surface facing up sees radiance 1.0,
+/// facing sideways 0.58, facing down 0.3 (its image integrated here).
+#[test]
+fn a_file_without_punctual_lights_gets_the_studio_environment() {
+    let lamp = w_emissive();
+    let s = load(&lamp.to_gltf_external(&dir("lamp"), "lamp").unwrap());
+    let env = s.env.expect("the studio environment");
+    assert_ne!(env.light, records::NO_LIGHT);
+    assert!(
+        s.emitters.len() >= 3,
+        "the lamp's two triangles and the environment"
+    );
+    let lit = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    let s = load(&lit.to_gltf_external(&dir("lit"), "lit").unwrap());
+    assert!(s.env.is_none() && s.num_punctual == 1);
+    assert!(!s.warnings.iter().any(|w| w.contains("studio")));
+    // the image's irradiance / pi toward up, sideways and down
+    let img = wgtrace::scene::textures::studio_environment();
+    let (w, h) = (img.width as usize, img.height as usize);
+    for (n, want) in [(Vec3::Y, 1.0), (Vec3::X, 0.5775), (Vec3::NEG_Y, 0.3)] {
+        let mut e = 0.0f64;
+        for y in 0..h {
+            let theta = std::f64::consts::PI * (y as f64 + 0.5) / h as f64;
+            for x in 0..w {
+                let phi = std::f64::consts::TAU * (x as f64 + 0.5) / w as f64;
+                let d = Vec3::new(
+                    (theta.sin() * phi.cos()) as f32,
+                    theta.cos() as f32,
+                    (theta.sin() * phi.sin()) as f32,
+                );
+                let cos = d.dot(n).max(0.0) as f64;
+                let dw = theta.sin()
+                    * (std::f64::consts::PI / h as f64)
+                    * (std::f64::consts::TAU / w as f64);
+                e += img.at(x as u32, y as u32)[0] as f64 * cos * dw;
+            }
+        }
+        let radiance = e / std::f64::consts::PI;
+        assert!(
+            (radiance - want).abs() < 5e-3,
+            "{n}: {radiance}, not {want}"
+        );
+    }
+}
+
+/// A quad of emissiveFactor 1 and nothing else: no punctual light.
+fn w_emissive() -> GltfWriter {
+    let mut w = GltfWriter::new();
+    let m = w.material(json!({ "emissiveFactor": [1.0, 1.0, 1.0] }));
+    let mesh = quad_mesh(&mut w, Some(m));
+    let n = w.node(json!({ "mesh": mesh }));
+    w.scene(&[n]);
+    w
 }

@@ -145,8 +145,9 @@ fn invalid_in(path: &Path) -> impl Fn(Vec<Problem>) -> SceneError + Copy + '_ {
 
 /// A glTF file rendered on its own: its first scene, under its first camera (or the one
 /// `overrides.camera` names; without any, one that frames the scene), the render
-/// settings' defaults and overrides, and a uniform background of radiance 1 when it has
-/// no light and no emissive material (or the background the overrides give).
+/// settings' defaults and overrides, and, when it has no punctual light, the studio
+/// environment (`textures::studio_environment`), sampled as the image background is;
+/// emissive surfaces add to it. The overrides' background replaces it.
 fn load_gltf_scene(
     path: &Path,
     overrides: &Overrides,
@@ -213,13 +214,32 @@ fn load_gltf_scene(
             }
         },
     };
-    if overrides.background.is_none() && g.lights.is_empty() && !g.emits() {
+    let mut images = Vec::new();
+    if overrides.background.is_none() && g.lights.is_empty() {
         warnings.push(
-            "no light and no emissive material: a uniform background of radiance 1 \
-             lights it (--background R,G,B sets another)"
+            "no punctual light: the studio environment lights it, a sky over a grey ground \
+             (emissive surfaces add to it; --background R,G,B replaces it: 1,1,1 for a \
+             white furnace, 0,0,0 for none)"
                 .into(),
         );
-        file.background.color = Some([1.0; 3]);
+        let name = "studio environment".to_string();
+        file.textures.insert(
+            name.clone(),
+            Spanned::new(
+                0..0,
+                TextureDesc::Image {
+                    path: "(built in)".into(),
+                    wrap: Default::default(),
+                    filter: Default::default(),
+                    uv_set: 0,
+                    factor: [1.0; 3],
+                    color_space: ColorSpace::Linear,
+                    transform: None,
+                },
+            ),
+        );
+        file.background.texture = Some(name);
+        images.push(Some(textures::studio_environment()));
     }
     let problems = validate::validate(&file, "", &overridden);
     if !problems.is_empty() {
@@ -228,7 +248,7 @@ fn load_gltf_scene(
     let files = SceneFiles {
         meshes: vec![None],
         imported: vec![Some(g)],
-        images: Vec::new(),
+        images,
     };
     let mut scene = flatten::flatten(&file, &files, build).map_err(|e| {
         let why = match e {

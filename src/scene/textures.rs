@@ -154,6 +154,46 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     })
 }
 
+/// The environment a glTF file without punctual lights is lit by when rendered on its own
+/// (a studio's neutral sky): an equirectangular float image, row 0 at +y, of radiance
+/// `STUDIO_ZENITH` straight up falling as the sine of the elevation to `STUDIO_HORIZON` at
+/// the horizon, over a ground of `STUDIO_GROUND`. A white diffuse surface facing up shows
+/// 1.0, one facing sideways 0.58, one facing down 0.3: shapes, reflections and normal maps
+/// read, and nothing is tinted.
+pub fn studio_environment() -> ImageData {
+    let (w, h) = (STUDIO_WIDTH, STUDIO_WIDTH / 2);
+    let mut data = Vec::with_capacity(w as usize * h as usize * 16);
+    for y in 0..h {
+        // the elevation of the row's centre: +90 degrees at row 0
+        let elevation =
+            std::f32::consts::FRAC_PI_2 - std::f32::consts::PI * (y as f32 + 0.5) / h as f32;
+        let l = if elevation > 0.0 {
+            STUDIO_HORIZON + (STUDIO_ZENITH - STUDIO_HORIZON) * elevation.sin()
+        } else {
+            STUDIO_GROUND
+        };
+        for _ in 0..w {
+            for c in [l, l, l, 1.0] {
+                data.extend(c.to_le_bytes());
+            }
+        }
+    }
+    ImageData {
+        width: w,
+        height: h,
+        kind: TexelKind::Float,
+        srgb: false,
+        data,
+    }
+}
+
+/// [`studio_environment`]'s radiance straight up, at the horizon (from above) and below it.
+pub const STUDIO_ZENITH: f32 = 1.2;
+pub const STUDIO_HORIZON: f32 = 0.6;
+pub const STUDIO_GROUND: f32 = 0.3;
+/// Its width in texels (its height is half): 0.7 degrees a texel.
+pub const STUDIO_WIDTH: u32 = 512;
+
 /// The Perlin tables of "Ray Tracing: The Next Week" from a fixed seed: 256 random unit
 /// vectors, then 256 rows holding the x, y and z permutations of 0..255.
 pub fn noise_tables() -> Vec<[f32; 4]> {
