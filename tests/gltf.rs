@@ -414,11 +414,21 @@ fn extensions_it_cannot_honour_are_errors_when_required_and_notes_when_used() {
         "{:?}",
         s.warnings
     );
-    w.use_extension("EXT_meshopt_compression", true);
+    w.use_extension("KHR_materials_clearcoat", true);
     let e = load_err(&w.to_gltf_external(&d, "required").unwrap());
     assert!(
         e.contains("required.gltf: extensionsRequired[0]: ")
-            && e.contains("EXT_meshopt_compression"),
+            && e.contains("KHR_materials_clearcoat"),
+        "{e}"
+    );
+    // Draco: refused with a way to decompress the file
+    let mut w = quad_file(pbr([0.5; 4], 0.0, 1.0));
+    w.use_extension("KHR_draco_mesh_compression", true);
+    let e = load_err(&w.to_gltf_external(&d, "draco").unwrap());
+    assert!(
+        e.contains("draco.gltf: extensionsRequired[0]: ")
+            && e.contains("Draco-compressed")
+            && e.contains("@gltf-transform/cli copy"),
         "{e}"
     );
 }
@@ -456,12 +466,13 @@ fn broken_files_are_refused_with_the_json_path() {
     w.json["bufferViews"][0]["byteLength"] = json!(1 << 20);
     assert_refused("view", &w, "bufferViews[0]", "past the end of buffers[0]");
     let mut w = base.clone();
-    w.json["accessors"][0]["componentType"] = json!(5121);
+    // unsigned int positions: neither float nor KHR_mesh_quantization's
+    w.json["accessors"][0]["componentType"] = json!(5125);
     assert_refused(
         "type",
         &w,
         "meshes[0].primitives[0].attributes.POSITION (accessors[0])",
-        "expected Vec3 of [F32]",
+        "expected Vec3 of [F32, I8, U8, I16, U16]",
     );
     let mut w = base.clone();
     w.json["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(99);
@@ -1295,4 +1306,217 @@ fn w_emissive() -> GltfWriter {
     let n = w.node(json!({ "mesh": mesh }));
     w.scene(&[n]);
     w
+}
+
+/// A mesh written with KHR_mesh_quantization (positions as non-normalized i16 on a grid,
+/// scaled back by its node; normals as normalized i8; uvs as normalized u16) loads to the
+/// same records, bit for bit, as its float twin holding the dequantized values.
+#[test]
+fn a_quantized_mesh_loads_as_its_float_twin() {
+    let sphere = gltf_writer::uv_sphere([0.0; 3], 0.5, 12, 24);
+    // the quantized values, and the floats they stand for
+    let qp: Vec<[i16; 3]> = sphere
+        .positions
+        .iter()
+        .map(|p| p.map(|x| (x * 1024.0).round() as i16))
+        .collect();
+    let qn: Vec<[i8; 3]> = sphere
+        .normals
+        .iter()
+        .map(|n| n.map(|x| (x * 127.0).round() as i8))
+        .collect();
+    let qt: Vec<[u16; 2]> = sphere
+        .uvs
+        .iter()
+        .map(|t| t.map(|x| (x * 65535.0).round() as u16))
+        .collect();
+    let fp: Vec<[f32; 3]> = qp.iter().map(|p| p.map(|x| x as f32 / 1024.0)).collect();
+    let fnrm: Vec<[f32; 3]> = qn
+        .iter()
+        .map(|n| n.map(|x| (x as f32 / 127.0).max(-1.0)))
+        .collect();
+    let ft: Vec<[f32; 2]> = qt.iter().map(|t| t.map(|x| x as f32 / 65535.0)).collect();
+    let material = |w: &mut GltfWriter| w.material(pbr([0.5; 4], 0.0, 0.5));
+    // the float twin
+    let mut plain = GltfWriter::new();
+    let m = material(&mut plain);
+    let attrs = [
+        ("POSITION", plain.positions(&fp)),
+        ("NORMAL", plain.vec3(&fnrm)),
+        ("TEXCOORD_0", plain.vec2(&ft)),
+    ];
+    let idx = plain.indices_u32(&sphere.indices);
+    let mesh = plain.mesh(vec![GltfWriter::primitive(&attrs, Some(idx), Some(m))]);
+    let n = plain.node(json!({ "mesh": mesh }));
+    plain.scene(&[n]);
+    // the quantized file: attributes 4-byte aligned (i16 VEC3 in 8 bytes, i8 VEC3 in 4)
+    let mut q = GltfWriter::new();
+    let m = material(&mut q);
+    let packed = |elems: Vec<Vec<u8>>, stride: usize| -> Vec<u8> {
+        elems
+            .into_iter()
+            .flat_map(|mut e| {
+                e.resize(stride, 0);
+                e
+            })
+            .collect()
+    };
+    let pos_bytes = packed(
+        qp.iter()
+            .map(|p| p.iter().flat_map(|x| x.to_le_bytes()).collect())
+            .collect(),
+        8,
+    );
+    let nrm_bytes = packed(
+        qn.iter()
+            .map(|n| n.iter().map(|&x| x as u8).collect())
+            .collect(),
+        4,
+    );
+    let uv_bytes = packed(
+        qt.iter()
+            .map(|t| t.iter().flat_map(|x| x.to_le_bytes()).collect())
+            .collect(),
+        4,
+    );
+    let (pv, nv, tv) = (
+        q.view(&pos_bytes, Some(8)),
+        q.view(&nrm_bytes, Some(4)),
+        q.view(&uv_bytes, Some(4)),
+    );
+    let count = qp.len();
+    let lo: Vec<f32> = (0..3)
+        .map(|k| qp.iter().map(|p| p[k]).min().unwrap() as f32)
+        .collect();
+    let hi: Vec<f32> = (0..3)
+        .map(|k| qp.iter().map(|p| p[k]).max().unwrap() as f32)
+        .collect();
+    let pa = q.accessor(pv, 0, 5122, count, "VEC3", Some((lo, hi)));
+    let na = q.accessor(nv, 0, 5120, count, "VEC3", None);
+    q.json["accessors"][na]["normalized"] = json!(true);
+    let ta = q.accessor(tv, 0, 5123, count, "VEC2", None);
+    q.json["accessors"][ta]["normalized"] = json!(true);
+    let idx = q.indices_u32(&sphere.indices);
+    let attrs = [("POSITION", pa), ("NORMAL", na), ("TEXCOORD_0", ta)];
+    let mesh = q.mesh(vec![GltfWriter::primitive(&attrs, Some(idx), Some(m))]);
+    let s = 1.0 / 1024.0;
+    let n = q.node(json!({ "mesh": mesh, "scale": [s, s, s] }));
+    q.scene(&[n]);
+    q.use_extension("KHR_mesh_quantization", true);
+    let a = load(&plain.to_gltf_external(&dir("float-twin"), "twin").unwrap());
+    let b = load(&q.to_gltf_external(&dir("quantized"), "quantized").unwrap());
+    assert_eq!(a.primitives, b.primitives);
+    assert_eq!(a.shape_data, b.shape_data);
+    assert_eq!(a.bvh, b.bvh);
+    // a normal that is not normalized is refused by its JSON path
+    q.json["accessors"][na]["normalized"] = json!(false);
+    let e = load_err(&q.to_gltf_external(&dir("quantized-bad"), "bad").unwrap());
+    assert!(
+        e.contains("attributes.NORMAL") && e.contains("not normalized"),
+        "{e}"
+    );
+}
+
+/// A mesh whose buffer views are EXT_meshopt_compression's encoding (vertex streams and a
+/// triangle index buffer, in a fallback buffer without data) loads to the same records as
+/// its plain twin; a view that does not decode is refused by its JSON path.
+#[test]
+fn a_meshopt_compressed_mesh_loads_as_its_plain_twin() {
+    let sphere = gltf_writer::uv_sphere([0.0; 3], 0.5, 12, 24);
+    let mut plain = GltfWriter::new();
+    let m = plain.material(pbr([0.5; 4], 0.0, 0.5));
+    let mesh = plain.add_mesh_arrays(&sphere, Some(m), true);
+    let n = plain.node(json!({ "mesh": mesh }));
+    plain.scene(&[n]);
+    let a = load(
+        &plain
+            .to_gltf_external(&dir("meshopt-twin"), "twin")
+            .unwrap(),
+    );
+    // the compressed file: buffer 0 holds the encoded streams, buffer 1 is the fallback
+    // the views decode into
+    let mut c = GltfWriter::new();
+    let m = c.material(pbr([0.5; 4], 0.0, 0.5));
+    let mut fallback_len = 0usize;
+    let mut compressed_view = |c: &mut GltfWriter,
+                               encoded: Vec<u8>,
+                               stride: usize,
+                               count: usize,
+                               mode: &str| {
+        // the encoded bytes in buffer 0 (through a view of their own, which nothing reads)
+        let raw = c.view(&encoded, None);
+        let at = c.json["bufferViews"][raw]["byteOffset"].clone();
+        let mut view = json!({ "buffer": 1, "byteOffset": fallback_len, "byteLength": stride * count,
+            "extensions": { "EXT_meshopt_compression": { "buffer": 0, "byteOffset": at,
+                "byteLength": encoded.len(), "byteStride": stride, "count": count, "mode": mode } } });
+        if mode == "ATTRIBUTES" {
+            view["byteStride"] = json!(stride);
+        }
+        fallback_len += (stride * count).next_multiple_of(4);
+        c.push("bufferViews", view)
+    };
+    let pos = meshopt::encoding::encode_vertex_buffer(&sphere.positions).unwrap();
+    let nrm = meshopt::encoding::encode_vertex_buffer(&sphere.normals).unwrap();
+    let uvs = meshopt::encoding::encode_vertex_buffer(&sphere.uvs).unwrap();
+    let idx =
+        meshopt::encoding::encode_index_buffer(&sphere.indices, sphere.positions.len()).unwrap();
+    let count = sphere.positions.len();
+    let pv = compressed_view(&mut c, pos, 12, count, "ATTRIBUTES");
+    let nv = compressed_view(&mut c, nrm, 12, count, "ATTRIBUTES");
+    let tv = compressed_view(&mut c, uvs, 8, count, "ATTRIBUTES");
+    let iv = compressed_view(&mut c, idx, 4, sphere.indices.len(), "TRIANGLES");
+    let lo: Vec<f32> = (0..3)
+        .map(|k| {
+            sphere
+                .positions
+                .iter()
+                .map(|p| p[k])
+                .fold(f32::MAX, f32::min)
+        })
+        .collect();
+    let hi: Vec<f32> = (0..3)
+        .map(|k| {
+            sphere
+                .positions
+                .iter()
+                .map(|p| p[k])
+                .fold(f32::MIN, f32::max)
+        })
+        .collect();
+    let pa = c.accessor(pv, 0, 5126, count, "VEC3", Some((lo, hi)));
+    let na = c.accessor(nv, 0, 5126, count, "VEC3", None);
+    let ta = c.accessor(tv, 0, 5126, count, "VEC2", None);
+    let ia = c.accessor(iv, 0, 5125, sphere.indices.len(), "SCALAR", None);
+    let attrs = [("POSITION", pa), ("NORMAL", na), ("TEXCOORD_0", ta)];
+    let mesh = c.mesh(vec![GltfWriter::primitive(&attrs, Some(ia), Some(m))]);
+    let n = c.node(json!({ "mesh": mesh }));
+    c.scene(&[n]);
+    c.use_extension("EXT_meshopt_compression", true);
+    let d = dir("meshopt");
+    let path = c.to_gltf_external(&d, "compressed").unwrap();
+    // the second buffer: the fallback, without data
+    let mut json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    json["buffers"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!({ "byteLength": fallback_len,
+        "extensions": { "EXT_meshopt_compression": { "fallback": true } } }));
+    std::fs::write(&path, serde_json::to_string(&json).unwrap()).unwrap();
+    let b = load(&path);
+    assert_eq!(a.primitives, b.primitives);
+    assert_eq!(a.shape_data, b.shape_data);
+    // bytes that do not decode: the view's JSON path
+    let at = json["bufferViews"][pv]["extensions"]["EXT_meshopt_compression"]["byteLength"]
+        .as_u64()
+        .unwrap();
+    json["bufferViews"][pv]["extensions"]["EXT_meshopt_compression"]["byteLength"] = json!(at / 2);
+    std::fs::write(&path, serde_json::to_string(&json).unwrap()).unwrap();
+    let e = load_err(&path);
+    assert!(
+        e.contains(&format!(
+            "bufferViews[{pv}].extensions.EXT_meshopt_compression"
+        )) && e.contains("does not decode"),
+        "{e}"
+    );
 }

@@ -141,3 +141,97 @@ impl Loader<'_> {
         Ok(())
     }
 }
+
+impl Loader<'_> {
+    /// The elements of accessor `a` (checked by [`Loader::check_accessor`]) as floats:
+    /// floats as they are; integers dequantized as glTF and KHR_mesh_quantization say, a
+    /// normalized one over its type's largest value (signed ones at least -1), any other
+    /// as its value. Sparse accessors included.
+    pub(super) fn read_floats<const N: usize>(
+        &self,
+        a: &gltf::Accessor,
+        key: &str,
+    ) -> Result<Vec<[f32; N]>>
+    where
+        [f32; N]: gltf::accessor::Item,
+        [i8; N]: gltf::accessor::Item,
+        [u8; N]: gltf::accessor::Item,
+        [i16; N]: gltf::accessor::Item,
+        [u16; N]: gltf::accessor::Item,
+        [u32; N]: gltf::accessor::Item,
+    {
+        use gltf::accessor::util::Iter;
+        use gltf::accessor::DataType;
+        let buffers = |b: gltf::Buffer| self.buffers.get(b.index()).map(Vec::as_slice);
+        let unreadable = || {
+            GltfError::new(
+                key,
+                "cannot be read (its sparse data points outside its buffer view?)",
+            )
+        };
+        let norm = a.normalized();
+        fn read<'s, T: gltf::accessor::Item + Copy, const N: usize>(
+            a: &gltf::Accessor<'s>,
+            buffers: impl Clone + Fn(gltf::Buffer<'s>) -> Option<&'s [u8]>,
+            f: impl Fn(T) -> f32,
+        ) -> Option<Vec<[f32; N]>>
+        where
+            [T; N]: gltf::accessor::Item,
+        {
+            Some(
+                Iter::<[T; N]>::new(a.clone(), buffers)?
+                    .map(|v| v.map(&f))
+                    .collect(),
+            )
+        }
+        let out = match a.data_type() {
+            DataType::F32 => read::<f32, N>(a, buffers, |x| x),
+            DataType::I8 => read::<i8, N>(a, buffers, |x| {
+                if norm {
+                    (x as f32 / 127.0).max(-1.0)
+                } else {
+                    x as f32
+                }
+            }),
+            DataType::U8 => {
+                read::<u8, N>(
+                    a,
+                    buffers,
+                    |x| {
+                        if norm {
+                            x as f32 / 255.0
+                        } else {
+                            x as f32
+                        }
+                    },
+                )
+            }
+            DataType::I16 => read::<i16, N>(a, buffers, |x| {
+                if norm {
+                    (x as f32 / 32767.0).max(-1.0)
+                } else {
+                    x as f32
+                }
+            }),
+            DataType::U16 => {
+                read::<u16, N>(
+                    a,
+                    buffers,
+                    |x| {
+                        if norm {
+                            x as f32 / 65535.0
+                        } else {
+                            x as f32
+                        }
+                    },
+                )
+            }
+            DataType::U32 => read::<u32, N>(a, buffers, |x| x as f32),
+        };
+        let out = out.ok_or_else(unreadable)?;
+        if !out.iter().flatten().all(|x| x.is_finite()) {
+            return Err(GltfError::new(key, "has a non-finite value"));
+        }
+        Ok(out)
+    }
+}

@@ -9,17 +9,20 @@ use gltf::json::validation::Validate;
 
 use super::error::{GltfError, Result};
 use super::loader::Loader;
+use super::meshopt;
 use crate::scene::imported::ImportedScene;
 use crate::scene::mesh::MAX_MESH_FILE_BYTES;
 
 /// The extensions wgtrace reads; a file that requires another one is refused.
 pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "EXT_meshopt_compression",
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_ior",
     "KHR_materials_specular",
     "KHR_materials_transmission",
     "KHR_materials_volume",
+    "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
 
@@ -113,6 +116,17 @@ pub(super) fn open(data: &[u8], dir: &Path) -> Result<(gltf::Document, Vec<Vec<u
     let mut warnings = Vec::new();
     let root = gltf.document.as_json();
     for (i, ext) in root.extensions_required.iter().enumerate() {
+        if ext == "KHR_draco_mesh_compression" {
+            return Err(GltfError::new(
+                format!("extensionsRequired[{i}]"),
+                "the file's meshes are Draco-compressed (KHR_draco_mesh_compression), \
+                 which wgtrace does not decode (no maintained Rust decoder exists); \
+                 decompress it first, e.g. with glTF-Transform, which decodes Draco on \
+                 reading: `npx @gltf-transform/cli copy model.glb plain.glb` (its `meshopt` \
+                 command instead writes EXT_meshopt_compression, which wgtrace reads), or \
+                 re-export it from Blender without compression",
+            ));
+        }
         if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
             return Err(GltfError::new(
                 format!("extensionsRequired[{i}]"),
@@ -183,6 +197,12 @@ pub(super) fn open(data: &[u8], dir: &Path) -> Result<(gltf::Document, Vec<Vec<u
         if let gltf::buffer::Source::Uri(uri) = buffer.source() {
             check_uri(uri, &format!("{key}.uri"))?;
         }
+        // a fallback buffer of EXT_meshopt_compression: its views are decoded into it
+        if meshopt::is_fallback(&buffer) && !matches!(buffer.source(), gltf::buffer::Source::Uri(_))
+        {
+            buffers.push(meshopt::fallback_bytes(&buffer)?);
+            continue;
+        }
         let data = gltf::buffer::Data::from_source_and_blob(buffer.source(), Some(dir), &mut blob)
             .map_err(|e| GltfError::new(key.clone(), source_error(e, &buffer.source())))?;
         if data.len() < buffer.length() {
@@ -197,6 +217,7 @@ pub(super) fn open(data: &[u8], dir: &Path) -> Result<(gltf::Document, Vec<Vec<u
         }
         buffers.push(data.0);
     }
+    meshopt::decode_views(&doc, &mut buffers)?;
     for view in doc.views() {
         let len = buffers[view.buffer().index()].len() as u128;
         // u128: a byteOffset near 2^64 must not wrap past the check

@@ -58,22 +58,39 @@ impl Loader<'_> {
         let positions = prim.get(&Semantic::Positions).ok_or_else(|| {
             GltfError::new(attr("POSITION"), "is missing (a primitive needs positions)")
         })?;
+        // floats, or the integer types KHR_mesh_quantization allows (dequantized when read)
+        let (f, i8, u8, i16, u16) = (
+            DataType::F32,
+            DataType::I8,
+            DataType::U8,
+            DataType::I16,
+            DataType::U16,
+        );
         let n = self.check_accessor(
             &positions,
             &attr("POSITION"),
             &[Dimensions::Vec3],
-            &[DataType::F32],
+            &[f, i8, u8, i16, u16],
         )?;
-        if let Some(a) = prim.get(&Semantic::Normals) {
-            self.check_count(
-                &a,
-                n,
-                &attr("NORMAL"),
-                &[Dimensions::Vec3],
-                &[DataType::F32],
-            )?;
+        // normals and tangents: floats or normalized signed integers
+        let unit = |a: &gltf::Accessor, name: &str| {
+            if a.data_type() != f && !a.normalized() {
+                return Err(GltfError::new(
+                    attr(name),
+                    format!(
+                        "is {:?} that is not normalized (KHR_mesh_quantization requires it)",
+                        a.data_type()
+                    ),
+                ));
+            }
+            Ok(())
+        };
+        let normals = prim.get(&Semantic::Normals);
+        if let Some(a) = &normals {
+            self.check_count(a, n, &attr("NORMAL"), &[Dimensions::Vec3], &[f, i8, i16])?;
+            unit(a, "NORMAL")?;
         }
-        let uv_types = [DataType::F32, DataType::U8, DataType::U16];
+        let uv_types = [f, i8, u8, i16, u16];
         for &set in &slots {
             if let Some(a) = prim.get(&Semantic::TexCoords(set)) {
                 let name = attr(&format!("TEXCOORD_{set}"));
@@ -94,13 +111,8 @@ impl Loader<'_> {
         }
         let tangents = prim.get(&Semantic::Tangents);
         if let Some(a) = &tangents {
-            self.check_count(
-                a,
-                n,
-                &attr("TANGENT"),
-                &[Dimensions::Vec4],
-                &[DataType::F32],
-            )?;
+            self.check_count(a, n, &attr("TANGENT"), &[Dimensions::Vec4], &[f, i8, i16])?;
+            unit(a, "TANGENT")?;
         }
         if let Some(a) = prim.indices() {
             let types = [DataType::U8, DataType::U16, DataType::U32];
@@ -114,28 +126,27 @@ impl Loader<'_> {
             )
         };
         let mut mesh = MeshData {
-            positions: reader
-                .read_positions()
-                .ok_or_else(|| unreadable(attr("POSITION")))?
+            positions: self
+                .read_floats::<3>(&positions, &attr("POSITION"))?
+                .into_iter()
                 .map(Vec3::from)
                 .collect(),
             ..Default::default()
         };
-        if prim.get(&Semantic::Normals).is_some() {
-            mesh.normals = reader
-                .read_normals()
-                .ok_or_else(|| unreadable(attr("NORMAL")))?
+        if let Some(a) = &normals {
+            mesh.normals = self
+                .read_floats::<3>(a, &attr("NORMAL"))?
+                .into_iter()
                 .map(Vec3::from)
                 .collect();
         }
         for (slot, &set) in slots.iter().enumerate() {
-            if prim.get(&Semantic::TexCoords(set)).is_none() {
+            let Some(a) = prim.get(&Semantic::TexCoords(set)) else {
                 continue;
-            }
-            let uvs = reader
-                .read_tex_coords(set)
-                .ok_or_else(|| unreadable(attr(&format!("TEXCOORD_{set}"))))?
-                .into_f32()
+            };
+            let uvs = self
+                .read_floats::<2>(&a, &attr(&format!("TEXCOORD_{set}")))?
+                .into_iter()
                 // glTF's v runs down the image, wgtrace's up
                 .map(|[u, v]| Vec2::new(u, 1.0 - v))
                 .collect();
@@ -172,15 +183,12 @@ impl Loader<'_> {
             .collect();
         let mut mesh = mesh::check(mesh).map_err(|e| GltfError::new(key, e))?;
         if prim.material().normal_texture().is_some() && !mesh.uvs.is_empty() {
-            if tangents.is_some() {
-                let t: Vec<Vec4> = reader
-                    .read_tangents()
-                    .ok_or_else(|| unreadable(attr("TANGENT")))?
+            if let Some(a) = &tangents {
+                let t: Vec<Vec4> = self
+                    .read_floats::<4>(a, &attr("TANGENT"))?
+                    .into_iter()
                     .map(Vec4::from)
                     .collect();
-                if !t.iter().all(|t| t.is_finite()) {
-                    return Err(GltfError::new(attr("TANGENT"), "has a non-finite value"));
-                }
                 mesh.tangents = mesh
                     .triangles
                     .iter()

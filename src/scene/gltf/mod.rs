@@ -17,6 +17,7 @@ pub mod file;
 pub mod loader;
 pub mod materials;
 pub mod meshes;
+pub mod meshopt;
 pub mod reader;
 pub mod textures;
 
