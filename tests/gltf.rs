@@ -639,12 +639,92 @@ mod fuzz {
         let _ = std::fs::remove_file(&path);
     }
 
+    /// A file that reaches every reader: a textured quad, and a second primitive with
+    /// quantized positions, a u8 colour, a second uv set and meshopt-compressed indices,
+    /// under a spec-gloss material reading both uv sets.
     fn asset() -> GltfWriter {
         let mut w = quad_file(pbr([0.5; 4], 0.5, 0.5));
         let img = image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 100, 50, 255]));
         let t = w.png_texture(&img, None).unwrap();
         w.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = json!({ "index": t });
+        let sg = w.material(json!({ "extensions": { "KHR_materials_pbrSpecularGlossiness": {
+            "diffuseTexture": { "index": t }, "specularGlossinessTexture": { "index": t, "texCoord": 1 } } } }));
+        let quads: [[i16; 4]; 4] = [
+            [0, 0, 0, 0],
+            [100, 0, 0, 0],
+            [100, 100, 0, 0],
+            [0, 100, 0, 0],
+        ];
+        let pos: Vec<u8> = quads
+            .iter()
+            .flatten()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let pv = w.view(&pos, Some(8));
+        let pa = w.accessor(
+            pv,
+            0,
+            5122,
+            4,
+            "VEC3",
+            Some((vec![0.0; 3], vec![100.0, 100.0, 0.0])),
+        );
+        let cv = w.view(
+            &[
+                255, 0, 0, 255, 0, 255, 0, 128, 0, 0, 255, 255, 255, 255, 255, 0,
+            ],
+            None,
+        );
+        let ca = w.accessor(cv, 0, 5121, 4, "VEC4", None);
+        w.json["accessors"][ca]["normalized"] = json!(true);
+        let t0 = w.vec2(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]);
+        let t1 = w.vec2(&[[0.0, 1.0], [2.0, 1.0], [2.0, 0.0], [0.0, 0.0]]);
+        let encoded = meshopt::encoding::encode_index_buffer(&[0u32, 1, 2, 0, 2, 3], 4).unwrap();
+        let raw = w.view(&encoded, None);
+        let at = w.json["bufferViews"][raw]["byteOffset"].clone();
+        let iv = w.push("bufferViews", json!({ "buffer": 1, "byteLength": 24,
+            "extensions": { "EXT_meshopt_compression": { "buffer": 0, "byteOffset": at,
+                "byteLength": encoded.len(), "byteStride": 4, "count": 6, "mode": "TRIANGLES" } } }));
+        let ia = w.accessor(iv, 0, 5125, 6, "SCALAR", None);
+        w.more_buffers.push(json!({ "byteLength": 24,
+            "extensions": { "EXT_meshopt_compression": { "fallback": true } } }));
+        let prim = GltfWriter::primitive(
+            &[
+                ("POSITION", pa),
+                ("COLOR_0", ca),
+                ("TEXCOORD_0", t0),
+                ("TEXCOORD_1", t1),
+            ],
+            Some(ia),
+            Some(sg),
+        );
+        let mesh = w.mesh(vec![prim]);
+        let n = w.node(json!({ "mesh": mesh, "scale": [0.01, 0.01, 0.01] }));
+        w.json["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(json!(n));
+        for e in [
+            "KHR_mesh_quantization",
+            "EXT_meshopt_compression",
+            "KHR_materials_pbrSpecularGlossiness",
+        ] {
+            w.use_extension(e, true);
+        }
         w
+    }
+
+    /// The fuzz tests' asset loads as it is: the mutations start from a file that works.
+    #[test]
+    fn the_fuzzed_asset_loads() {
+        let w = asset();
+        let d = dir("fuzz-asset");
+        let s = load(&w.to_gltf_external(&d, "asset").unwrap());
+        assert!(s.primitives.len() >= 4, "{}", s.primitives.len());
+        let both = records::PRIM_FLAG_UV1 | records::PRIM_FLAG_COLORS;
+        assert!(s.primitives.iter().any(|p| p.flags & both == both));
+        std::fs::write(d.join("asset.glb"), w.glb_bytes()).unwrap();
+        load(&d.join("asset.glb"));
     }
 
     proptest! {
@@ -1518,5 +1598,96 @@ fn a_meshopt_compressed_mesh_loads_as_its_plain_twin() {
             "bufferViews[{pv}].extensions.EXT_meshopt_compression"
         )) && e.contains("does not decode"),
         "{e}"
+    );
+}
+
+/// KHR_materials_pbrSpecularGlossiness maps onto pbr so that a spec-gloss file and its
+/// metal-rough twin look alike, tile by tile within the statistical bound, on the GPU: a
+/// textured dielectric (diffuse texture; specular 0.04 with glossiness in the texture's
+/// alpha, its twin's roughness map holding 1 - alpha) and an untextured metal (black
+/// diffuse, coloured specular; the twin metallic 1 with that base colour).
+#[test]
+fn specular_glossiness_files_look_like_their_metal_rough_twins() {
+    let diffuse = image::RgbaImage::from_fn(8, 8, |x, y| {
+        image::Rgba([40 + 25 * x as u8, 200 - 20 * y as u8, 90, 255])
+    });
+    let gloss = |x: u32, y: u32| (20 + 28 * ((x + y) % 8)) as u8;
+    let spec_gloss =
+        image::RgbaImage::from_fn(8, 8, |x, y| image::Rgba([255, 255, 255, gloss(x, y)]));
+    let rough = image::RgbaImage::from_fn(8, 8, |x, y| image::Rgba([0, 255 - gloss(x, y), 0, 255]));
+    let build = |materials: [serde_json::Value; 2], textures: &[&image::RgbaImage], ext: bool| {
+        let mut w = GltfWriter::new();
+        for t in textures {
+            w.png_texture(t, None).unwrap();
+        }
+        let ms: Vec<usize> = materials.into_iter().map(|m| w.material(m)).collect();
+        let mut nodes = Vec::new();
+        for (k, m) in ms.into_iter().enumerate() {
+            let sphere = gltf_writer::uv_sphere([1.1 * k as f32 - 0.55, 0.0, 0.0], 0.5, 24, 48);
+            let mesh = w.add_mesh_arrays(&sphere, Some(m), true);
+            nodes.push(w.node(json!({ "mesh": mesh })));
+        }
+        let c = w
+            .camera(json!({ "type": "perspective", "perspective": { "yfov": 0.6, "znear": 0.1 } }));
+        nodes.push(w.node(json!({ "camera": c, "translation": [0.0, 0.3, 3.0] })));
+        let l = w.light(json!({ "type": "point", "intensity": 8.0 }));
+        let mut ln = json!({ "translation": [1.0, 2.0, 2.0] });
+        ln.as_object_mut()
+            .unwrap()
+            .extend(light_ref(l).as_object().unwrap().clone());
+        nodes.push(w.node(ln));
+        w.scene(&nodes);
+        if ext {
+            w.use_extension("KHR_materials_pbrSpecularGlossiness", true);
+        }
+        w
+    };
+    let sg = "KHR_materials_pbrSpecularGlossiness";
+    let spec = build(
+        [
+            json!({ "extensions": { sg: { "diffuseTexture": { "index": 0 },
+                "specularFactor": [0.04, 0.04, 0.04], "glossinessFactor": 1.0,
+                "specularGlossinessTexture": { "index": 1 } } } }),
+            json!({ "extensions": { sg: { "diffuseFactor": [0.0, 0.0, 0.0, 1.0],
+                "specularFactor": [0.9, 0.6, 0.3], "glossinessFactor": 0.7 } } }),
+        ],
+        &[&diffuse, &spec_gloss],
+        true,
+    );
+    let twin = build(
+        [
+            json!({ "pbrMetallicRoughness": { "baseColorTexture": { "index": 0 },
+                "metallicRoughnessTexture": { "index": 1 } } }),
+            json!({ "pbrMetallicRoughness": { "baseColorFactor": [0.9, 0.6, 0.3, 1.0],
+                "metallicFactor": 1.0, "roughnessFactor": 0.3 } }),
+        ],
+        &[&diffuse, &rough],
+        false,
+    );
+    let o = Overrides {
+        width: Some(48),
+        height: Some(24),
+        spp: Some(256),
+        ..Default::default()
+    };
+    let a = wgtrace::load_scene(
+        &spec.to_gltf_external(&dir("spec-gloss"), "sg").unwrap(),
+        &o,
+    )
+    .unwrap();
+    let b = wgtrace::load_scene(
+        &twin.to_gltf_external(&dir("metal-rough"), "mr").unwrap(),
+        &o,
+    )
+    .unwrap();
+    let (ia, ib) = (common::render_gpu(&a), common::render_gpu(&b));
+    let c = common::compare(&ia, &ib, 8);
+    assert!(c.failed_tiles.is_empty(), "{}", c.failed_tiles.join("\n"));
+    // the metal's Fresnel at normal incidence is its specular colour in both
+    let metal = pbr::Params::read(&a.materials[1]);
+    let f0 = metal.specular_color * 0.04;
+    assert!(
+        (f0 - Vec3::new(0.9, 0.6, 0.3)).abs().max_element() < 1e-6,
+        "{f0}"
     );
 }

@@ -41,6 +41,8 @@ pub struct GltfWriter {
     pub json: Value,
     /// The contents of buffer 0.
     pub bin: Vec<u8>,
+    /// Buffers after buffer 0, as given (e.g. EXT_meshopt_compression's fallback).
+    pub more_buffers: Vec<Value>,
 }
 
 impl Default for GltfWriter {
@@ -55,6 +57,7 @@ impl GltfWriter {
         GltfWriter {
             json: json!({ "asset": { "version": "2.0", "generator": "wgtrace tests" } }),
             bin: Vec::new(),
+            more_buffers: Vec::new(),
         }
     }
 
@@ -271,7 +274,9 @@ impl GltfWriter {
             if let Some(uri) = buffer_uri {
                 b["uri"] = json!(uri);
             }
-            root["buffers"] = json!([b]);
+            let mut all = vec![b];
+            all.extend(self.more_buffers.iter().cloned());
+            root["buffers"] = json!(all);
         }
         root
     }

@@ -25,6 +25,9 @@ pub(super) struct TextureKey {
     pub(super) factor: [f32; 3],
     pub(super) uv_slot: u32,
     pub(super) transform: Option<UvTransformDesc>,
+    /// A texture made from the glTF one's image (`Some` of the glossiness factor's bits
+    /// for a roughness map from KHR_materials_pbrSpecularGlossiness).
+    pub(super) derived: Option<u32>,
 }
 
 pub(super) struct Loader<'a> {

@@ -87,9 +87,12 @@ pub(super) fn uv_sets(m: &gltf::Material) -> (Vec<u32>, Option<u32>) {
             .unwrap_or(info.tex_coord())
     };
     let pbr = m.pbr_metallic_roughness();
+    let sg = m.pbr_specular_glossiness();
     let mut sets: Vec<u32> = [
         pbr.base_color_texture(),
         pbr.metallic_roughness_texture(),
+        sg.as_ref().and_then(|s| s.diffuse_texture()),
+        sg.as_ref().and_then(|s| s.specular_glossiness_texture()),
         m.emissive_texture(),
         m.specular().and_then(|s| s.specular_color_texture()),
         m.specular().and_then(|s| s.specular_texture()),

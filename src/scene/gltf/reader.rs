@@ -17,6 +17,14 @@ pub trait MaterialReader {
     ) -> Result<ColorDesc>;
     /// The name of the texture of `info`: sRGB-decoded (`srgb`) or linear data.
     fn texture(&mut self, info: &gltf::texture::Info, srgb: bool, key: &str) -> Result<String>;
+    /// The name of a roughness map made from a texture's alpha (KHR_materials_
+    /// pbrSpecularGlossiness: roughness = 1 - `glossiness` x alpha, in green).
+    fn roughness_texture(
+        &mut self,
+        info: &gltf::texture::Info,
+        glossiness: f32,
+        key: &str,
+    ) -> Result<String>;
     /// The name of a normal texture (linear).
     fn normal_texture(&mut self, n: &gltf::material::NormalTexture, key: &str) -> Result<String>;
     /// A note of what was approximated or left out.

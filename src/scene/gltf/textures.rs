@@ -13,6 +13,7 @@ use super::reader::MaterialReader;
 use crate::scene::format::{ColorSpace, Filter, TextureDesc, UvTransformDesc, Wrap, WrapMode};
 use crate::scene::imported::ImportedTexture;
 use crate::scene::materials::common::ColorDesc;
+use crate::scene::texels::TexelKind;
 use crate::scene::textures::{self, ImageData};
 
 impl Loader<'_> {
@@ -109,6 +110,60 @@ impl Loader<'_> {
         self.uv_sets.iter().position(|&s| s == set).unwrap_or(0) as u32
     }
 
+    /// The texture of KHR_materials_pbrSpecularGlossiness's glossiness as a roughness map:
+    /// a linear 8-bit image whose green is 1 - `glossiness` x the alpha of the texture
+    /// of `info` (pbr's metallic-roughness texture reads roughness from green, metallic
+    /// from blue: 0), made once per texture and glossiness factor.
+    pub(super) fn roughness_from_glossiness(
+        &mut self,
+        info: &gltf::texture::Info,
+        glossiness: f32,
+        key: &str,
+    ) -> Result<String> {
+        let uv_set = info
+            .texture_transform()
+            .and_then(|t| t.tex_coord())
+            .unwrap_or(info.tex_coord());
+        let transform = info
+            .texture_transform()
+            .map(|t| UvTransformDesc::from_v_down(t.offset(), t.rotation(), t.scale()));
+        let tex = info.texture();
+        let derived = Some(glossiness.to_bits());
+        let slot = self.uv_slot(uv_set);
+        if let Some(i) = self.texture_keys.iter().position(|t| {
+            t.texture == tex.index()
+                && t.derived == derived
+                && t.uv_slot == slot
+                && t.transform == transform
+        }) {
+            return Ok(self.out.textures[i].name.clone());
+        }
+        let source = self
+            .image(&tex.source(), false)
+            .map_err(|e| GltfError::new(e.key, format!("{} (the image of {key})", e.message)))?;
+        let texels = (0..source.texel_count() as usize).flat_map(|i| {
+            let a = source.texel(i)[3];
+            let g = ((1.0 - glossiness * a).clamp(0.0, 1.0) * 255.0).round() as u8;
+            [0, g, 0, 255]
+        });
+        let image = ImageData {
+            width: source.width,
+            height: source.height,
+            kind: TexelKind::Unorm8,
+            srgb: false,
+            data: texels.collect(),
+        };
+        self.texture_entry(
+            tex,
+            slot,
+            transform,
+            false,
+            [1.0; 3],
+            derived,
+            Arc::new(image),
+        )
+    }
+
     fn texture_lookup(
         &mut self,
         tex: gltf::Texture,
@@ -123,12 +178,35 @@ impl Loader<'_> {
             factor,
             uv_slot,
             transform,
+            derived: None,
         };
         if let Some(i) = self.texture_keys.iter().position(|t| *t == k) {
             return Ok(self.out.textures[i].name.clone());
         }
-        let source = tex.source();
-        let image = self.image(&source, srgb)?;
+        let image = self.image(&tex.source(), srgb)?;
+        self.texture_entry(tex, uv_slot, transform, srgb, factor, None, image)
+    }
+
+    /// A texture of the scene format over `image`, with its sampler's modes: its name.
+    #[allow(clippy::too_many_arguments)]
+    fn texture_entry(
+        &mut self,
+        tex: gltf::Texture,
+        uv_slot: u32,
+        transform: Option<UvTransformDesc>,
+        srgb: bool,
+        factor: [f32; 3],
+        derived: Option<u32>,
+        image: Arc<ImageData>,
+    ) -> Result<String> {
+        let k = TextureKey {
+            texture: tex.index(),
+            srgb,
+            factor,
+            uv_slot,
+            transform,
+            derived,
+        };
         let sampler = tex.sampler();
         let mode = |w: gltf::texture::WrappingMode| match w {
             gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
@@ -227,6 +305,15 @@ impl MaterialReader for Loader<'_> {
 
     fn texture(&mut self, info: &gltf::texture::Info, srgb: bool, key: &str) -> Result<String> {
         self.texture_of(info, srgb, [1.0; 3], key)
+    }
+
+    fn roughness_texture(
+        &mut self,
+        info: &gltf::texture::Info,
+        glossiness: f32,
+        key: &str,
+    ) -> Result<String> {
+        self.roughness_from_glossiness(info, glossiness, key)
     }
 
     fn normal_texture(&mut self, n: &gltf::material::NormalTexture, key: &str) -> Result<String> {

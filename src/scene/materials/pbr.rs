@@ -223,6 +223,9 @@ pub const GLTF_KEYS: &[(&str, &str)] = &[
 /// A glTF material (not transmissive): its metallic-roughness values and textures, with
 /// KHR_materials_ior, KHR_materials_specular and KHR_materials_emissive_strength.
 pub fn from_gltf(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> Result<Desc> {
+    if let Some(sg) = m.pbr_specular_glossiness() {
+        return from_specular_glossiness(m, &sg, key, r);
+    }
     let pbr = m.pbr_metallic_roughness();
     let factor = pbr.base_color_factor();
     reader::factor(
@@ -291,6 +294,79 @@ pub fn from_gltf(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> R
         }
     }
     Ok(desc)
+}
+
+/// The JSON path of KHR_materials_pbrSpecularGlossiness's fields.
+const SG: &str = "extensions.KHR_materials_pbrSpecularGlossiness";
+
+/// KHR_materials_pbrSpecularGlossiness (older exports) onto pbr, exactly for its shading
+/// model: the diffuse colour (and texture, sRGB, its alpha the opacity) is the base colour
+/// of a dielectric (metallic 0) whose reflectance at normal incidence is the specular
+/// colour: KHR_materials_specular's F0 = min(0.04 specular_color, 1) x specular with
+/// specular 1 and specular_color = specular / 0.04 (times the specularGlossiness texture,
+/// sRGB), F90 = 1; roughness = 1 - glossiness (times the texture's alpha: a roughness map
+/// made from it). A metal (black diffuse, coloured specular) and its metal-rough twin
+/// then have the same BSDF.
+fn from_specular_glossiness(
+    m: &gltf::Material,
+    sg: &gltf::material::PbrSpecularGlossiness,
+    key: &str,
+    r: &mut dyn MaterialReader,
+) -> Result<Desc> {
+    let diffuse = sg.diffuse_factor();
+    reader::factor(&format!("{key}.{SG}.diffuseFactor"), &diffuse, true)?;
+    let specular = sg.specular_factor();
+    reader::factor(&format!("{key}.{SG}.specularFactor"), &specular, true)?;
+    let glossiness = sg.glossiness_factor();
+    if !(0.0..=1.0).contains(&glossiness) {
+        return Err(crate::scene::gltf::error::GltfError::new(
+            format!("{key}.{SG}.glossinessFactor"),
+            format!("must be in [0, 1], got {glossiness}"),
+        ));
+    }
+    let [red, green, blue, alpha] = diffuse;
+    let base_color = r.color(
+        sg.diffuse_texture(),
+        [red, green, blue],
+        &format!("{key}.{SG}.diffuseTexture"),
+    )?;
+    let texture = sg.specular_glossiness_texture();
+    let tkey = format!("{key}.{SG}.specularGlossinessTexture");
+    let specular_color = r.color(texture.clone(), specular.map(|s| s / 0.04), &tkey)?;
+    let (roughness, metallic_roughness) = match &texture {
+        // the map holds 1 - glossiness x alpha; the factor then is 1
+        Some(info) => (1.0, Some(r.roughness_texture(info, glossiness, &tkey)?)),
+        None => (1.0 - glossiness, None),
+    };
+    let emission = reader::emission(m, key, r)?;
+    let (normal_map, normal_scale) = match m.normal_texture() {
+        Some(n) => (
+            Some(r.normal_texture(&n, &format!("{key}.normalTexture"))?),
+            n.scale(),
+        ),
+        None => (None, 1.0),
+    };
+    Ok(Desc {
+        base_color,
+        metallic: 0.0,
+        roughness,
+        ior: 1.5,
+        specular: 1.0,
+        specular_color,
+        metallic_roughness,
+        normal_map,
+        normal_scale,
+        alpha,
+        alpha_mode: match m.alpha_mode() {
+            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+        },
+        alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
+        emission,
+        two_sided: m.double_sided(),
+        ..Desc::default()
+    })
 }
 
 /// Where a .mtl material's values come from, by field.
