@@ -301,6 +301,9 @@ fn material_extensions_map_onto_pbr_and_dielectric() {
             "KHR_materials_transmission": { "transmissionFactor": 1.0 },
             "KHR_materials_ior": { "ior": 1.33 },
             "KHR_materials_volume": { "attenuationDistance": 2.0, "attenuationColor": [0.5, 1.0, 0.25] } } }));
+    let frosted = w.material(json!({
+        "pbrMetallicRoughness": { "roughnessFactor": 0.5 },
+        "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1.0 } } }));
     for e in [
         "KHR_materials_emissive_strength",
         "KHR_materials_ior",
@@ -314,7 +317,9 @@ fn material_extensions_map_onto_pbr_and_dielectric() {
     let m1 = quad_mesh(&mut w, Some(glass));
     let n0 = w.node(json!({ "mesh": m0 }));
     let n1 = w.node(json!({ "mesh": m1, "translation": [0.0, 0.0, -1.0] }));
-    w.scene(&[n0, n1]);
+    let m2 = quad_mesh(&mut w, Some(frosted));
+    let n2 = w.node(json!({ "mesh": m2, "translation": [0.0, 0.0, -2.0] }));
+    w.scene(&[n0, n1, n2]);
     let s = load(&w.to_gltf_external(&dir("ext"), "ext").unwrap());
     let (m, g) = (s.materials[0], s.materials[1]);
     assert_eq!(m.tag, MaterialKind::Pbr.tag());
@@ -332,8 +337,11 @@ fn material_extensions_map_onto_pbr_and_dielectric() {
     assert_eq!((surface.opacity, surface.alpha_cutoff), (0.5, 0.25));
     assert_eq!(g.tag, MaterialKind::Dielectric.tag());
     let glass = dielectric::Params::read(&g);
-    assert_eq!(glass.ior, 1.33);
+    assert_eq!((glass.ior, glass.alpha), (1.33, 0.0));
     assert_eq!(glass.tint, Vec3::new(0.9, 1.0, 0.9));
+    // rough transmission: rough glass, GGX alpha = roughnessFactor^2
+    let frosted = dielectric::Params::read(&s.materials[2]);
+    assert_eq!((frosted.ior, frosted.alpha), (1.5, 0.25));
     // sigma_a = -ln(colour) / distance
     let want = Vec3::new(0.5f32.ln() / -2.0, 0.0, 0.25f32.ln() / -2.0);
     assert!(

@@ -1,6 +1,7 @@
-// type = "dielectric": smooth glass (scene::materials::dielectric; CPU twin
+// type = "dielectric": glass, smooth or rough (scene::materials::dielectric; CPU twin
 // cpu/materials/dielectric.rs).
 #import shared/bsdf
+#import shared/sampling
 #import shared/types
 
 // eta = eta_i / eta_t (1 / ior entering, ior leaving, the normal turned toward the
@@ -8,17 +9,23 @@
 // internal reflection when eta^2 sin^2(theta_i) >= 1; otherwise reflection with the exact
 // Fresnel probability (fresnel_dielectric; ior 1 is invisible). Weight = tint, times the
 // Beer-Lambert transmittance exp(-absorption x distance) for a segment that ran inside.
-// Deltas only.
+// Deltas when smooth; a rough one (GGX alpha at least ALPHA_SMOOTH) scatters by
+// dielectric_rough_scatter.
 fn dielectric_scatter(p: DielectricParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     let entering = hit.front_face;
     let n = select(-hit.ns, hit.ns, entering);
     let eta = select(p.ior, 1.0 / p.ior, entering);
-    let cos_i = clamp(-dot(ray.dir, n), 0.0, 1.0);
-    let sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
     var weight = p.tint;
     if (!entering) {
         weight *= exp(-p.absorption * length(hit.p - ray.origin));
     }
+#ifdef HAS_ROUGH_DIELECTRIC
+    if (p.alpha >= ALPHA_SMOOTH) {
+        return dielectric_rough_scatter(p, ray, hit, n, eta, weight, u);
+    }
+#endif
+    let cos_i = clamp(-dot(ray.dir, n), 0.0, 1.0);
+    let sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
     if (sin2_t >= 1.0) {
         return Scatter(true, reflect_dir(ray.dir, n), weight, 0.0, true);
     }
@@ -28,3 +35,121 @@ fn dielectric_scatter(p: DielectricParams, ray: Ray, hit: Hit, u: vec2<f32>) -> 
     }
     return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), weight, 0.0, true);
 }
+
+#ifdef HAS_ROUGH_DIELECTRIC
+// Compiled for scenes with rough glass only (llvmpipe runs an untaken branch under a
+// mask, and smooth glass would pay for it).
+
+// The exact Fresnel reflectance at cosine c > 0 on the side of relative index eta
+// (1 under total internal reflection).
+fn dielectric_fresnel(c: f32, eta: f32) -> f32 {
+    let sin2_t = eta * eta * max(0.0, 1.0 - c * c);
+    if (sin2_t >= 1.0) {
+        return 1.0;
+    }
+    return fresnel_dielectric(c, sqrt(1.0 - sin2_t), eta);
+}
+
+// The probability of sampling reflection off a rough dielectric seen at cos_o: the
+// Fresnel reflectance of the mean surface, kept in [0.1, 0.9]. It depends on wo only, so
+// the pdf of the two lobes together is exact.
+fn dielectric_reflect_prob(cos_o: f32, eta: f32) -> f32 {
+    return clamp(dielectric_fresnel(cos_o, eta), 0.1, 0.9);
+}
+
+// The microfacet normal of wo and wi about n (wo's side, eta = eta_o / eta_i of the two
+// sides): the half vector of a reflection, the generalized one eta wo + wi of a
+// refraction (Walter et al. 2007), on n's side; zero when none is.
+fn dielectric_half(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec3<f32> {
+    let reflected = dot(n, wi) > 0.0;
+    var h = select(eta * wo + wi, wo + wi, reflected);
+    let len = length(h);
+    if (len == 0.0) {
+        return vec3<f32>(0.0);
+    }
+    h = h / len;
+    return select(-h, h, dot(h, n) > 0.0);
+}
+
+// BSDF x |cos(theta_i)| of rough glass (GGX alpha, exact Fresnel F at wo . h), for unit
+// wo and wi about the unit normal n on wo's side, eta = eta_o / eta_i:
+// reflection F D G2 / (4 cos_o); refraction (Walter et al. 2007, for radiance: times
+// eta^2, the 1 / eta_t^2 scaling of radiance across the boundary)
+// eta^2 (1 - F) D G2 |wi . h| |wo . h| / ((wi . h + eta wo . h)^2 cos_o).
+fn dielectric_rough_eval(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> f32 {
+    let cos_o = dot(n, wo);
+    let cos_i = dot(n, wi);
+    let h = dielectric_half(n, wo, wi, eta);
+    let oh = dot(wo, h);
+    let ih = dot(wi, h);
+    // a microfacet seen from both sides as the two directions need
+    if (cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0) {
+        return 0.0;
+    }
+    let d = ggx_d(dot(n, h), alpha) * smith_g2(cos_o, abs(cos_i), alpha);
+    let f = dielectric_fresnel(oh, eta);
+    if (cos_i > 0.0) {
+        return f * d / (4.0 * cos_o);
+    }
+    let denom = ih + eta * oh;
+    return eta * eta * (1.0 - f) * d * abs(ih) * oh / (denom * denom * cos_o);
+}
+
+// The pdf of dielectric_rough_scatter's directions: a visible normal's density
+// G1(wo) D(h) (wo . h) / cos_o, mapped through the reflection (1 / (4 wo . h)) with
+// probability dielectric_reflect_prob, or through the refraction
+// (|wi . h| / (wi . h + eta wo . h)^2) with the rest.
+fn dielectric_rough_pdf(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> f32 {
+    let cos_o = dot(n, wo);
+    let cos_i = dot(n, wi);
+    let h = dielectric_half(n, wo, wi, eta);
+    let oh = dot(wo, h);
+    let ih = dot(wi, h);
+    if (cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0) {
+        return 0.0;
+    }
+    let visible = ggx_d(dot(n, h), alpha) / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
+    let p_r = dielectric_reflect_prob(cos_o, eta);
+    if (cos_i > 0.0) {
+        // a refraction chosen at a microfacet that reflects totally reflects instead
+        let tir = eta * eta * (1.0 - oh * oh) >= 1.0;
+        return select(p_r, 1.0, tir) * visible / 4.0;
+    }
+    let denom = ih + eta * oh;
+    return (1.0 - p_r) * visible * oh * abs(ih) / (denom * denom);
+}
+
+// Rough glass: a visible normal h seen from wo (Heitz 2018), then the mirror direction
+// about it (with probability dielectric_reflect_prob, u.x reused) or the refraction
+// through it (the mirror direction where h reflects totally); weight = eval / pdf times the tint (and absorption) in `weight`. A
+// direction on the wrong side of the geometric surface is absorbed. Sampled as a delta: next-event estimation does not reach lights
+// through it (its eval needs the side of the hit, which the integrator's BSDF queries do
+// not carry).
+fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, weight: vec3<f32>, u: vec2<f32>) -> Scatter {
+    let wo = -ray.dir;
+    let cos_o = dot(n, wo);
+    if (cos_o <= 0.0) {
+        return absorbed();
+    }
+    let p_r = dielectric_reflect_prob(cos_o, eta);
+    let chose_reflection = u.x < p_r;
+    let uh = vec2<f32>(select((u.x - p_r) / (1.0 - p_r), u.x / p_r, chose_reflection), u.y);
+    let tb = onb_tangents(n);
+    let local = vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o);
+    let h_l = sample_ggx_vndf(local, p.alpha, uh);
+    let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
+    let oh = dot(wo, h);
+    let sin2_t = eta * eta * max(0.0, 1.0 - oh * oh);
+    let cos_t = sqrt(max(0.0, 1.0 - sin2_t));
+    let is_reflection = chose_reflection || sin2_t >= 1.0;
+    let wi = select(normalize(-eta * wo + (eta * oh - cos_t) * h), normalize(2.0 * oh * h - wo), is_reflection);
+    let side = select(-1.0, 1.0, hit.front_face);
+    let above = side * dot(wi, hit.ng) > 0.0;
+    let f = dielectric_rough_eval(p.alpha, n, wo, wi, eta);
+    let pdf = dielectric_rough_pdf(p.alpha, n, wo, wi, eta);
+    if (!(pdf > 0.0) || above != is_reflection) {
+        return absorbed();
+    }
+    return Scatter(true, wi, weight * (f / pdf), 0.0, true);
+}
+#endif

@@ -18,6 +18,7 @@ use super::shader::{self, ShaderError};
 use crate::scene::flat::FlatScene;
 use crate::scene::format::{LightSampling, SamplerKind};
 use crate::scene::materials::common::Surface;
+use crate::scene::materials::dielectric;
 use crate::scene::materials::MaterialKind;
 use crate::scene::records as r;
 use crate::tuning::Tuning;
@@ -54,6 +55,8 @@ pub enum Feature {
     SecondUv,
     /// Triangles with vertex colours, which multiply their material's colour and opacity.
     VertexColors,
+    /// Rough glass (`dielectric` with a roughness): its microfacet lobes.
+    RoughDielectric,
     /// Materials with alpha (pbr's `alpha_mode` mask or blend): rays pass through where a
     /// surface is transparent.
     Alpha,
@@ -93,11 +96,12 @@ const GEOMETRY: [Feature; 10] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 17] = [
+const SHADING: [Feature; 18] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::SecondUv,
     Feature::VertexColors,
+    Feature::RoughDielectric,
     Feature::Alpha,
     Feature::ImageTexture,
     Feature::SrgbTexture,
@@ -140,6 +144,7 @@ impl Feature {
             Feature::NormalMap => "HAS_NORMAL_MAP",
             Feature::SecondUv => "HAS_UV1",
             Feature::VertexColors => "HAS_VERTEX_COLORS",
+            Feature::RoughDielectric => "HAS_ROUGH_DIELECTRIC",
             Feature::Alpha => "HAS_ALPHA",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
             Feature::SrgbTexture => "HAS_SRGB_TEXTURE",
@@ -276,6 +281,13 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
             flag(r::PRIM_FLAG_UV1) || scene.textures.iter().any(|t| t.uv_set != 0),
         )
         .with(Feature::VertexColors, flag(r::PRIM_FLAG_COLORS))
+        .with(
+            Feature::RoughDielectric,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.tag == MaterialKind::Dielectric.tag() && dielectric::is_rough(m)),
+        )
         .with(Feature::ImageTexture, texture(r::TEX_IMAGE))
         .with(
             Feature::SrgbTexture,
@@ -338,12 +350,14 @@ impl ShaderSpec {
     /// uses them: alpha adds two closest-hit searches (the shadow rays' `shadowed`,
     /// which llvmpipe inlines at each call) to a shader that serves every other scene,
     /// and llvmpipe's compile of it went from 153 s to 232 s with them; a second uv set
-    /// and vertex colours add reads to every triangle hit.
-    pub const OPTIONAL_IN_FULL: [Feature; 4] = [
+    /// and vertex colours add reads to every triangle hit; rough glass a branch to
+    /// every glass hit.
+    pub const OPTIONAL_IN_FULL: [Feature; 5] = [
         Feature::Alpha,
         Feature::NormalMap,
         Feature::SecondUv,
         Feature::VertexColors,
+        Feature::RoughDielectric,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):

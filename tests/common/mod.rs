@@ -342,6 +342,18 @@ pub const MATERIALS: &[TestMaterial] = &[
         false,
     ),
     row(
+        "dielectric rough 0.3",
+        "type = \"dielectric\"\nior = 1.5\nroughness = 0.3",
+        false,
+        false,
+    ),
+    row(
+        "dielectric rough 1.0 tinted",
+        "type = \"dielectric\"\nior = 1.33\nroughness = 1\ntint = [0.9, 0.8, 0.7]",
+        false,
+        false,
+    ),
+    row(
         "microfacet smooth",
         "type = \"microfacet\"\nalbedo = [1, 1, 1]\nspecular = [1, 1, 1]\nroughness = 0",
         false,

@@ -1,6 +1,12 @@
 //! Mirrors `shaders/materials/dielectric.wgsl`.
 
-use crate::cpu::bsdf::{fresnel_dielectric, reflect_dir, Scatter, Shading};
+use glam::Vec3;
+
+use crate::cpu::bsdf::{
+    fresnel_dielectric, ggx_d, reflect_dir, sample_ggx_vndf, smith_g2, smith_lambda, Scatter,
+    Shading, ABSORBED, ALPHA_SMOOTH,
+};
+use crate::cpu::sampling::onb_tangents;
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::dielectric::Params;
 
@@ -8,17 +14,21 @@ impl Shading for Params {
     /// Snell refraction (eta = 1 / ior entering, ior leaving, the normal turned toward
     /// the incoming ray), total internal reflection, reflection with the exact Fresnel
     /// probability; weight = tint, times the Beer-Lambert transmittance exp(-absorption x
-    /// distance) for a segment that ran inside. Deltas only.
+    /// distance) for a segment that ran inside. Deltas when smooth; rough glass by
+    /// `rough_scatter`.
     fn scatter(&self, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
         let entering = hit.front_face;
         let n = if entering { hit.ns } else { -hit.ns };
         let eta = if entering { 1.0 / self.ior } else { self.ior };
-        let cos_i = (-ray.dir.dot(n)).clamp(0.0, 1.0);
-        let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
         let mut weight = self.tint;
         if !entering {
             weight *= (-self.absorption * (hit.p - ray.origin).length()).exp();
         }
+        if self.alpha >= ALPHA_SMOOTH {
+            return rough_scatter(self, ray, hit, n, eta, weight, u);
+        }
+        let cos_i = (-ray.dir.dot(n)).clamp(0.0, 1.0);
+        let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
         let reflected = Scatter {
             ok: true,
             dir: reflect_dir(ray.dir, n),
@@ -40,5 +50,140 @@ impl Shading for Params {
             pdf: 0.0,
             delta: true,
         }
+    }
+}
+
+/// The exact Fresnel reflectance at cosine c > 0 on the side of relative index eta (1
+/// under total internal reflection).
+pub fn fresnel(c: f32, eta: f32) -> f32 {
+    let sin2_t = eta * eta * (1.0 - c * c).max(0.0);
+    if sin2_t >= 1.0 {
+        return 1.0;
+    }
+    fresnel_dielectric(c, (1.0 - sin2_t).sqrt(), eta)
+}
+
+/// The probability of sampling reflection off rough glass seen at cos_o: the mean
+/// surface's Fresnel reflectance, kept in [0.1, 0.9].
+pub fn reflect_prob(cos_o: f32, eta: f32) -> f32 {
+    fresnel(cos_o, eta).clamp(0.1, 0.9)
+}
+
+/// The microfacet normal of wo and wi about n (wo's side, eta = eta_o / eta_i): the half
+/// vector of a reflection, the generalized eta wo + wi of a refraction, on n's side;
+/// zero when none is.
+pub fn half(n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> Vec3 {
+    let h = if n.dot(wi) > 0.0 {
+        wo + wi
+    } else {
+        eta * wo + wi
+    };
+    let len = h.length();
+    if len == 0.0 {
+        return Vec3::ZERO;
+    }
+    let h = h / len;
+    if h.dot(n) > 0.0 {
+        h
+    } else {
+        -h
+    }
+}
+
+/// BSDF x |cos(theta_i)| of rough glass: reflection F D G2 / (4 cos_o); refraction, for
+/// radiance, eta^2 (1 - F) D G2 |wi . h| |wo . h| / ((wi . h + eta wo . h)^2 cos_o).
+pub fn rough_eval(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+    let cos_o = n.dot(wo);
+    let cos_i = n.dot(wi);
+    let h = half(n, wo, wi, eta);
+    let oh = wo.dot(h);
+    let ih = wi.dot(h);
+    if cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0 {
+        return 0.0;
+    }
+    let d = ggx_d(n.dot(h), alpha) * smith_g2(cos_o, cos_i.abs(), alpha);
+    let f = fresnel(oh, eta);
+    if cos_i > 0.0 {
+        return f * d / (4.0 * cos_o);
+    }
+    let denom = ih + eta * oh;
+    eta * eta * (1.0 - f) * d * ih.abs() * oh / (denom * denom * cos_o)
+}
+
+/// The pdf of `rough_scatter`'s directions.
+pub fn rough_pdf(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+    let cos_o = n.dot(wo);
+    let cos_i = n.dot(wi);
+    let h = half(n, wo, wi, eta);
+    let oh = wo.dot(h);
+    let ih = wi.dot(h);
+    if cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0 {
+        return 0.0;
+    }
+    let visible = ggx_d(n.dot(h), alpha) / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
+    let p_r = reflect_prob(cos_o, eta);
+    if cos_i > 0.0 {
+        // a refraction chosen at a microfacet that reflects totally reflects instead
+        let tir = eta * eta * (1.0 - oh * oh) >= 1.0;
+        return if tir { 1.0 } else { p_r } * visible / 4.0;
+    }
+    let denom = ih + eta * oh;
+    (1.0 - p_r) * visible * oh * ih.abs() / (denom * denom)
+}
+
+/// Rough glass: a visible normal, then the mirror direction about it or the refraction
+/// through it (the mirror direction where it reflects totally); weight = eval / pdf times `weight`; sampled as a delta.
+pub fn rough_scatter(
+    p: &Params,
+    ray: &Ray,
+    hit: &Hit,
+    n: Vec3,
+    eta: f32,
+    weight: Vec3,
+    u: [f32; 2],
+) -> Scatter {
+    let wo = -ray.dir;
+    let cos_o = n.dot(wo);
+    if cos_o <= 0.0 {
+        return ABSORBED;
+    }
+    let p_r = reflect_prob(cos_o, eta);
+    let chose_reflection = u[0] < p_r;
+    let uh = [
+        if chose_reflection {
+            u[0] / p_r
+        } else {
+            (u[0] - p_r) / (1.0 - p_r)
+        },
+        u[1],
+    ];
+    let tb = onb_tangents(n);
+    let local = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);
+    let h_l = sample_ggx_vndf(local, p.alpha, uh);
+    let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
+    let oh = wo.dot(h);
+    let sin2_t = eta * eta * (1.0 - oh * oh).max(0.0);
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+    let reflect = chose_reflection || sin2_t >= 1.0;
+    let wi = if reflect {
+        (2.0 * oh * h - wo).normalize()
+    } else {
+        (-eta * wo + (eta * oh - cos_t) * h).normalize()
+    };
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    let above = side * wi.dot(hit.ng) > 0.0;
+    let f = rough_eval(p.alpha, n, wo, wi, eta);
+    let pdf = rough_pdf(p.alpha, n, wo, wi, eta);
+    // written as in WGSL, so a NaN pdf takes the same branch on both backends
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(pdf > 0.0) || above != reflect {
+        return ABSORBED;
+    }
+    Scatter {
+        ok: true,
+        dir: wi,
+        weight: weight * (f / pdf),
+        pdf: 0.0,
+        delta: true,
     }
 }

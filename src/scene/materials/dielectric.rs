@@ -1,6 +1,8 @@
-//! `type = "dielectric"`: smooth glass. Reflection or refraction is chosen by the exact
-//! Fresnel reflectance; `tint` multiplies every scattering and `absorption` (per unit
-//! length, Beer-Lambert) acts inside. glTF's KHR_materials_transmission (with
+//! `type = "dielectric"`: glass, smooth or rough. Smooth, reflection or refraction is
+//! chosen by the exact Fresnel reflectance; rough (`roughness` > 0, GGX alpha =
+//! roughness^2), GGX microfacets reflect and refract as Walter et al. 2007 define them,
+//! sampled by their visible normals. `tint` multiplies every scattering and `absorption`
+//! (per unit length, Beer-Lambert) acts inside. glTF's KHR_materials_transmission (with
 //! KHR_materials_volume) and .mtl's refracting illumination models map onto it. Shading:
 //! `shaders/materials/dielectric.wgsl`, CPU twin `cpu/materials/dielectric.rs`.
 
@@ -11,7 +13,7 @@ use super::common::{
 };
 use crate::scene::gltf::error::{GltfError, Result};
 use crate::scene::gltf::reader::{self, MaterialReader};
-use crate::scene::records::Material;
+use crate::scene::records::{Material, ALPHA_SMOOTH};
 
 /// Its entry in the scene format.
 #[derive(Debug, Clone, Deserialize)]
@@ -22,6 +24,9 @@ pub struct Desc {
     pub tint: ColorDesc,
     #[serde(default)]
     pub absorption: [f32; 3],
+    /// Perceptual roughness in [0, 1] (GGX alpha = its square); 0 is smooth glass.
+    #[serde(default)]
+    pub roughness: f32,
     #[serde(default)]
     pub emission: ColorDesc,
     /// Emit from the back side too.
@@ -39,20 +44,29 @@ material_view! {
         ior: f32 = scalars.x,
         /// Beer-Lambert coefficient per unit length inside.
         absorption: rgb = color2,
+        /// GGX alpha = roughness^2; below ALPHA_SMOOTH smooth glass.
+        alpha: f32 = scalars.y,
     }
 }
 
-/// The lobes of its type: deltas (reflection, refraction).
+/// The lobes of its type: deltas (reflection, refraction, smooth; rough glass is sampled
+/// as one too: `dielectric_rough_scatter`).
 pub const LOBES: Lobes = Lobes {
     density: false,
     delta: true,
 };
+
+/// Whether a dielectric's record is rough glass (`HAS_ROUGH_DIELECTRIC`).
+pub fn is_rough(m: &Material) -> bool {
+    Params::read(m).alpha >= ALPHA_SMOOTH
+}
 
 impl Model for Desc {
     fn check(&self, c: &mut Check) {
         c.positive("ior", self.ior);
         c.color("tint", &self.tint, true);
         c.nonnegative3("absorption", self.absorption);
+        c.unit("roughness", self.roughness);
         c.color("emission", &self.emission, false);
     }
 
@@ -71,6 +85,7 @@ impl Model for Desc {
             tint_texture,
             ior: self.ior,
             absorption: self.absorption.into(),
+            alpha: self.roughness * self.roughness,
         }
         .write(record);
     }
@@ -81,10 +96,11 @@ pub const GLTF_KEYS: &[(&str, &str)] = &[
     ("ior", "extensions.KHR_materials_ior.ior"),
     ("tint", "pbrMetallicRoughness.baseColorFactor"),
     ("absorption", "extensions.KHR_materials_volume"),
+    ("roughness", "pbrMetallicRoughness.roughnessFactor"),
     ("emission", "emissiveFactor"),
 ];
 
-/// glTF's KHR_materials_transmission (`factor` > 0) onto smooth glass of the material's
+/// glTF's KHR_materials_transmission (`factor` > 0) onto glass of the material's
 /// ior, tinted by the base colour, absorbing inside as KHR_materials_volume says
 /// (sigma_a = -ln(attenuationColor) / attenuationDistance).
 pub fn from_gltf(
@@ -120,9 +136,9 @@ pub fn from_gltf(
             "{key}: transmissionFactor {factor} is rendered as 1 (wgtrace's glass transmits all it does not reflect)"
         ));
     }
-    if pbr.roughness_factor() > 0.0 {
+    if pbr.metallic_roughness_texture().is_some() {
         r.warn(format!(
-            "{key}: rough transmission is rendered as smooth glass"
+            "{key}: its metallicRoughnessTexture is left out: glass takes roughnessFactor as it is"
         ));
     }
     let mut absorption = [0.0; 3];
@@ -150,6 +166,7 @@ pub fn from_gltf(
         ior,
         tint,
         absorption,
+        roughness: pbr.roughness_factor(),
         emission,
         two_sided: m.double_sided(),
     })
@@ -173,6 +190,7 @@ pub fn from_mtl(m: &tobj::Material) -> std::result::Result<Desc, String> {
         ior,
         tint,
         absorption: [0.0; 3],
+        roughness: 0.0,
         emission: ColorDesc::Rgb(m.emissive.unwrap_or([0.0; 3])),
         two_sided: false,
     })
