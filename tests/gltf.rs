@@ -1699,3 +1699,28 @@ fn specular_glossiness_files_look_like_their_metal_rough_twins() {
         "{f0}"
     );
 }
+
+/// glTF's triangle strips and fans become the triangles the specification numbers, all
+/// wound alike; a strip's restart (a repeated vertex) adds none; a list comes in threes.
+#[test]
+fn strips_and_fans_become_triangles_wound_alike() {
+    use gltf::mesh::Mode;
+    use wgtrace::scene::gltf::meshes::triangles;
+    assert_eq!(
+        triangles(Mode::TriangleStrip, &[0, 1, 2, 3]).unwrap(),
+        vec![[0, 1, 2], [1, 3, 2]]
+    );
+    assert_eq!(
+        triangles(Mode::TriangleFan, &[0, 1, 2, 3]).unwrap(),
+        vec![[1, 2, 0], [2, 3, 0]]
+    );
+    // two strips joined by a restart: 0 1 2, then 3 4 5 after 2 2 3 3
+    assert_eq!(
+        triangles(Mode::TriangleStrip, &[0, 1, 2, 2, 3, 3, 4, 5]).unwrap(),
+        vec![[0, 1, 2], [3, 5, 4]]
+    );
+    assert!(triangles(Mode::Triangles, &[0, 1, 2, 3])
+        .unwrap_err()
+        .contains("not a multiple of 3"));
+    assert!(triangles(Mode::TriangleFan, &[0, 1]).unwrap().is_empty());
+}

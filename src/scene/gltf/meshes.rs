@@ -15,7 +15,11 @@ impl Loader<'_> {
     pub(super) fn mesh(&mut self, mesh: &gltf::Mesh, transform: Affine3A) -> Result<()> {
         for prim in mesh.primitives() {
             let key = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-            if prim.mode() != gltf::mesh::Mode::Triangles {
+            use gltf::mesh::Mode;
+            if !matches!(
+                prim.mode(),
+                Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+            ) {
                 self.out.warnings.push(format!(
                     "{key}: mode {:?} is left out (wgtrace renders triangles)",
                     prim.mode()
@@ -171,16 +175,8 @@ impl Loader<'_> {
             }
             None => (0..n as u32).collect(),
         };
-        if !indices.len().is_multiple_of(3) {
-            return Err(GltfError::new(
-                format!("{key}.indices"),
-                format!("has {} entries, not a multiple of 3", indices.len()),
-            ));
-        }
-        mesh.triangles = indices
-            .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]])
-            .collect();
+        mesh.triangles = triangles(prim.mode(), &indices)
+            .map_err(|e| GltfError::new(format!("{key}.indices"), e))?;
         let mut mesh = mesh::check(mesh).map_err(|e| GltfError::new(key, e))?;
         if prim.material().normal_texture().is_some() && !mesh.uvs.is_empty() {
             if let Some(a) = &tangents {
@@ -212,4 +208,40 @@ impl Loader<'_> {
         }
         Ok(mesh)
     }
+}
+
+/// The triangles of a primitive's vertex list in `mode`, as glTF 2.0 (3.7.2.1) numbers
+/// them: a list three by three; a strip's triangle i of vertices i, i + 1 + i % 2,
+/// i + 2 - i % 2 (every other one turned, so all wind alike); a fan's of i + 1, i + 2 and
+/// 0. A strip's or fan's triangles that repeat a vertex (a strip's restarts) are left out.
+pub fn triangles(
+    mode: gltf::mesh::Mode,
+    indices: &[u32],
+) -> std::result::Result<Vec<[u32; 3]>, String> {
+    use gltf::mesh::Mode;
+    let n = indices.len();
+    let tris: Vec<[u32; 3]> = match mode {
+        Mode::Triangles => {
+            if !n.is_multiple_of(3) {
+                return Err(format!("has {n} entries, not a multiple of 3"));
+            }
+            return Ok(indices
+                .chunks_exact(3)
+                .map(|t| [t[0], t[1], t[2]])
+                .collect());
+        }
+        Mode::TriangleStrip => (0..n.saturating_sub(2))
+            .map(|i| {
+                let odd = i % 2;
+                [indices[i], indices[i + 1 + odd], indices[i + 2 - odd]]
+            })
+            .collect(),
+        _ => (0..n.saturating_sub(2))
+            .map(|i| [indices[i + 1], indices[i + 2], indices[0]])
+            .collect(),
+    };
+    Ok(tris
+        .into_iter()
+        .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+        .collect())
 }
