@@ -7,6 +7,7 @@
 //! Run: `cargo bench --bench assets`. Timings come from one run on whatever machine runs
 //! it; compare within the report, not across machines.
 
+mod common;
 #[path = "../tests/common/gltf_writer.rs"]
 mod gltf_writer;
 
@@ -14,9 +15,10 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
+use common::samples_per_second;
 use gltf_writer::GltfWriter;
 use serde_json::json;
-use wgtrace::{Engine, FlatScene, Overrides, Session, SessionOptions, StopRule};
+use wgtrace::{Engine, Overrides};
 
 /// Side of each map.
 const MAP: u32 = 2048;
@@ -82,29 +84,6 @@ fn asset() -> Vec<u8> {
     w.glb_bytes()
 }
 
-/// Samples per second of `engine` on `scene`: one warm-up pass, then passes for MIN_TIME.
-fn samples_per_second(engine: Engine, scene: &FlatScene) -> f64 {
-    let opts = SessionOptions {
-        passes: wgtrace::session::Passes::Uncapped,
-        ..Default::default()
-    };
-    let mut session = Session::with_engine(scene.clone(), engine, opts).expect("session");
-    let warm = StopRule {
-        until: Some(1),
-        ..Default::default()
-    };
-    session.run(&warm, |_| {}).expect("warm-up pass");
-    let timed = StopRule {
-        time_limit: Some(MIN_TIME),
-        ..Default::default()
-    };
-    session
-        .run(&timed, |_| {})
-        .expect("passes")
-        .progress
-        .samples_per_second()
-}
-
 fn main() {
     let dir = root().join("target/bench-assets");
     std::fs::create_dir_all(&dir).expect("target/bench-assets");
@@ -150,8 +129,8 @@ fn main() {
     let gpu = Engine::gpu(&scene, 0)
         .unwrap_or_else(|e| panic!("the benchmark needs a Vulkan adapter: {e}"));
     let device = gpu.name();
-    let gpu_rate = samples_per_second(gpu, &scene);
-    let cpu_rate = samples_per_second(Engine::cpu(&scene), &scene);
+    let gpu_rate = samples_per_second(gpu, &scene, MIN_TIME);
+    let cpu_rate = samples_per_second(Engine::cpu(&scene), &scene, MIN_TIME);
     eprintln!(
         "{} triangles, {bytes} bytes of texels, load {:.2} s, GPU {gpu_rate:.0} / CPU {cpu_rate:.0} samples/s",
         scene.primitives.len(),

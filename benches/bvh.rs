@@ -6,14 +6,17 @@
 //! `cargo run --release --example gen_mesh`). Timings come from one run on whatever machine
 //! runs it; compare ratios within the report, not across machines.
 
+mod common;
+
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+use common::samples_per_second;
 use glam::Vec3;
 use wgtrace::scene::bvh::{self, Aabb};
-use wgtrace::{Engine, FlatScene, Overrides, Session, SessionOptions, StopRule, Tuning};
+use wgtrace::{Engine, Overrides, Tuning};
 
 /// Triangle counts asked of the generator (2 N^2 for an N x N grid).
 const SIZES: [u64; 4] = [1_000, 10_000, 100_000, 1_000_000];
@@ -53,30 +56,6 @@ fn scene_text(mesh: &Path) -> String {
          [[objects]]\ntype = \"mesh\"\npath = \"{}\"\nmaterial = \"ground\"\n",
         mesh.display()
     )
-}
-
-/// Samples per second of `engine` on `scene` in a session: one warm-up pass, then passes
-/// for MIN_TIME.
-fn samples_per_second(engine: Engine, scene: &FlatScene) -> f64 {
-    let opts = SessionOptions {
-        passes: wgtrace::session::Passes::Uncapped,
-        ..Default::default()
-    };
-    let mut session = Session::with_engine(scene.clone(), engine, opts).expect("session");
-    let warm = StopRule {
-        until: Some(1),
-        ..Default::default()
-    };
-    session.run(&warm, |_| {}).expect("warm-up pass");
-    let timed = StopRule {
-        time_limit: Some(MIN_TIME),
-        ..Default::default()
-    };
-    session
-        .run(&timed, |_| {})
-        .expect("passes")
-        .progress
-        .samples_per_second()
 }
 
 struct Row {
@@ -131,12 +110,12 @@ fn main() {
             match Engine::gpu(scene, 0) {
                 Ok(gpu) => {
                     device = gpu.name();
-                    rates[k] = Some(samples_per_second(gpu, scene));
+                    rates[k] = Some(samples_per_second(gpu, scene, MIN_TIME));
                 }
                 Err(e @ wgtrace::gpu::GpuError::LoopLimit { .. }) => eprintln!("GPU: {e}"),
                 Err(e) => panic!("the benchmark needs a Vulkan adapter: {e}"),
             }
-            rates[2 + k] = Some(samples_per_second(Engine::cpu(scene), scene));
+            rates[2 + k] = Some(samples_per_second(Engine::cpu(scene), scene, MIN_TIME));
         }
         let row = Row {
             triangles: with.primitives.len(),

@@ -14,7 +14,7 @@ mod common;
 use common::{material, TestMaterial, MATERIALS};
 use glam::Vec3;
 use wgtrace::cpu::bsdf::{fresnel_dielectric, ggx_d, schlick, smith_lambda};
-use wgtrace::cpu::materials::dielectric::{rough_eval, rough_pdf};
+use wgtrace::cpu::materials::dielectric::rough_lobes;
 use wgtrace::cpu::materials::{bsdf_eval, bsdf_pdf, material_eval, scatter};
 use wgtrace::cpu::types::{Hit, Ray};
 use wgtrace::scene::records::{Material, MAT_FLAG_DELTA, MAT_FLAG_NEE};
@@ -523,7 +523,7 @@ fn rough_glass_samples_its_pdf_over_the_sphere() {
                         let s = scatter(&m, &ray, &hit, u);
                         s.ok.then_some(s.dir)
                     },
-                    |wi| rough_pdf(alpha, n, wo, wi, eta),
+                    |wi| rough_lobes(alpha, n, wo, wi, eta).1,
                 );
             }
         }
@@ -549,11 +549,11 @@ fn rough_glass_is_reciprocal_for_radiance() {
                 if wi.z < 0.0 && (eta * wo + wi).length() < 0.3 {
                     continue;
                 }
-                let f1 = rough_eval(alpha, Vec3::Z, wo, wi, eta) / wi.z.abs();
+                let f1 = rough_lobes(alpha, Vec3::Z, wo, wi, eta).0 / wi.z.abs();
                 let f2 = if wi.z > 0.0 {
-                    rough_eval(alpha, Vec3::Z, wi, wo, eta) / wo.z
+                    rough_lobes(alpha, Vec3::Z, wi, wo, eta).0 / wo.z
                 } else {
-                    eta * eta * rough_eval(alpha, -Vec3::Z, wi, wo, 1.0 / eta) / wo.z
+                    eta * eta * rough_lobes(alpha, -Vec3::Z, wi, wo, 1.0 / eta).0 / wo.z
                 };
                 assert!(f1.is_finite() && f1 >= 0.0, "{f1}");
                 assert!(

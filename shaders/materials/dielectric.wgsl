@@ -71,12 +71,18 @@ fn dielectric_half(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec3
     return select(-h, h, dot(h, n) > 0.0);
 }
 
-// BSDF x |cos(theta_i)| of rough glass (GGX alpha, exact Fresnel F at wo . h), for unit
-// wo and wi about the unit normal n on wo's side, eta = eta_o / eta_i:
-// reflection F D G2 / (4 cos_o); refraction (Walter et al. 2007, for radiance: times
-// eta^2, the 1 / eta_t^2 scaling of radiance across the boundary)
-// eta^2 (1 - F) D G2 |wi . h| |wo . h| / ((wi . h + eta wo . h)^2 cos_o).
-fn dielectric_rough_eval(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> f32 {
+// Rough glass toward wi, for unit wo and wi about the unit normal n on wo's side,
+// eta = eta_o / eta_i: (BSDF x |cos(theta_i)|, the pdf of dielectric_rough_scatter's
+// directions), computed together since the scatter needs both.
+// BSDF (GGX alpha, exact Fresnel F at wo . h): reflection F D G2 / (4 cos_o);
+// refraction (Walter et al. 2007, for radiance: times eta^2, the 1 / eta_t^2 scaling of
+// radiance across the boundary) eta^2 (1 - F) D G2 |wi . h| |wo . h| /
+// ((wi . h + eta wo . h)^2 cos_o).
+// pdf: a visible normal's density G1(wo) D(h) (wo . h) / cos_o, mapped through the
+// reflection (1 / (4 wo . h)) with probability dielectric_reflect_prob (1 where h
+// reflects totally: a refraction chosen there reflects instead), or through the
+// refraction (|wi . h| / (wi . h + eta wo . h)^2) with the rest.
+fn dielectric_rough_lobes(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec2<f32> {
     let cos_o = dot(n, wo);
     let cos_i = dot(n, wi);
     let h = dielectric_half(n, wo, wi, eta);
@@ -84,47 +90,29 @@ fn dielectric_rough_eval(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>,
     let ih = dot(wi, h);
     // a microfacet seen from both sides as the two directions need
     if (cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0) {
-        return 0.0;
+        return vec2<f32>(0.0);
     }
-    let d = ggx_d(dot(n, h), alpha) * smith_g2(cos_o, abs(cos_i), alpha);
+    let d = ggx_d(dot(n, h), alpha);
+    let g2 = smith_g2(cos_o, abs(cos_i), alpha);
+    let visible = d / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
     let f = dielectric_fresnel(oh, eta);
-    if (cos_i > 0.0) {
-        return f * d / (4.0 * cos_o);
-    }
-    let denom = ih + eta * oh;
-    return eta * eta * (1.0 - f) * d * abs(ih) * oh / (denom * denom * cos_o);
-}
-
-// The pdf of dielectric_rough_scatter's directions: a visible normal's density
-// G1(wo) D(h) (wo . h) / cos_o, mapped through the reflection (1 / (4 wo . h)) with
-// probability dielectric_reflect_prob, or through the refraction
-// (|wi . h| / (wi . h + eta wo . h)^2) with the rest.
-fn dielectric_rough_pdf(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> f32 {
-    let cos_o = dot(n, wo);
-    let cos_i = dot(n, wi);
-    let h = dielectric_half(n, wo, wi, eta);
-    let oh = dot(wo, h);
-    let ih = dot(wi, h);
-    if (cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0) {
-        return 0.0;
-    }
-    let visible = ggx_d(dot(n, h), alpha) / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
     let p_r = dielectric_reflect_prob(cos_o, eta);
     if (cos_i > 0.0) {
-        // a refraction chosen at a microfacet that reflects totally reflects instead
         let tir = eta * eta * (1.0 - oh * oh) >= 1.0;
-        return select(p_r, 1.0, tir) * visible / 4.0;
+        return vec2<f32>(f * d * g2 / (4.0 * cos_o), select(p_r, 1.0, tir) * visible / 4.0);
     }
     let denom = ih + eta * oh;
-    return (1.0 - p_r) * visible * oh * abs(ih) / (denom * denom);
+    let jacobian = abs(ih) * oh / (denom * denom);
+    return vec2<f32>(eta * eta * (1.0 - f) * d * g2 * jacobian / cos_o, (1.0 - p_r) * visible * jacobian);
 }
 
 // Rough glass: a visible normal h seen from wo (Heitz 2018), then the mirror direction
 // about it (with probability dielectric_reflect_prob, u.x reused) or the refraction
-// through it (the mirror direction where h reflects totally); weight = eval / pdf times the tint (and absorption) in `weight`. A
-// direction on the wrong side of the geometric surface is absorbed. Sampled as a delta: next-event estimation does not reach lights
-// through it (its eval needs the side of the hit, which the integrator's BSDF queries do
-// not carry).
+// through it (the mirror direction where h reflects totally); weight = BSDF x cos / pdf
+// (dielectric_rough_lobes) times the tint (and absorption) in `weight`. A direction on
+// the wrong side of the geometric surface is absorbed. Sampled as a delta: next-event
+// estimation does not reach lights through it (its eval needs the side of the hit, which
+// the integrator's BSDF queries do not carry).
 fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, weight: vec3<f32>, u: vec2<f32>) -> Scatter {
     let wo = -ray.dir;
     let cos_o = dot(n, wo);
@@ -145,11 +133,10 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
     let wi = select(normalize(-eta * wo + (eta * oh - cos_t) * h), normalize(2.0 * oh * h - wo), is_reflection);
     let side = select(-1.0, 1.0, hit.front_face);
     let above = side * dot(wi, hit.ng) > 0.0;
-    let f = dielectric_rough_eval(p.alpha, n, wo, wi, eta);
-    let pdf = dielectric_rough_pdf(p.alpha, n, wo, wi, eta);
-    if (!(pdf > 0.0) || above != is_reflection) {
+    let lobes = dielectric_rough_lobes(p.alpha, n, wo, wi, eta);
+    if (!(lobes.y > 0.0) || above != is_reflection) {
         return absorbed();
     }
-    return Scatter(true, wi, weight * (f / pdf), 0.0, true);
+    return Scatter(true, wi, weight * (lobes.x / lobes.y), 0.0, true);
 }
 #endif

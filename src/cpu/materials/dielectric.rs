@@ -90,49 +90,41 @@ pub fn half(n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> Vec3 {
     }
 }
 
-/// BSDF x |cos(theta_i)| of rough glass: reflection F D G2 / (4 cos_o); refraction, for
+/// Rough glass toward wi: (BSDF x |cos(theta_i)|, the pdf of `rough_scatter`'s
+/// directions), computed together. BSDF: reflection F D G2 / (4 cos_o); refraction, for
 /// radiance, eta^2 (1 - F) D G2 |wi . h| |wo . h| / ((wi . h + eta wo . h)^2 cos_o).
-pub fn rough_eval(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+/// pdf: the visible normal's density through the reflection (probability
+/// `reflect_prob`, 1 where h reflects totally) or the refraction (the rest).
+pub fn rough_lobes(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
     let cos_o = n.dot(wo);
     let cos_i = n.dot(wi);
     let h = half(n, wo, wi, eta);
     let oh = wo.dot(h);
     let ih = wi.dot(h);
     if cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0 {
-        return 0.0;
+        return (0.0, 0.0);
     }
-    let d = ggx_d(n.dot(h), alpha) * smith_g2(cos_o, cos_i.abs(), alpha);
+    let d = ggx_d(n.dot(h), alpha);
+    let g2 = smith_g2(cos_o, cos_i.abs(), alpha);
+    let visible = d / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
     let f = fresnel(oh, eta);
-    if cos_i > 0.0 {
-        return f * d / (4.0 * cos_o);
-    }
-    let denom = ih + eta * oh;
-    eta * eta * (1.0 - f) * d * ih.abs() * oh / (denom * denom * cos_o)
-}
-
-/// The pdf of `rough_scatter`'s directions.
-pub fn rough_pdf(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
-    let cos_o = n.dot(wo);
-    let cos_i = n.dot(wi);
-    let h = half(n, wo, wi, eta);
-    let oh = wo.dot(h);
-    let ih = wi.dot(h);
-    if cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0 {
-        return 0.0;
-    }
-    let visible = ggx_d(n.dot(h), alpha) / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
     let p_r = reflect_prob(cos_o, eta);
     if cos_i > 0.0 {
-        // a refraction chosen at a microfacet that reflects totally reflects instead
         let tir = eta * eta * (1.0 - oh * oh) >= 1.0;
-        return if tir { 1.0 } else { p_r } * visible / 4.0;
+        let p = if tir { 1.0 } else { p_r };
+        return (f * d * g2 / (4.0 * cos_o), p * visible / 4.0);
     }
     let denom = ih + eta * oh;
-    (1.0 - p_r) * visible * oh * ih.abs() / (denom * denom)
+    let jacobian = ih.abs() * oh / (denom * denom);
+    (
+        eta * eta * (1.0 - f) * d * g2 * jacobian / cos_o,
+        (1.0 - p_r) * visible * jacobian,
+    )
 }
 
 /// Rough glass: a visible normal, then the mirror direction about it or the refraction
-/// through it (the mirror direction where it reflects totally); weight = eval / pdf times `weight`; sampled as a delta.
+/// through it (the mirror direction where it reflects totally); weight = BSDF x cos / pdf
+/// (`rough_lobes`) times `weight`; sampled as a delta.
 pub fn rough_scatter(
     p: &Params,
     ray: &Ray,
@@ -172,8 +164,7 @@ pub fn rough_scatter(
     };
     let side = if hit.front_face { 1.0 } else { -1.0 };
     let above = side * wi.dot(hit.ng) > 0.0;
-    let f = rough_eval(p.alpha, n, wo, wi, eta);
-    let pdf = rough_pdf(p.alpha, n, wo, wi, eta);
+    let (f, pdf) = rough_lobes(p.alpha, n, wo, wi, eta);
     // written as in WGSL, so a NaN pdf takes the same branch on both backends
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(pdf > 0.0) || above != reflect {

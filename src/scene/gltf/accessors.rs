@@ -186,46 +186,11 @@ impl Loader<'_> {
         }
         let out = match a.data_type() {
             DataType::F32 => read::<f32, N>(a, buffers, |x| x),
-            DataType::I8 => read::<i8, N>(a, buffers, |x| {
-                if norm {
-                    (x as f32 / 127.0).max(-1.0)
-                } else {
-                    x as f32
-                }
-            }),
-            DataType::U8 => {
-                read::<u8, N>(
-                    a,
-                    buffers,
-                    |x| {
-                        if norm {
-                            x as f32 / 255.0
-                        } else {
-                            x as f32
-                        }
-                    },
-                )
-            }
-            DataType::I16 => read::<i16, N>(a, buffers, |x| {
-                if norm {
-                    (x as f32 / 32767.0).max(-1.0)
-                } else {
-                    x as f32
-                }
-            }),
-            DataType::U16 => {
-                read::<u16, N>(
-                    a,
-                    buffers,
-                    |x| {
-                        if norm {
-                            x as f32 / 65535.0
-                        } else {
-                            x as f32
-                        }
-                    },
-                )
-            }
+            // normalized integers over their largest value, signed ones at least -1
+            DataType::I8 => read::<i8, N>(a, buffers, |x| dequantize(x as f32, 127.0, norm)),
+            DataType::U8 => read::<u8, N>(a, buffers, |x| dequantize(x as f32, 255.0, norm)),
+            DataType::I16 => read::<i16, N>(a, buffers, |x| dequantize(x as f32, 32767.0, norm)),
+            DataType::U16 => read::<u16, N>(a, buffers, |x| dequantize(x as f32, 65535.0, norm)),
             DataType::U32 => read::<u32, N>(a, buffers, |x| x as f32),
         };
         let out = out.ok_or_else(unreadable)?;
@@ -233,5 +198,15 @@ impl Loader<'_> {
             return Err(GltfError::new(key, "has a non-finite value"));
         }
         Ok(out)
+    }
+}
+
+/// A component as KHR_mesh_quantization reads it: a normalized integer over its largest
+/// value `max` (a signed one at least -1), else as it is.
+fn dequantize(x: f32, max: f32, normalized: bool) -> f32 {
+    if normalized {
+        (x / max).max(-1.0)
+    } else {
+        x
     }
 }

@@ -128,15 +128,16 @@ impl Loader<'_> {
             .texture_transform()
             .map(|t| UvTransformDesc::from_v_down(t.offset(), t.rotation(), t.scale()));
         let tex = info.texture();
-        let derived = Some(glossiness.to_bits());
-        let slot = self.uv_slot(uv_set);
-        if let Some(i) = self.texture_keys.iter().position(|t| {
-            t.texture == tex.index()
-                && t.derived == derived
-                && t.uv_slot == slot
-                && t.transform == transform
-        }) {
-            return Ok(self.out.textures[i].name.clone());
+        let k = TextureKey {
+            texture: tex.index(),
+            srgb: false,
+            factor: [1.0; 3],
+            uv_slot: self.uv_slot(uv_set),
+            transform,
+            derived: Some(glossiness.to_bits()),
+        };
+        if let Some(name) = self.known_texture(&k) {
+            return Ok(name);
         }
         let source = self
             .image(&tex.source(), false)
@@ -153,15 +154,13 @@ impl Loader<'_> {
             srgb: false,
             data: texels.collect(),
         };
-        self.texture_entry(
-            tex,
-            slot,
-            transform,
-            false,
-            [1.0; 3],
-            derived,
-            Arc::new(image),
-        )
+        self.texture_entry(tex, k, Arc::new(image))
+    }
+
+    /// The name of the texture already made for `k`, if one was.
+    fn known_texture(&self, k: &TextureKey) -> Option<String> {
+        let i = self.texture_keys.iter().position(|t| t == k)?;
+        Some(self.out.textures[i].name.clone())
     }
 
     fn texture_lookup(
@@ -180,33 +179,21 @@ impl Loader<'_> {
             transform,
             derived: None,
         };
-        if let Some(i) = self.texture_keys.iter().position(|t| *t == k) {
-            return Ok(self.out.textures[i].name.clone());
+        if let Some(name) = self.known_texture(&k) {
+            return Ok(name);
         }
         let image = self.image(&tex.source(), srgb)?;
-        self.texture_entry(tex, uv_slot, transform, srgb, factor, None, image)
+        self.texture_entry(tex, k, image)
     }
 
-    /// A texture of the scene format over `image`, with its sampler's modes: its name.
-    #[allow(clippy::too_many_arguments)]
+    /// A texture of the scene format over `image`, with its sampler's modes and what key
+    /// `k` says (uv slot, factor, colour space, transform): its name.
     fn texture_entry(
         &mut self,
         tex: gltf::Texture,
-        uv_slot: u32,
-        transform: Option<UvTransformDesc>,
-        srgb: bool,
-        factor: [f32; 3],
-        derived: Option<u32>,
+        k: TextureKey,
         image: Arc<ImageData>,
     ) -> Result<String> {
-        let k = TextureKey {
-            texture: tex.index(),
-            srgb,
-            factor,
-            uv_slot,
-            transform,
-            derived,
-        };
         let sampler = tex.sampler();
         let mode = |w: gltf::texture::WrappingMode| match w {
             gltf::texture::WrappingMode::ClampToEdge => WrapMode::Clamp,
@@ -231,14 +218,14 @@ impl Loader<'_> {
                 path: String::new(),
                 wrap,
                 filter,
-                uv_set: uv_slot,
-                factor,
-                color_space: if srgb {
+                uv_set: k.uv_slot,
+                factor: k.factor,
+                color_space: if k.srgb {
                     ColorSpace::Srgb
                 } else {
                     ColorSpace::Linear
                 },
-                transform,
+                transform: k.transform,
             },
             image,
         });

@@ -264,11 +264,7 @@ pub fn from_gltf(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> R
         normal_map,
         normal_scale,
         alpha,
-        alpha_mode: match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
-            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
-        },
+        alpha_mode: alpha_mode(m),
         alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
         emission,
         two_sided: m.double_sided(),
@@ -357,16 +353,21 @@ fn from_specular_glossiness(
         normal_map,
         normal_scale,
         alpha,
-        alpha_mode: match m.alpha_mode() {
-            gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
-            gltf::material::AlphaMode::Mask => AlphaMode::Mask,
-            gltf::material::AlphaMode::Blend => AlphaMode::Blend,
-        },
+        alpha_mode: alpha_mode(m),
         alpha_cutoff: m.alpha_cutoff().unwrap_or(0.5),
         emission,
         two_sided: m.double_sided(),
         ..Desc::default()
     })
+}
+
+/// glTF's alphaMode as the format's.
+fn alpha_mode(m: &gltf::Material) -> AlphaMode {
+    match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
+        gltf::material::AlphaMode::Mask => AlphaMode::Mask,
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
+    }
 }
 
 /// Where a .mtl material's values come from, by field.
