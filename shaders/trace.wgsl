@@ -210,9 +210,14 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     let surface = surface_at((*path).ray, cand);
     let mat = material_at(material_record(surface.material), surface);
 #ifdef HAS_NORMAL_MAP
-    let hit = normal_mapped(mat, surface);
+    let mapped = normal_mapped(mat, surface);
 #else
-    let hit = surface;
+    let mapped = surface;
+#endif
+#ifdef HAS_SHADING_NORMALS
+    let hit = bent_normal(mapped, (*path).ray);
+#else
+    let hit = mapped;
 #endif
     var le = emitted(mat, hit);
 #ifdef HAS_MIS
@@ -280,7 +285,7 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         return false;
     }
     (*path).prev_p = hit.p;
-    (*path).prev_pdf = s.pdf;
+    (*path).prev_pdf = scatter_pdf(mat, (*path).ray, hit, s);
     (*path).prev_delta = s.delta;
     (*path).ray = spawn_ray(hit, s.dir);
     (*path).depth += 1u;

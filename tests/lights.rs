@@ -688,10 +688,44 @@ type = "polygon"
 vertices = [[-4, 4, -5], [4, 4, -5], [4, 2, -6], [-4, 2, -6]]
 material = "panel"
 "#;
+    // a smooth-shaded icosphere of glossy pbr lit from behind and beside: at its rim the
+    // shading normals are bent and directions sent over the geometric surface, whose
+    // densities (bsdf_eval, bsdf_pdf, scatter_pdf) every strategy must agree on
+    let smooth = format!(
+        r#"
+[render]
+width = 32
+height = 24
+spp = 256
+max_depth = 3
+[camera]
+look_from = [0, 0.3, 3.2]
+look_at = [0, 0, 0]
+vfov = 45
+[materials]
+ball = {{ type = "pbr", base_color = [0.8, 0.5, 0.3], metallic = 0, roughness = 0.35 }}
+side = {{ type = "emissive", radiance = [2, 1.8, 1.6] }}
+panel = {{ type = "emissive", radiance = [0.6, 0.7, 1.0] }}
+[[objects]]
+type = "mesh"
+path = "{}"
+material = "ball"
+[[objects]]
+type = "polygon"
+vertices = [[2.5, -2, 1], [2.5, 2, 1], [2.5, 2, -2], [2.5, -2, -2]]
+material = "side"
+[[objects]]
+type = "polygon"
+vertices = [[-3, 3, -3], [3, 3, -3], [3, -1, -3.5], [-3, -1, -3.5]]
+material = "panel"
+"#,
+        common::repo_path("scenes/meshes/icosphere.obj").display()
+    );
     let cornell = std::fs::read_to_string(common::repo_path("scenes/cornell.toml")).unwrap();
     let dir = std::env::temp_dir();
     for (name, src, size) in [
         ("glossy", glossy.to_string(), None),
+        ("smooth-shaded", smooth, None),
         ("cornell", cornell, Some(32)),
     ] {
         let mut imgs = Vec::new();

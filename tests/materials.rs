@@ -15,7 +15,9 @@ use common::{material, TestMaterial, MATERIALS};
 use glam::Vec3;
 use wgtrace::cpu::bsdf::{fresnel_dielectric, ggx_d, schlick, smith_lambda};
 use wgtrace::cpu::materials::dielectric::rough_lobes;
-use wgtrace::cpu::materials::{bsdf_eval, bsdf_pdf, material_eval, scatter};
+use wgtrace::cpu::materials::{
+    bent_normal, bsdf_eval, bsdf_pdf, material_eval, scatter, scatter_pdf,
+};
 use wgtrace::cpu::types::{Hit, Ray};
 use wgtrace::scene::records::{Material, MAT_FLAG_DELTA, MAT_FLAG_NEE};
 
@@ -260,6 +262,73 @@ fn every_sampler_matches_its_pdf() {
         tested >= 8,
         "the table has too few sampled materials: {tested}"
     );
+}
+
+/// A shading normal tilted 35 degrees from the geometric one (+Z), seen from views that
+/// leave the viewer over and under its horizon: after `bent_normal`, every material of the
+/// chi-square rows samples directions over the geometric surface with the density
+/// `bsdf_pdf` gives (chi-square; MIS weighs by it, `scatter_pdf`), and its mean weight is
+/// the integral of `bsdf_eval` over the hemisphere (5 standard errors): what the lobes
+/// send under the geometric surface comes back over it, and is counted once.
+#[test]
+fn shading_normals_sample_and_weigh_what_eval_and_pdf_say() {
+    let tilt = 35f32.to_radians();
+    let ns = Vec3::new(tilt.sin(), 0.0, tilt.cos());
+    for t in MATERIALS.iter().filter(|t| t.chi2) {
+        let m = material(t.keys);
+        for theta in [-80.0f32, -50.0, 20.0, 70.0] {
+            let (_, ray, mut hit) = view(theta);
+            hit.ns = ns;
+            let hit = bent_normal(&hit, &ray);
+            let label = format!("{}, tilted normal, {theta} deg", t.name);
+            chi_square(
+                &label,
+                false,
+                |u| {
+                    let s = scatter(&m, &ray, &hit, u);
+                    if s.ok {
+                        let p = scatter_pdf(&m, &ray, &hit, &s);
+                        let q = bsdf_pdf(&m, &ray, &hit, s.dir);
+                        assert!((p - q).abs() <= 1e-4 * q.max(1e-3), "{label}: {p} vs {q}");
+                        assert!(s.dir.z > 0.0, "{label}: {} under the surface", s.dir);
+                    }
+                    s.ok.then_some(s.dir)
+                },
+                |wi| bsdf_pdf(&m, &ray, &hit, wi),
+            );
+            // the mean weight against the integral of eval (midpoint rule, 256 x 512)
+            let (mut sum, mut sq, n) = (0.0f64, 0.0f64, 100_000);
+            let mut rng = 5u32;
+            for _ in 0..n {
+                let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+                let s = scatter(&m, &ray, &hit, u);
+                let w = if s.ok { s.weight.x as f64 } else { 0.0 };
+                sum += w;
+                sq += w * w;
+            }
+            let mean = sum / n as f64;
+            let se = ((sq / n as f64 - mean * mean) / n as f64).sqrt();
+            let (nt, np) = (256, 512);
+            let mut integral = 0.0f64;
+            for i in 0..nt {
+                let th = (i as f64 + 0.5) / nt as f64 * std::f64::consts::FRAC_PI_2;
+                for j in 0..np {
+                    let ph = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
+                    let wi = Vec3::new(
+                        (th.sin() * ph.cos()) as f32,
+                        (th.sin() * ph.sin()) as f32,
+                        th.cos() as f32,
+                    );
+                    integral += bsdf_eval(&m, &ray, &hit, wi).x as f64 * th.sin();
+                }
+            }
+            integral *= std::f64::consts::FRAC_PI_2 / nt as f64 * std::f64::consts::TAU / np as f64;
+            assert!(
+                (mean - integral).abs() <= 5.0 * se + 3e-3,
+                "{label}: mean weight {mean} +- {se} vs eval's integral {integral}"
+            );
+        }
+    }
 }
 
 /// The weight and pdf a sampled direction comes with are `eval / pdf` and `pdf` of that

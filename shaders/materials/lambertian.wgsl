@@ -6,15 +6,16 @@
 #import shared/types
 
 // Cosine-weighted about the shading normal on the side the ray came from, so either side
-// of a surface scatters; weight = albedo exactly. A direction that an interpolated normal
-// tilts under the geometric surface ends the path.
+// of a surface scatters; weight = albedo exactly. A direction that a shading normal tilts
+// under the geometric surface is sent over it (over_surface); its pdf is the drawn one's.
 fn lambertian_scatter(p: LambertianParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     let side = select(-1.0, 1.0, hit.front_face);
-    let dir = sample_cosine_hemisphere(side * hit.ns, u);
+    let drawn = sample_cosine_hemisphere(side * hit.ns, u);
+    let dir = over_surface(drawn, side, hit);
     if (side * dot(dir, hit.ng) <= 0.0) {
         return absorbed();
     }
-    return Scatter(true, dir, p.albedo, dot(side * hit.ns, dir) / PI, false);
+    return Scatter(true, dir, p.albedo, dot(side * hit.ns, drawn) / PI, false);
 }
 
 // albedo / pi x cos.

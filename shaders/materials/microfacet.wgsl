@@ -55,12 +55,12 @@ fn microfacet_scatter(p: MicrofacetParams, ray: Ray, hit: Hit, u: vec2<f32>) -> 
     let is_smooth = p.alpha < ALPHA_SMOOTH;
     if (is_smooth && u.x < p_s) {
         // the mirror lobe: weight = ks F(cos_o) / p_s
-        let wi = reflect_dir(ray.dir, n);
+        let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
         if (side * dot(wi, hit.ng) <= 0.0) {
             return absorbed();
         }
         return Scatter(true, wi, p.specular * (schlick(cos_o, p.ior) / p_s), 0.0, true);
     }
     let wi = sample_ggx_lobes(p_s, p.alpha, n, wo, u);
-    return density_sample(wi, microfacet_eval(p, n, wo, wi), microfacet_pdf(p, n, wo, wi), side, hit.ng);
+    return density_sample(wi, microfacet_eval(p, n, wo, wi), microfacet_pdf(p, n, wo, wi), side, hit);
 }

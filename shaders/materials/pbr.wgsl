@@ -83,5 +83,5 @@ fn pbr_scatter(p: PbrParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
         return absorbed();
     }
     let wi = sample_ggx_lobes(pbr_spec_prob(p, cos_o), p.alpha, n, wo, u);
-    return density_sample(wi, pbr_eval(p, n, wo, wi), pbr_pdf(p, n, wo, wi), side, hit.ng);
+    return density_sample(wi, pbr_eval(p, n, wo, wi), pbr_pdf(p, n, wo, wi), side, hit);
 }

@@ -22,14 +22,30 @@ fn absorbed() -> Scatter {
     return Scatter(false, vec3<f32>(0.0), vec3<f32>(0.0), 0.0, true);
 }
 
-// A direction wi drawn from a lobe with a density, weighted by BSDF x cos f over its pdf;
-// absorbed when the pdf is not positive or wi is under the geometric surface (ng turned
-// to the ray's side).
-fn density_sample(wi: vec3<f32>, f: vec3<f32>, pdf: f32, side: f32, ng: vec3<f32>) -> Scatter {
-    if (!(pdf > 0.0) || side * dot(wi, ng) <= 0.0) {
+// wi as scattering sends it. Where the hit's shading normal differs from its geometric
+// one (an interpolated or mapped normal: HAS_SHADING_NORMALS), a direction its lobes send
+// under the geometric surface (ng turned to the ray's side by `side`) is mirrored over
+// it, as if the surface reflected it there, rather than lost: a smooth-shaded or
+// normal-mapped surface keeps the energy its shading gives it (docs/robustness.md).
+// bsdf_eval and bsdf_pdf count both directions that reach a direction. Elsewhere wi.
+fn over_surface(wi: vec3<f32>, side: f32, hit: Hit) -> vec3<f32> {
+#ifdef HAS_SHADING_NORMALS
+    if (any(hit.ns != hit.ng) && side * dot(wi, hit.ng) < 0.0) {
+        return wi - 2.0 * dot(wi, hit.ng) * hit.ng;
+    }
+#endif
+    return wi;
+}
+
+// A direction wi drawn from a lobe with a density, weighted by BSDF x cos f over its pdf,
+// sent over the surface (over_surface); absorbed when the pdf is not positive or the
+// direction is under the geometric surface (ng turned to the ray's side).
+fn density_sample(wi: vec3<f32>, f: vec3<f32>, pdf: f32, side: f32, hit: Hit) -> Scatter {
+    let dir = over_surface(wi, side, hit);
+    if (!(pdf > 0.0) || side * dot(dir, hit.ng) <= 0.0) {
         return absorbed();
     }
-    return Scatter(true, wi, f / pdf, pdf, false);
+    return Scatter(true, dir, f / pdf, pdf, false);
 }
 
 // Mirror direction of d about the unit normal n: d - 2 (d . n) n.

@@ -111,20 +111,80 @@ fn alpha_u(u: f32, k: u32) -> f32 {
 }
 #endif
 
+#ifdef HAS_SHADING_NORMALS
+// The hit with its shading normal bent where it differs from the geometric one and the
+// mirror direction of the viewer about it would come within SHADING_LIFT of the geometric
+// surface or under it (the viewer under the shading normal's horizon, as at a
+// smooth-shaded silhouette): to the half vector of the viewer and that mirror direction
+// lifted to SHADING_LIFT over the surface (after Keller et al. 2017, the Iray paper). The
+// viewer is then over the shading horizon and a mirror reflects over the surface, where
+// the unbent normal would have absorbed the path. Continuous: at SHADING_LIFT the half
+// vector is the normal itself.
+fn bent_normal(hit: Hit, ray: Ray) -> Hit {
+    var h = hit;
+    if (any(hit.ns != hit.ng)) {
+        let side = select(-1.0, 1.0, hit.front_face);
+        let ng = side * hit.ng;
+        let n = side * hit.ns;
+        let wo = -ray.dir;
+        let r = 2.0 * dot(wo, n) * n - wo;
+        let c = dot(r, ng);
+        if (c < SHADING_LIFT) {
+            let lifted = normalize(r + (SHADING_LIFT - c) * ng);
+            h.ns = side * normalize(wo + lifted);
+        }
+    }
+    return h;
+}
+#endif
+
+// The direction mirrored over the hit's geometric surface: the other direction that
+// over_surface sends to the same place.
+fn mirrored(wi: vec3<f32>, hit: Hit) -> vec3<f32> {
+    return wi - 2.0 * dot(wi, hit.ng) * hit.ng;
+}
+
 // BSDF x cos toward wi: what scatter's weight is the ratio of, and 0 under the geometric
-// surface, where scatter absorbs, and for delta lobes.
+// surface, where scatter absorbs, and for delta lobes. Where shading normals differ from
+// the geometric one, what the lobes send to wi's mirror image under the surface is sent
+// to wi too (over_surface).
 fn bsdf_eval(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> vec3<f32> {
     let side = select(-1.0, 1.0, hit.front_face);
     if (side * dot(wi, hit.ng) <= 0.0) {
         return vec3<f32>(0.0);
     }
-    return material_eval(mat, side * hit.ns, -ray.dir, wi);
+    var f = material_eval(mat, side * hit.ns, -ray.dir, wi);
+#ifdef HAS_SHADING_NORMALS
+    if (any(hit.ns != hit.ng)) {
+        f += material_eval(mat, side * hit.ns, -ray.dir, mirrored(wi, hit));
+    }
+#endif
+    return f;
 }
 
 // The density with which scatter draws wi (before it absorbs directions under the
-// geometric surface).
+// geometric surface); with shading normals that differ, the density of its mirror image
+// too, which over_surface sends to wi.
 fn bsdf_pdf(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> f32 {
-    return material_pdf(mat, select(-hit.ns, hit.ns, hit.front_face), -ray.dir, wi);
+    let n = select(-hit.ns, hit.ns, hit.front_face);
+    var pdf = material_pdf(mat, n, -ray.dir, wi);
+#ifdef HAS_SHADING_NORMALS
+    if (any(hit.ns != hit.ng)) {
+        pdf += material_pdf(mat, n, -ray.dir, mirrored(wi, hit));
+    }
+#endif
+    return pdf;
+}
+
+// The density of a scattered direction s as MIS weighs it against light sampling:
+// scatter's own, or bsdf_pdf's where shading normals may have sent it over the surface.
+fn scatter_pdf(mat: Material, ray: Ray, hit: Hit, s: Scatter) -> f32 {
+#ifdef HAS_SHADING_NORMALS
+    if (!s.delta && any(hit.ns != hit.ng)) {
+        return bsdf_pdf(mat, ray, hit, s.dir);
+    }
+#endif
+    return s.pdf;
 }
 
 // Whether next-event estimation applies at a surface: it has a lobe with a density (its

@@ -167,18 +167,29 @@ pub fn sample_ggx_lobes(p_s: f32, alpha: f32, n: Vec3, wo: Vec3, u: [f32; 2]) ->
     sample_cosine_hemisphere(n, [(u[0] - p_s) / (1.0 - p_s), u[1]])
 }
 
+/// `wi` as scattering sends it (bsdf.wgsl's `over_surface`): where the hit's shading
+/// normal differs from its geometric one, a direction under the geometric surface (`ng`
+/// turned to the ray's `side`) is mirrored over it rather than lost; elsewhere `wi`.
+pub fn over_surface(wi: Vec3, side: f32, hit: &Hit) -> Vec3 {
+    if hit.ns != hit.ng && side * wi.dot(hit.ng) < 0.0 {
+        return wi - 2.0 * wi.dot(hit.ng) * hit.ng;
+    }
+    wi
+}
+
 /// A direction `wi` drawn from a lobe with a density, weighted by BSDF x cos `f` over its
-/// `pdf`; absorbed when the pdf is not positive or `wi` is under the geometric surface
-/// (`ng` turned to the ray's `side`).
-pub fn density_sample(wi: Vec3, f: Vec3, pdf: f32, side: f32, ng: Vec3) -> Scatter {
+/// `pdf`, sent over the surface (`over_surface`); absorbed when the pdf is not positive or
+/// the direction is under the geometric surface (`ng` turned to the ray's `side`).
+pub fn density_sample(wi: Vec3, f: Vec3, pdf: f32, side: f32, hit: &Hit) -> Scatter {
+    let dir = over_surface(wi, side, hit);
     // Written as in WGSL, so a NaN pdf takes the same branch on both backends.
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(pdf > 0.0) || side * wi.dot(ng) <= 0.0 {
+    if !(pdf > 0.0) || side * dir.dot(hit.ng) <= 0.0 {
         return ABSORBED;
     }
     Scatter {
         ok: true,
-        dir: wi,
+        dir,
         weight: f / pdf,
         pdf,
         delta: false,

@@ -9,8 +9,8 @@ use super::lights::{
     background_radiance, light_pdf, light_pdf_total, power_heuristic, sample_light, sample_punctual,
 };
 use super::materials::{
-    alpha_u, bsdf_eval, bsdf_pdf, emitted, material_at, mixture_applies, nee_applies,
-    normal_mapped, scatter, transparent_at,
+    alpha_u, bent_normal, bsdf_eval, bsdf_pdf, emitted, material_at, mixture_applies, nee_applies,
+    normal_mapped, scatter, scatter_pdf, transparent_at,
 };
 use super::rng::rand_2d;
 use super::samplers::{bounce_2d, sample_2d, DIM_ALPHA, DIM_PUNCTUAL, DIM_RR};
@@ -258,7 +258,7 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
     }
     let surface = surface_at(b, &path.ray, &cand);
     let mat = &material_at(b, &b.materials[surface.material as usize], &surface);
-    let hit = normal_mapped(b, mat, &surface);
+    let hit = bent_normal(&normal_mapped(b, mat, &surface), &path.ray);
     let mut le = emitted(mat, &hit);
     let light = b.primitives[cand.prim as usize].flags >> PRIM_LIGHT_SHIFT;
     if mis && light != 0 && le.cmpgt(Vec3::ZERO).any() {
@@ -322,7 +322,7 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         return false;
     }
     path.prev_p = hit.p;
-    path.prev_pdf = s.pdf;
+    path.prev_pdf = scatter_pdf(mat, &path.ray, &hit, &s);
     path.prev_delta = s.delta;
     path.ray = spawn_ray(&hit, s.dir);
     path.depth += 1;

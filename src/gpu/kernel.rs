@@ -7,7 +7,7 @@ use wgpu::util::DeviceExt;
 use super::bindings::{bind_scene, layout, scene_buffers, Slot};
 use super::context::GpuContext;
 use super::error::GpuError;
-use super::plan::GpuPlan;
+use super::plan::{Feature, GpuPlan};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{
     KernelHit, KernelRay, LightQuery, LightReply, MaterialQuery, MaterialReply, TextureLookup,
@@ -73,20 +73,17 @@ pub fn lookup_textures(
 }
 
 /// Asks the GPU's materials what the integrator asks of them (`materials_main`): each
-/// query's material at its hit, scattered, evaluated and its pdf taken toward `wi`.
+/// query's material at its hit, scattered, evaluated and its pdf taken toward `wi`. A
+/// query's shading normal may differ from its geometric one whatever the scene's
+/// primitives, so the shading of such normals is compiled in.
 pub fn shade_materials(
     ctx: &GpuContext,
     scene: &FlatScene,
     queries: &[MaterialQuery],
 ) -> Result<Vec<MaterialReply>, GpuError> {
-    run_kernel(
-        ctx,
-        scene,
-        &plan(ctx, scene)?,
-        "materials_main",
-        io(2),
-        queries,
-    )
+    let mut plan = plan(ctx, scene)?;
+    plan.shader.features.insert(Feature::ShadingNormals);
+    run_kernel(ctx, scene, &plan, "materials_main", io(2), queries)
 }
 
 /// Samples the GPU's lights from each query's point (`lights_main`), with the pdfs of what

@@ -51,6 +51,10 @@ pub enum Feature {
     Textures,
     /// Tangent-space normal maps (pbr's `normal_map`), with the vertex tangents they need.
     NormalMap,
+    /// Shading normals that differ from the geometric one (interpolated vertex normals,
+    /// normal maps): bent toward the viewer where it is under them, and directions under
+    /// the geometric surface sent over it (`bent_normal`, `over_surface`).
+    ShadingNormals,
     /// Triangles with a second uv set, which textures may read (`uv_set = 1`).
     SecondUv,
     /// Triangles with vertex colours, which multiply their material's colour and opacity.
@@ -96,9 +100,10 @@ const GEOMETRY: [Feature; 10] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 18] = [
+const SHADING: [Feature; 19] = [
     Feature::Textures,
     Feature::NormalMap,
+    Feature::ShadingNormals,
     Feature::SecondUv,
     Feature::VertexColors,
     Feature::RoughDielectric,
@@ -142,6 +147,7 @@ impl Feature {
             Feature::Material(kind) => kind.define(),
             Feature::Textures => "HAS_TEXTURES",
             Feature::NormalMap => "HAS_NORMAL_MAP",
+            Feature::ShadingNormals => "HAS_SHADING_NORMALS",
             Feature::SecondUv => "HAS_UV1",
             Feature::VertexColors => "HAS_VERTEX_COLORS",
             Feature::RoughDielectric => "HAS_ROUGH_DIELECTRIC",
@@ -268,6 +274,14 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .any(|m| Surface::read(m).normal_texture != r::NO_TEXTURE),
         )
         .with(
+            Feature::ShadingNormals,
+            flag(r::PRIM_FLAG_SHADING_NORMALS)
+                || scene
+                    .materials
+                    .iter()
+                    .any(|m| Surface::read(m).normal_texture != r::NO_TEXTURE),
+        )
+        .with(
             Feature::Alpha,
             scene
                 .materials
@@ -351,10 +365,11 @@ impl ShaderSpec {
     /// which llvmpipe inlines at each call) to a shader that serves every other scene,
     /// and llvmpipe's compile of it went from 153 s to 232 s with them; a second uv set
     /// and vertex colours add reads to every triangle hit; rough glass a branch to
-    /// every glass hit.
-    pub const OPTIONAL_IN_FULL: [Feature; 5] = [
+    /// every glass hit; shading normals a second eval and pdf to every light sample.
+    pub const OPTIONAL_IN_FULL: [Feature; 6] = [
         Feature::Alpha,
         Feature::NormalMap,
+        Feature::ShadingNormals,
         Feature::SecondUv,
         Feature::VertexColors,
         Feature::RoughDielectric,

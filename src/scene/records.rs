@@ -196,6 +196,10 @@ shared_constants! {
     /// pbrt-v4): eval and pdf leave it out and the sampler takes the mirror direction
     /// itself, so roughness 0 never divides by zero.
     ALPHA_SMOOTH: f32 = 1e-3;
+    /// Where a shading normal differs from the geometric one, the cosine under which the
+    /// mirror direction of the viewer about it may not come to the geometric surface:
+    /// the normal is bent to lift it there (`bent_normal`).
+    SHADING_LIFT: f32 = 1e-2;
     /// A BVH node's exit distance is widened by 1 + 2 gamma(3), gamma(n) = n eps /
     /// (1 - n eps) with eps = 2^-24, so rounding never culls a box a ray touches.
     BOX_WIDEN: f32 = 1.0 + 3.0 * f32::EPSILON;

@@ -3,8 +3,8 @@
 use glam::Vec3;
 
 use crate::cpu::bsdf::{
-    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, reflect_dir, sample_ggx_lobes,
-    schlick, smith_g2, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, over_surface, reflect_dir,
+    sample_ggx_lobes, schlick, smith_g2, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
 use crate::cpu::sampling::PI;
 use crate::cpu::types::{Hit, Ray};
@@ -58,7 +58,7 @@ impl Shading for Params {
         let is_smooth = self.alpha < ALPHA_SMOOTH;
         if is_smooth && u[0] < p_s {
             // the mirror lobe: weight = ks F(cos_o) / p_s
-            let wi = reflect_dir(ray.dir, n);
+            let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
             if side * wi.dot(hit.ng) <= 0.0 {
                 return ABSORBED;
             }
@@ -71,6 +71,6 @@ impl Shading for Params {
             };
         }
         let wi = sample_ggx_lobes(p_s, self.alpha, n, wo, u);
-        density_sample(wi, self.eval(n, wo, wi), self.pdf(n, wo, wi), side, hit.ng)
+        density_sample(wi, self.eval(n, wo, wi), self.pdf(n, wo, wi), side, hit)
     }
 }

@@ -21,7 +21,7 @@ use crate::scene::materials::common::Surface;
 use crate::scene::materials::{for_each_material, MaterialKind};
 use crate::scene::records::{
     Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA,
-    MAT_FLAG_NEE, MAT_FLAG_TWO_SIDED, NO_TEXTURE,
+    MAT_FLAG_NEE, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -165,21 +165,64 @@ pub fn alpha_u(u: f32, k: u32) -> f32 {
     x - x.floor()
 }
 
+/// The hit with its shading normal bent where the viewer's mirror direction about it
+/// would come within `SHADING_LIFT` of the geometric surface or under it
+/// (materials.wgsl's `bent_normal`, which says why).
+pub fn bent_normal(hit: &Hit, ray: &Ray) -> Hit {
+    let mut h = *hit;
+    if hit.ns != hit.ng {
+        let side = if hit.front_face { 1.0 } else { -1.0 };
+        let ng = side * hit.ng;
+        let n = side * hit.ns;
+        let wo = -ray.dir;
+        let r = 2.0 * wo.dot(n) * n - wo;
+        let c = r.dot(ng);
+        if c < SHADING_LIFT {
+            let lifted = (r + (SHADING_LIFT - c) * ng).normalize();
+            h.ns = side * (wo + lifted).normalize();
+        }
+    }
+    h
+}
+
+/// The direction mirrored over the hit's geometric surface (materials.wgsl's `mirrored`).
+pub fn mirrored(wi: Vec3, hit: &Hit) -> Vec3 {
+    wi - 2.0 * wi.dot(hit.ng) * hit.ng
+}
+
 /// BSDF x cos toward wi, 0 under the geometric surface (where scatter absorbs) and for
-/// delta lobes.
+/// delta lobes; with a shading normal that differs from the geometric one, plus what the
+/// lobes send to wi's mirror image (which `over_surface` sends to wi).
 pub fn bsdf_eval(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> Vec3 {
     let side = if hit.front_face { 1.0 } else { -1.0 };
     if side * wi.dot(hit.ng) <= 0.0 {
         return Vec3::ZERO;
     }
-    material_eval(mat, side * hit.ns, -ray.dir, wi)
+    let f = material_eval(mat, side * hit.ns, -ray.dir, wi);
+    if hit.ns != hit.ng {
+        return f + material_eval(mat, side * hit.ns, -ray.dir, mirrored(wi, hit));
+    }
+    f
 }
 
 /// The density with which scatter draws wi (before it absorbs directions under the
-/// geometric surface).
+/// geometric surface), plus its mirror image's where shading normals differ.
 pub fn bsdf_pdf(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> f32 {
     let n = if hit.front_face { hit.ns } else { -hit.ns };
-    material_pdf(mat, n, -ray.dir, wi)
+    let pdf = material_pdf(mat, n, -ray.dir, wi);
+    if hit.ns != hit.ng {
+        return pdf + material_pdf(mat, n, -ray.dir, mirrored(wi, hit));
+    }
+    pdf
+}
+
+/// The density of a scattered direction as MIS weighs it (materials.wgsl's
+/// `scatter_pdf`): scatter's own, or `bsdf_pdf`'s where shading normals differ.
+pub fn scatter_pdf(mat: &Material, ray: &Ray, hit: &Hit, s: &Scatter) -> f32 {
+    if !s.delta && hit.ns != hit.ng {
+        return bsdf_pdf(mat, ray, hit, s.dir);
+    }
+    s.pdf
 }
 
 /// Whether next-event estimation applies: the material has a lobe with a density (its

@@ -91,6 +91,6 @@ impl Shading for Params {
             return ABSORBED;
         }
         let wi = sample_ggx_lobes(spec_prob(self, cos_o), self.alpha, n, wo, u);
-        density_sample(wi, self.eval(n, wo, wi), self.pdf(n, wo, wi), side, hit.ng)
+        density_sample(wi, self.eval(n, wo, wi), self.pdf(n, wo, wi), side, hit)
     }
 }
