@@ -414,9 +414,17 @@ fn every_test_in_the_repository_runs_under_cargo_test() {
 /// roughness, fails here: use the material's `Params` or `common::material`.
 #[test]
 fn material_places_are_named_only_by_the_material_layer() {
-    const PLACES: [&str; 8] = [
+    const PLACES: [&str; 16] = [
         "scalars",
+        "scalars2",
         "color2",
+        "color3",
+        "normal2",
+        "tex_data2",
+        "tex_data3",
+        "tex_data4",
+        "tex_data5",
+        "tex_normal2",
         "tex_color",
         "tex_color2",
         "tex_data0",

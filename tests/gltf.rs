@@ -353,6 +353,108 @@ fn material_extensions_map_onto_pbr_and_dielectric() {
     assert_eq!(s.background, [0.0; 3]);
 }
 
+/// KHR_materials_clearcoat and KHR_materials_sheen map onto pbr's layers with their
+/// factors and textures (the coat's normal map and the sheen's sRGB colour among them),
+/// the sheen's albedo table placed in the scene's tables; their mistakes are named by
+/// their JSON paths.
+#[test]
+fn clearcoat_and_sheen_map_onto_pbr_with_their_textures() {
+    let img = image::RgbaImage::from_fn(2, 2, |x, y| {
+        image::Rgba([200, 100, (x * 255) as u8, (y * 255) as u8])
+    });
+    let layered = |clearcoat: serde_json::Value, sheen: serde_json::Value| {
+        let mut w = GltfWriter::new();
+        let t = w.png_texture(&img, None).unwrap();
+        let fill = |v: serde_json::Value| {
+            serde_json::from_str::<serde_json::Value>(
+                &v.to_string().replace("\"T\"", &t.to_string()),
+            )
+            .unwrap()
+        };
+        let m = w.material(json!({
+            "pbrMetallicRoughness": { "baseColorFactor": [0.2, 0.3, 0.4, 1.0], "metallicFactor": 0.0 },
+            "extensions": { "KHR_materials_clearcoat": fill(clearcoat), "KHR_materials_sheen": fill(sheen) } }));
+        w.use_extension("KHR_materials_clearcoat", false);
+        w.use_extension("KHR_materials_sheen", false);
+        let mesh = quad_mesh(&mut w, Some(m));
+        let n = w.node(json!({ "mesh": mesh }));
+        w.scene(&[n]);
+        w
+    };
+    let w = layered(
+        json!({ "clearcoatFactor": 0.8, "clearcoatRoughnessFactor": 0.4,
+                "clearcoatTexture": { "index": "T" }, "clearcoatRoughnessTexture": { "index": "T" },
+                "clearcoatNormalTexture": { "index": "T", "scale": 0.5 } }),
+        json!({ "sheenColorFactor": [0.5, 0.25, 1.0], "sheenColorTexture": { "index": "T" },
+                "sheenRoughnessFactor": 0.6, "sheenRoughnessTexture": { "index": "T" } }),
+    );
+    let s = load(&w.to_gltf_external(&dir("layers"), "layers").unwrap());
+    assert!(
+        !s.warnings.iter().any(|w| w.contains("KHR_materials")),
+        "{:?}",
+        s.warnings
+    );
+    let p = pbr::Params::read(&s.materials[0]);
+    assert_eq!((p.clearcoat, p.coat_normal_scale), (0.8, 0.5));
+    assert!((p.coat_alpha - 0.16).abs() < 1e-6 && (p.sheen_alpha - 0.36).abs() < 1e-6);
+    for t in [
+        p.clearcoat_texture,
+        p.clearcoat_roughness_texture,
+        p.coat_normal_texture,
+        p.sheen_color_texture,
+        p.sheen_roughness_texture,
+    ] {
+        assert_ne!(t, records::NO_TEXTURE);
+    }
+    // the sheen colour is its texture, sRGB, times the factor
+    assert_eq!(p.sheen_color, Vec3::ONE);
+    let sheen_tex = &s.textures[p.sheen_color_texture as usize];
+    assert_eq!(sheen_tex.color0, [0.5, 0.25, 1.0, 0.0]);
+    assert_ne!(sheen_tex.flags & records::TEX_FLAG_SRGB, 0);
+    assert_eq!(
+        s.textures[p.clearcoat_texture as usize].flags & records::TEX_FLAG_SRGB,
+        0
+    );
+    let table = pbr::sheen_albedo_table();
+    let at = p.sheen_table as usize;
+    assert_eq!(s.tables[at], [table[0], table[1], table[2], table[3]]);
+    assert_eq!(s.tables.len(), at + table.len() / 4);
+
+    // mistakes, by their JSON paths
+    let no_sheen = json!({});
+    for (clearcoat, sheen, want) in [
+        (
+            json!({ "clearcoatFactor": 1.5 }),
+            no_sheen.clone(),
+            "materials[0].extensions.KHR_materials_clearcoat.clearcoatFactor: must be in [0, 1]",
+        ),
+        (
+            json!({ "clearcoatRoughnessFactor": "rough" }),
+            no_sheen.clone(),
+            "materials[0].extensions.KHR_materials_clearcoat.clearcoatRoughnessFactor: must be a finite number",
+        ),
+        (
+            json!({ "clearcoatFactor": 1.0, "clearcoatTexture": { "index": 7 } }),
+            no_sheen.clone(),
+            "materials[0].extensions.KHR_materials_clearcoat.clearcoatTexture.index: must name one of the file's 1 textures",
+        ),
+        (
+            json!({}),
+            json!({ "sheenColorFactor": [2.0, 0.0, 0.0] }),
+            "materials[0].extensions.KHR_materials_sheen.sheenColorFactor[0]: must be in [0, 1]",
+        ),
+        (
+            json!({}),
+            json!({ "sheenColorFactor": [1.0, 0.0] }),
+            "materials[0].extensions.KHR_materials_sheen.sheenColorFactor: must be three numbers",
+        ),
+    ] {
+        let w = layered(clearcoat, sheen);
+        let err = load_err(&w.to_gltf_external(&dir("layer-errors"), "bad").unwrap());
+        assert!(err.contains(want), "{err}\nwanted: {want}");
+    }
+}
+
 #[test]
 fn textures_keep_their_colour_space_factor_and_transform() {
     let mut w = GltfWriter::new();

@@ -344,6 +344,22 @@ material = "m"
             r#"{ type = "pbr", metallic = 0.5, roughness = 0.8, ior = 2 }"#,
             false,
         ),
+        // pbr's layers: a coat over a white matte base, a white sheen over it, and both
+        (
+            "clearcoated pbr",
+            r#"{ type = "pbr", metallic = 0, specular = 0, clearcoat = 1, clearcoat_roughness = 0.3 }"#,
+            false,
+        ),
+        (
+            "sheen pbr",
+            r#"{ type = "pbr", metallic = 0, specular = 0, sheen_color = [1, 1, 1], sheen_roughness = 0.3 }"#,
+            false,
+        ),
+        (
+            "sheen under clearcoat",
+            r#"{ type = "pbr", metallic = 0, roughness = 0.5, sheen_color = [1, 1, 1], sheen_roughness = 0.8, clearcoat = 1 }"#,
+            false,
+        ),
     ] {
         let s = scene_from_str(&template.replace("MATERIAL", material));
         for (backend, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {

@@ -73,6 +73,15 @@ pub const ENTRIES: &[Entry] = &[
         "scenes/pbr.toml",
         "glTF metallic-roughness: metallic 0, 0.5, 1 by roughness 0 to 1",
     ),
+    // rough glass is found by its own sampling only: more samples for its noise
+    Entry {
+        spp: Some(1024),
+        ..entry(
+            "coated",
+            "scenes/coated.toml",
+            "Rough glass, roughness 0 to 1; a clearcoat, smooth and rough, and a sheen",
+        )
+    },
     entry(
         "gltf-spheres",
         "scenes/gltf-spheres.toml",

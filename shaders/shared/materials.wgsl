@@ -51,28 +51,14 @@ fn material_at(m: Material, hit: Hit) -> Material {
 }
 
 #ifdef HAS_NORMAL_MAP
-// The hit with its shading normal taken from the surface's tangent-space normal map: n =
-// normalize(t x + b y + ns z) over the frame of the interpolated tangent, made
-// orthogonal to ns (b = sign x ns cross t), the map's x and y scaled by normal_scale. A
-// hit without tangents, or a mapped normal that would face away from the geometric side,
-// keeps its normal.
+// The hit with its shading normal taken from the surface's tangent-space normal map
+// (map_normal).
 fn normal_mapped(mat: Material, hit: Hit) -> Hit {
     var h = hit;
 #ifdef HAS_TEXTURES
     let s = surface_params(mat);
-    let t_len = length(hit.tangent.xyz);
-    if (s.normal_texture == NO_TEXTURE || t_len == 0.0) {
-        return h;
-    }
-    let n = hit.ns;
-    let t = normalize(hit.tangent.xyz - n * dot(n, hit.tangent.xyz));
-    let b = cross(n, t) * select(-1.0, 1.0, hit.tangent.w >= 0.0);
-    var c = 2.0 * texture_value(s.normal_texture, hit.uv, hit.p) - vec3<f32>(1.0);
-    c = vec3<f32>(c.xy * s.normal_scale, c.z);
-    let m = t * c.x + b * c.y + n * c.z;
-    let len = length(m);
-    if (len > 0.0 && dot(m, hit.ng) > 0.0) {
-        h.ns = m / len;
+    if (s.normal_texture != NO_TEXTURE) {
+        h.ns = map_normal(s.normal_texture, s.normal_scale, hit);
     }
 #endif
     return h;

@@ -201,6 +201,29 @@ fn texture_value(index: u32, uv: vec4<f32>, p: vec3<f32>) -> vec3<f32> {
 #endif
 }
 
+#ifdef HAS_NORMAL_MAP
+// The shading normal that tangent-space normal map `index` gives a hit: normalize(t x +
+// b y + ns z) over the frame of the interpolated tangent, made orthogonal to ns (b = sign
+// x ns cross t), the map's x and y scaled by `scale`. A hit without tangents, or a
+// mapped normal that would face away from the geometric side, keeps its normal.
+fn map_normal(index: u32, scale: f32, hit: Hit) -> vec3<f32> {
+    if (length(hit.tangent.xyz) == 0.0) {
+        return hit.ns;
+    }
+    let n = hit.ns;
+    let t = normalize(hit.tangent.xyz - n * dot(n, hit.tangent.xyz));
+    let b = cross(n, t) * select(-1.0, 1.0, hit.tangent.w >= 0.0);
+    var c = 2.0 * texture_value(index, hit.uv, hit.p) - vec3<f32>(1.0);
+    c = vec3<f32>(c.xy * scale, c.z);
+    let m = t * c.x + b * c.y + n * c.z;
+    let len = length(m);
+    if (len > 0.0 && dot(m, hit.ng) > 0.0) {
+        return m / len;
+    }
+    return hit.ns;
+}
+#endif
+
 // A texture's alpha at uv: an image's own, else 1.
 fn texture_alpha(index: u32, uv: vec4<f32>) -> f32 {
     let tex = textures[index];

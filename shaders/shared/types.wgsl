@@ -36,7 +36,9 @@ struct BvhNode {
 // Storage: each material names its places in its view (NAMEParams, written from
 // scene::materials), what every material has in SurfaceParams. The record's own rules: a
 // texture in tex_color replaces color.rgb (clamped to 1), in tex_color2 color2.rgb, in
-// tex_emission emission.rgb; tex_data0 and tex_data1 are the material's own.
+// tex_emission emission.rgb; tex_data0 to tex_data5 and tex_normal2 are the material's
+// own (its texture hook may write normal2, a second shading normal at the hit); table is
+// the first tables entry of a table the material reads.
 struct Material {
     tag: u32,
     flags: u32,
@@ -50,6 +52,17 @@ struct Material {
     tex_data0: u32,
     tex_normal: u32,
     tex_data1: u32,
+    color3: vec4<f32>,
+    scalars2: vec4<f32>,
+    normal2: vec4<f32>,
+    tex_data2: u32,
+    tex_data3: u32,
+    tex_data4: u32,
+    tex_data5: u32,
+    tex_normal2: u32,
+    table: u32,
+    pad0: u32,
+    pad1: u32,
 }
 
 // Constant: color0 | checker: cells of textures even / odd (color0 / color1 where

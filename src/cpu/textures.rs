@@ -3,7 +3,7 @@
 use glam::{IVec3, Vec2, Vec3, Vec4};
 
 use super::bindings::Bindings;
-use super::types::xyz;
+use super::types::{xyz, Hit};
 use crate::scene::records::{
     Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_NEAREST, TEX_FLAG_SOLID, TEX_FLAG_SRGB, TEX_IMAGE,
     TEX_MODE_MASK, TEX_NOISE, TEX_WRAP_T_SHIFT,
@@ -177,6 +177,28 @@ pub fn texture_value(b: &Bindings, index: u32, uv: Vec4, p: Vec3) -> Vec3 {
         return xyz(if odd { tex.color1 } else { tex.color0 });
     }
     texture_leaf(b, cell, uv, p)
+}
+
+/// The shading normal that tangent-space normal map `index` gives a hit (textures.wgsl's
+/// `map_normal`): over the interpolated tangent's frame, x and y scaled by `scale`; the
+/// hit's own normal without tangents or where the mapped one would face away.
+pub fn map_normal(b: &Bindings, index: u32, scale: f32, hit: &Hit) -> Vec3 {
+    let tangent = hit.tangent.truncate();
+    if tangent.length() == 0.0 {
+        return hit.ns;
+    }
+    let n = hit.ns;
+    let t = (tangent - n * n.dot(tangent)).normalize();
+    let sign = if hit.tangent.w >= 0.0 { 1.0 } else { -1.0 };
+    let bt = n.cross(t) * sign;
+    let c = 2.0 * texture_value(b, index, hit.uv, hit.p) - Vec3::ONE;
+    let (x, y) = (c.x * scale, c.y * scale);
+    let m = t * x + bt * y + n * c.z;
+    let len = m.length();
+    if len > 0.0 && m.dot(hit.ng) > 0.0 {
+        return m / len;
+    }
+    hit.ns
 }
 
 /// A texture's alpha at uv: an image's own, else 1.

@@ -18,8 +18,8 @@ use super::shader::{self, ShaderError};
 use crate::scene::flat::FlatScene;
 use crate::scene::format::{LightSampling, SamplerKind};
 use crate::scene::materials::common::Surface;
-use crate::scene::materials::dielectric;
 use crate::scene::materials::MaterialKind;
+use crate::scene::materials::{dielectric, pbr};
 use crate::scene::records as r;
 use crate::tuning::Tuning;
 
@@ -61,6 +61,12 @@ pub enum Feature {
     VertexColors,
     /// Rough glass (`dielectric` with a roughness): its microfacet lobes.
     RoughDielectric,
+    /// pbr's clearcoat (KHR_materials_clearcoat): its lobe and what it lets through.
+    Clearcoat,
+    /// pbr's sheen (KHR_materials_sheen): the Charlie lobe and its albedo table.
+    Sheen,
+    /// Either of pbr's layers: the choice among their lobes and the base's.
+    PbrLayers,
     /// Materials with alpha (pbr's `alpha_mode` mask or blend): rays pass through where a
     /// surface is transparent.
     Alpha,
@@ -100,13 +106,16 @@ const GEOMETRY: [Feature; 10] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 19] = [
+const SHADING: [Feature; 22] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
     Feature::SecondUv,
     Feature::VertexColors,
     Feature::RoughDielectric,
+    Feature::Clearcoat,
+    Feature::Sheen,
+    Feature::PbrLayers,
     Feature::Alpha,
     Feature::ImageTexture,
     Feature::SrgbTexture,
@@ -151,6 +160,9 @@ impl Feature {
             Feature::SecondUv => "HAS_UV1",
             Feature::VertexColors => "HAS_VERTEX_COLORS",
             Feature::RoughDielectric => "HAS_ROUGH_DIELECTRIC",
+            Feature::Clearcoat => "HAS_CLEARCOAT",
+            Feature::Sheen => "HAS_SHEEN",
+            Feature::PbrLayers => "HAS_PBR_LAYERS",
             Feature::Alpha => "HAS_ALPHA",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
             Feature::SrgbTexture => "HAS_SRGB_TEXTURE",
@@ -239,6 +251,15 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     // lights are sampled only toward surfaces with a lobe that has a density (the
     // materials' own answer, `nee_applies`), and only when there are lights
     let nee = scene.materials.iter().any(|m| m.nee());
+    let is_pbr = |m: &r::Material| m.tag == MaterialKind::Pbr.tag();
+    let clearcoat = scene
+        .materials
+        .iter()
+        .any(|m| is_pbr(m) && pbr::has_clearcoat(m));
+    let sheen = scene
+        .materials
+        .iter()
+        .any(|m| is_pbr(m) && pbr::has_sheen(m));
     let lit = scene.emitters.len() > scene.num_punctual as usize && nee;
     let materials: FeatureSet = MaterialKind::ALL
         .iter()
@@ -268,10 +289,10 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         .with(Feature::Textures, !scene.textures.is_empty())
         .with(
             Feature::NormalMap,
-            scene
-                .materials
-                .iter()
-                .any(|m| Surface::read(m).normal_texture != r::NO_TEXTURE),
+            scene.materials.iter().any(|m| {
+                Surface::read(m).normal_texture != r::NO_TEXTURE
+                    || (is_pbr(m) && pbr::has_coat_normal_map(m))
+            }),
         )
         .with(
             Feature::ShadingNormals,
@@ -302,6 +323,9 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .iter()
                 .any(|m| m.tag == MaterialKind::Dielectric.tag() && dielectric::is_rough(m)),
         )
+        .with(Feature::Clearcoat, clearcoat)
+        .with(Feature::Sheen, sheen)
+        .with(Feature::PbrLayers, clearcoat || sheen)
         .with(Feature::ImageTexture, texture(r::TEX_IMAGE))
         .with(
             Feature::SrgbTexture,
@@ -365,14 +389,18 @@ impl ShaderSpec {
     /// which llvmpipe inlines at each call) to a shader that serves every other scene,
     /// and llvmpipe's compile of it went from 153 s to 232 s with them; a second uv set
     /// and vertex colours add reads to every triangle hit; rough glass a branch to
-    /// every glass hit; shading normals a second eval and pdf to every light sample.
-    pub const OPTIONAL_IN_FULL: [Feature; 6] = [
+    /// every glass hit; shading normals a second eval and pdf to every light sample;
+    /// pbr's layers two lobes to every pbr hit.
+    pub const OPTIONAL_IN_FULL: [Feature; 9] = [
         Feature::Alpha,
         Feature::NormalMap,
         Feature::ShadingNormals,
         Feature::SecondUv,
         Feature::VertexColors,
         Feature::RoughDielectric,
+        Feature::Clearcoat,
+        Feature::Sheen,
+        Feature::PbrLayers,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):
@@ -477,12 +505,13 @@ impl ShaderSpec {
                         && (f(Feature::Textures) || f(Feature::EnvMap))
                         && f(Feature::ImageTexture)
                 }
-                // the tables by noise look-ups, and by the background's distribution when
-                // lights are sampled
+                // the tables by noise look-ups, by the background's distribution when
+                // lights are sampled, and by pbr's sheen (its albedo table)
                 Slot::Tables => {
                     let env = f(Feature::EnvMap);
                     (f(Feature::Textures) || env) && f(Feature::NoiseTexture)
                         || env && (f(Feature::Mis) || f(Feature::Mixture))
+                        || f(Feature::Sheen)
                 }
             })
             .collect()

@@ -10,7 +10,7 @@ use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
 use super::format::{LightDesc, ObjectDesc, Projection, SceneFile, TextureDesc, TransformDesc};
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
-use super::materials::MaterialDesc;
+use super::materials::{pbr, MaterialDesc, MaterialKind};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
@@ -532,10 +532,20 @@ pub fn flatten(
         .chain(gltfs().flat_map(|g| g.materials.iter().map(|(n, m)| (n, m))))
         .collect();
     let material_names: Vec<String> = material_list.iter().map(|m| m.0.clone()).collect();
-    let materials: Vec<Material> = material_list
+    let mut materials: Vec<Material> = material_list
         .iter()
         .map(|m| m.1.record(&texture_names))
         .collect();
+    // the sheen's albedo table, after the background's distribution
+    let is_pbr = |m: &Material| m.tag == MaterialKind::Pbr.tag();
+    if materials.iter().any(|m| is_pbr(m) && pbr::has_sheen(m)) {
+        let offset = tables.len() as u32;
+        let table = pbr::sheen_albedo_table();
+        tables.extend(table.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
+        for m in materials.iter_mut().filter(|m| is_pbr(m)) {
+            pbr::point_at_sheen_table(m, offset);
+        }
+    }
     let Builder {
         unbounded,
         bounded,

@@ -200,6 +200,12 @@ shared_constants! {
     /// mirror direction of the viewer about it may not come to the geometric surface:
     /// the normal is bent to lift it there (`bent_normal`).
     SHADING_LIFT: f32 = 1e-2;
+    /// The sheen's smallest alpha: the Charlie distribution's exponent 1 / alpha stays
+    /// within f32 (pbr's `sheen_roughness` 0 and its textures are kept above it).
+    SHEEN_ALPHA_MIN: f32 = 1e-2;
+    /// Cosines and alphas of the sheen's albedo table (`pbr::sheen_albedo_table`), each
+    /// from 0 to 1.
+    SHEEN_TABLE_SIZE: u32 = 32;
     /// A BVH node's exit distance is widened by 1 + 2 gamma(3), gamma(n) = n eps /
     /// (1 - n eps) with eps = 2^-24, so rounding never culls a box a ray touches.
     BOX_WIDEN: f32 = 1.0 + 3.0 * f32::EPSILON;
@@ -253,8 +259,10 @@ pub struct Primitive {
 /// for every material: a texture in `tex_color` replaces `color.rgb` at a hit, clamped
 /// to 1 (a reflectance), and its alpha multiplies the surface's opacity; one in
 /// `tex_color2` replaces `color2.rgb`, clamped with `MAT_FLAG_COLOR2_CLAMPED`; one in
-/// `tex_emission` replaces `emission.rgb`; `tex_data0` and `tex_data1` are read by the
-/// material's own texture hook only. Flags: `MAT_FLAG_*`.
+/// `tex_emission` replaces `emission.rgb`; `tex_data0` to `tex_data5` and `tex_normal2`
+/// are read by the material's own texture hook only, which may also write `normal2` (a
+/// second shading normal at the hit: pbr's clearcoat's); `table` is the first `tables`
+/// entry of a table the material reads. Flags: `MAT_FLAG_*`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {
@@ -271,6 +279,17 @@ pub struct Material {
     pub tex_data0: u32,
     pub tex_normal: u32,
     pub tex_data1: u32,
+    pub color3: [f32; 4],
+    pub scalars2: [f32; 4],
+    pub normal2: [f32; 4],
+    pub tex_data2: u32,
+    pub tex_data3: u32,
+    pub tex_data4: u32,
+    pub tex_data5: u32,
+    pub tex_normal2: u32,
+    pub table: u32,
+    pub pad0: u32,
+    pub pad1: u32,
 }
 
 impl Default for Material {
@@ -288,6 +307,17 @@ impl Default for Material {
             tex_data0: NO_TEXTURE,
             tex_normal: NO_TEXTURE,
             tex_data1: NO_TEXTURE,
+            color3: [0.0; 4],
+            scalars2: [0.0; 4],
+            normal2: [0.0; 4],
+            tex_data2: NO_TEXTURE,
+            tex_data3: NO_TEXTURE,
+            tex_data4: NO_TEXTURE,
+            tex_data5: NO_TEXTURE,
+            tex_normal2: NO_TEXTURE,
+            table: 0,
+            pad0: 0,
+            pad1: 0,
         }
     }
 }
@@ -662,7 +692,18 @@ shared_record!(Material {
     tex_color2,
     tex_data0,
     tex_normal,
-    tex_data1
+    tex_data1,
+    color3,
+    scalars2,
+    normal2,
+    tex_data2,
+    tex_data3,
+    tex_data4,
+    tex_data5,
+    tex_normal2,
+    table,
+    pad0,
+    pad1
 });
 shared_record!(Texture {
     tag,

@@ -384,6 +384,36 @@ pub const MATERIALS: &[TestMaterial] = &[
         true,
     ),
     row(
+        "pbr clearcoat 0.5 over white",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0\nspecular = 0\nclearcoat = 1\nclearcoat_roughness = 0.5",
+        false,
+        true,
+    ),
+    row(
+        "pbr smooth clearcoat over red",
+        "type = \"pbr\"\nbase_color = [0.8, 0.1, 0.1]\nmetallic = 0\nroughness = 0.5\nclearcoat = 1",
+        false,
+        false,
+    ),
+    row(
+        "pbr white sheen 0.5 over white",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0\nspecular = 0\nsheen_color = [1, 1, 1]\nsheen_roughness = 0.5",
+        false,
+        true,
+    ),
+    row(
+        "pbr velvet sheen 0.3",
+        "type = \"pbr\"\nbase_color = [0.2, 0.05, 0.1]\nmetallic = 0\nroughness = 0.8\nsheen_color = [0.9, 0.4, 0.6]\nsheen_roughness = 0.3",
+        false,
+        true,
+    ),
+    row(
+        "pbr sheen under clearcoat",
+        "type = \"pbr\"\nbase_color = [0.5, 0.5, 0.8]\nmetallic = 0\nroughness = 0.6\nsheen_color = [0.5, 0.5, 0.5]\nsheen_roughness = 0.8\nclearcoat = 0.7\nclearcoat_roughness = 0.3",
+        false,
+        true,
+    ),
+    row(
         "pbr white smooth",
         "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0\nroughness = 0",
         false,

@@ -15,7 +15,7 @@ use glam::Vec3;
 
 use super::bindings::Bindings;
 use super::bsdf::{Scatter, Shading, ABSORBED};
-use super::textures::{texture_alpha, texture_value};
+use super::textures::{map_normal, texture_alpha, texture_value};
 use super::types::{Hit, Ray};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::{for_each_material, MaterialKind};
@@ -123,20 +123,8 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
 pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
     let mut h = *hit;
     let s = Surface::read(mat);
-    let tangent = hit.tangent.truncate();
-    if s.normal_texture == NO_TEXTURE || tangent.length() == 0.0 {
-        return h;
-    }
-    let n = hit.ns;
-    let t = (tangent - n * n.dot(tangent)).normalize();
-    let sign = if hit.tangent.w >= 0.0 { 1.0 } else { -1.0 };
-    let bt = n.cross(t) * sign;
-    let c = 2.0 * texture_value(b, s.normal_texture, hit.uv, hit.p) - Vec3::ONE;
-    let (x, y) = (c.x * s.normal_scale, c.y * s.normal_scale);
-    let m = t * x + bt * y + n * c.z;
-    let len = m.length();
-    if len > 0.0 && m.dot(hit.ng) > 0.0 {
-        h.ns = m / len;
+    if s.normal_texture != NO_TEXTURE {
+        h.ns = map_normal(b, s.normal_texture, s.normal_scale, hit);
     }
     h
 }

@@ -60,6 +60,14 @@ impl Loader<'_> {
             None => 0.0,
         };
         let (desc, keys) = if transmission > 0.0 {
+            for ext in ["KHR_materials_clearcoat", "KHR_materials_sheen"] {
+                if m.extension_value(ext).is_some() {
+                    self.out.warnings.push(format!(
+                        "{key}: {ext} on a transmissive material is left out (it is \
+                         rendered as glass)"
+                    ));
+                }
+            }
             let d = dielectric::from_gltf(m, &key, transmission, self)?;
             (MaterialDesc::Dielectric(d), dielectric::GLTF_KEYS)
         } else {
@@ -104,11 +112,24 @@ pub(super) fn uv_sets(m: &gltf::Material) -> (Vec<u32>, Option<u32>) {
     if let Some(n) = m.normal_texture() {
         sets.push(normal_tex_coord(&n));
     }
+    sets.extend(pbr::layer_textures(m).into_iter().map(json_tex_coord));
     sets.sort_unstable();
     sets.dedup();
     let dropped = sets.get(2).copied();
     sets.truncate(2);
     (sets, dropped)
+}
+
+/// The uv set a texture reference given as JSON reads: its KHR_texture_transform's
+/// texCoord, else its own, else 0.
+pub(super) fn json_tex_coord(info: &gltf::json::Value) -> u32 {
+    let set = |v: Option<&gltf::json::Value>| v.and_then(|c| c.as_u64());
+    set(info
+        .get("extensions")
+        .and_then(|e| e.get("KHR_texture_transform"))
+        .and_then(|t| t.get("texCoord")))
+    .or(set(info.get("texCoord")))
+    .unwrap_or(0) as u32
 }
 
 /// The uv set a normal texture reads (the crate gives its KHR_texture_transform only as

@@ -27,6 +27,16 @@ pub trait MaterialReader {
     ) -> Result<String>;
     /// The name of a normal texture (linear).
     fn normal_texture(&mut self, n: &gltf::material::NormalTexture, key: &str) -> Result<String>;
+    /// The name of the texture of a texture reference given as JSON (`index`, `texCoord`
+    /// and KHR_texture_transform, as an extension the crate does not read holds it),
+    /// sRGB-decoded (`srgb`) or linear, its texels times `factor`.
+    fn json_texture(
+        &mut self,
+        info: &gltf::json::Value,
+        srgb: bool,
+        factor: [f32; 3],
+        key: &str,
+    ) -> Result<String>;
     /// A note of what was approximated or left out.
     fn warn(&mut self, message: String);
 }

@@ -8,7 +8,7 @@ use std::sync::Arc;
 use super::error::{GltfError, Result};
 use super::file::{check_uri, source_error};
 use super::loader::{Loader, TextureKey};
-use super::materials::normal_tex_coord;
+use super::materials::{json_tex_coord, normal_tex_coord};
 use super::reader::MaterialReader;
 use crate::scene::format::{ColorSpace, Filter, TextureDesc, UvTransformDesc, Wrap, WrapMode};
 use crate::scene::imported::ImportedTexture;
@@ -56,44 +56,7 @@ impl Loader<'_> {
         n: &gltf::material::NormalTexture,
         key: &str,
     ) -> Result<String> {
-        let ext = n.extension_value("KHR_texture_transform");
-        let pair = |name: &str, default: [f32; 2]| -> Result<[f32; 2]> {
-            match ext.and_then(|e| e.get(name)) {
-                None => Ok(default),
-                Some(v) => match v
-                    .as_array()
-                    .map(|a| a.iter().map(|x| x.as_f64()).collect::<Vec<_>>())
-                {
-                    Some(a) if a.len() == 2 && a.iter().all(|x| x.is_some_and(f64::is_finite)) => {
-                        Ok([a[0].unwrap_or(0.0) as f32, a[1].unwrap_or(0.0) as f32])
-                    }
-                    _ => Err(GltfError::new(
-                        format!("{key}.extensions.KHR_texture_transform.{name}"),
-                        "must be two finite numbers",
-                    )),
-                },
-            }
-        };
-        let transform = match ext {
-            Some(e) => {
-                let rotation = e
-                    .get("rotation")
-                    .map_or(Some(0.0), |r| r.as_f64())
-                    .filter(|r| r.is_finite())
-                    .ok_or_else(|| {
-                        GltfError::new(
-                            format!("{key}.extensions.KHR_texture_transform.rotation"),
-                            "must be a finite number",
-                        )
-                    })? as f32;
-                Some(UvTransformDesc::from_v_down(
-                    pair("offset", [0.0; 2])?,
-                    rotation,
-                    pair("scale", [1.0; 2])?,
-                ))
-            }
-            None => None,
-        };
+        let transform = json_transform(n.extension_value("KHR_texture_transform"), key)?;
         let uv_set = normal_tex_coord(n);
         self.texture_lookup(
             n.texture(),
@@ -104,6 +67,83 @@ impl Loader<'_> {
         )
     }
 
+    /// A look-up of a texture reference given as JSON (`MaterialReader::json_texture`).
+    fn json_texture_of(
+        &mut self,
+        info: &gltf::json::Value,
+        srgb: bool,
+        factor: [f32; 3],
+        key: &str,
+    ) -> Result<String> {
+        let count = self.doc.textures().len();
+        let tex = info
+            .get("index")
+            .and_then(|i| i.as_u64())
+            .and_then(|i| self.doc.textures().nth(i as usize))
+            .ok_or_else(|| {
+                GltfError::new(
+                    format!("{key}.index"),
+                    format!("must name one of the file's {count} textures"),
+                )
+            })?;
+        let ext = info
+            .get("extensions")
+            .and_then(|e| e.get("KHR_texture_transform"));
+        let transform = json_transform(ext, key)?;
+        self.texture_lookup(
+            tex,
+            self.uv_slot(json_tex_coord(info)),
+            transform,
+            srgb,
+            factor,
+        )
+        .map_err(|e| GltfError::new(e.key, format!("{} (the image of {key})", e.message)))
+    }
+}
+
+/// A KHR_texture_transform given as JSON (`ext`), checked: its offset, rotation and
+/// scale, finite.
+fn json_transform(ext: Option<&gltf::json::Value>, key: &str) -> Result<Option<UvTransformDesc>> {
+    let pair = |name: &str, default: [f32; 2]| -> Result<[f32; 2]> {
+        match ext.and_then(|e| e.get(name)) {
+            None => Ok(default),
+            Some(v) => match v
+                .as_array()
+                .map(|a| a.iter().map(|x| x.as_f64()).collect::<Vec<_>>())
+            {
+                Some(a) if a.len() == 2 && a.iter().all(|x| x.is_some_and(f64::is_finite)) => {
+                    Ok([a[0].unwrap_or(0.0) as f32, a[1].unwrap_or(0.0) as f32])
+                }
+                _ => Err(GltfError::new(
+                    format!("{key}.extensions.KHR_texture_transform.{name}"),
+                    "must be two finite numbers",
+                )),
+            },
+        }
+    };
+    Ok(match ext {
+        Some(e) => {
+            let rotation = e
+                .get("rotation")
+                .map_or(Some(0.0), |r| r.as_f64())
+                .filter(|r| r.is_finite())
+                .ok_or_else(|| {
+                    GltfError::new(
+                        format!("{key}.extensions.KHR_texture_transform.rotation"),
+                        "must be a finite number",
+                    )
+                })? as f32;
+            Some(UvTransformDesc::from_v_down(
+                pair("offset", [0.0; 2])?,
+                rotation,
+                pair("scale", [1.0; 2])?,
+            ))
+        }
+        None => None,
+    })
+}
+
+impl Loader<'_> {
     /// The slot of its primitive's uv sets that glTF uv set `set` of the material being
     /// read is in (slot 0 for a set left out: see `materials::uv_sets`).
     fn uv_slot(&self, set: u32) -> u32 {
@@ -305,6 +345,16 @@ impl MaterialReader for Loader<'_> {
 
     fn normal_texture(&mut self, n: &gltf::material::NormalTexture, key: &str) -> Result<String> {
         self.normal_texture_of(n, key)
+    }
+
+    fn json_texture(
+        &mut self,
+        info: &gltf::json::Value,
+        srgb: bool,
+        factor: [f32; 3],
+        key: &str,
+    ) -> Result<String> {
+        self.json_texture_of(info, srgb, factor, key)
     }
 
     fn warn(&mut self, message: String) {

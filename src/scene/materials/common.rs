@@ -297,13 +297,14 @@ pub struct View {
 }
 
 impl View {
-    /// Whether the material has textures of its own (a field in `tex_data0` or
-    /// `tex_data1`): its shading then has a texture hook (`NAME_textures` in WGSL,
-    /// `Shading::textures` on the CPU) that looks them up at a hit.
+    /// Whether the material has textures of its own (a field in `tex_data0` to
+    /// `tex_data5` or `tex_normal2`): its shading then has a texture hook
+    /// (`NAME_textures` in WGSL, `Shading::textures` on the CPU) that looks them up at a
+    /// hit.
     pub fn own_textures(&self) -> bool {
         self.fields
             .iter()
-            .any(|f| f.place == "tex_data0" || f.place == "tex_data1")
+            .any(|f| f.place.starts_with("tex_data") || f.place == "tex_normal2")
     }
 }
 

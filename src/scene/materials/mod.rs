@@ -106,6 +106,9 @@ macro_rules! material_types {
         /// `[materials]` entries, selected by `type`. Every type may emit: `emission` (a
         /// colour or a texture) is the radiance of its front side, which makes it a light
         /// too (`emissive` calls it `radiance`).
+        // pbr's (with its layers' keys) is the largest by far; a scene's materials are
+        // few and read once, so they are not boxed
+        #[allow(clippy::large_enum_variant)]
         #[derive(Debug, Clone, Deserialize)]
         #[serde(tag = "type", rename_all = "lowercase")]
         pub enum MaterialDesc {

@@ -3,10 +3,17 @@
 //! Smith's height-correlated visibility, Fresnel-Schlick) over a Lambertian base of
 //! `base_color` for the dielectric (F0 from `ior`, scaled by `specular` and
 //! `specular_color`), mixed by `metallic` with a metal whose F0 is `base_color`; the base
-//! gets what the Fresnel of both directions lets through. Its defaults are glTF's. glTF
-//! materials and .mtl's non-refracting ones map onto it. Shading:
+//! gets what the Fresnel of both directions lets through. Over it may lie a sheen
+//! (KHR_materials_sheen: the Charlie distribution of Estevez and Kulla 2017, the layer
+//! under it scaled by what the sheen reflects) and over both a clearcoat
+//! (KHR_materials_clearcoat: a GGX dielectric of ior 1.5, with its own roughness and
+//! normal map, over a layer that receives what the coat transmits). Its defaults are
+//! glTF's. glTF materials and .mtl's non-refracting ones map onto it. Shading:
 //! `shaders/materials/pbr.wgsl`, CPU twin `cpu/materials/pbr.rs`.
 
+use std::sync::OnceLock;
+
+use glam::Vec3;
 use serde::Deserialize;
 
 use super::common::{
@@ -15,7 +22,10 @@ use super::common::{
 };
 use crate::scene::gltf::error::Result;
 use crate::scene::gltf::reader::{self, MaterialReader};
-use crate::scene::records::{Material, ALPHA_SMOOTH, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK};
+use crate::scene::records::{
+    Material, ALPHA_SMOOTH, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, NO_TEXTURE, SHEEN_ALPHA_MIN,
+    SHEEN_TABLE_SIZE,
+};
 
 /// Its entry in the scene format.
 #[derive(Debug, Clone, Deserialize)]
@@ -61,6 +71,33 @@ pub struct Desc {
     /// Emit from the back side too.
     #[serde(default)]
     pub two_sided: bool,
+    /// The strength of a clear coat over the material (KHR_materials_clearcoat's factor).
+    #[serde(default)]
+    pub clearcoat: f32,
+    /// A texture whose red channel multiplies `clearcoat` (linear).
+    #[serde(default)]
+    pub clearcoat_texture: Option<String>,
+    /// The coat's roughness (GGX alpha = its square).
+    #[serde(default)]
+    pub clearcoat_roughness: f32,
+    /// A texture whose green channel multiplies `clearcoat_roughness` (linear).
+    #[serde(default)]
+    pub clearcoat_roughness_texture: Option<String>,
+    /// The coat's own tangent-space normal map (linear); without one the coat follows
+    /// the surface's normal, not `normal_map`.
+    #[serde(default)]
+    pub clearcoat_normal_map: Option<String>,
+    #[serde(default = "one")]
+    pub clearcoat_normal_scale: f32,
+    /// The sheen's colour (KHR_materials_sheen's sheenColor; black: no sheen).
+    #[serde(default)]
+    pub sheen_color: ColorDesc,
+    /// The sheen's roughness (Charlie alpha = its square).
+    #[serde(default)]
+    pub sheen_roughness: f32,
+    /// A texture whose alpha channel multiplies `sheen_roughness`.
+    #[serde(default)]
+    pub sheen_roughness_texture: Option<String>,
 }
 
 fn half() -> f32 {
@@ -96,6 +133,15 @@ impl Default for Desc {
             alpha_cutoff: half(),
             emission: ColorDesc::default(),
             two_sided: false,
+            clearcoat: 0.0,
+            clearcoat_texture: None,
+            clearcoat_roughness: 0.0,
+            clearcoat_roughness_texture: None,
+            clearcoat_normal_map: None,
+            clearcoat_normal_scale: 1.0,
+            sheen_color: ColorDesc::default(),
+            sheen_roughness: 0.0,
+            sheen_roughness_texture: None,
         }
     }
 }
@@ -121,7 +167,129 @@ material_view! {
         metallic_roughness_texture: u32 = tex_data0,
         /// Its alpha scales `specular`.
         specular_texture: u32 = tex_data1,
+        /// The clearcoat's strength (0: none).
+        clearcoat: f32 = scalars2.x,
+        /// The coat's GGX alpha, at least ALPHA_SMOOTH.
+        coat_alpha: f32 = scalars2.y,
+        coat_normal_scale: f32 = scalars2.z,
+        /// 1 where the base has a normal map: the coat then follows the surface's own
+        /// normal (or its own map), not the base's.
+        base_normal_mapped: f32 = scalars2.w,
+        /// At a hit: the coat's normal (its map's, or the surface's unmapped one) where
+        /// the texture hook sets it, else 0 (the shading normal).
+        coat_normal: rgb = normal2,
+        /// Its red scales `clearcoat`.
+        clearcoat_texture: u32 = tex_data2,
+        /// Its green scales the coat's roughness.
+        clearcoat_roughness_texture: u32 = tex_data3,
+        coat_normal_texture: u32 = tex_normal2,
+        /// The sheen's colour (black: none).
+        sheen_color: rgb = color3,
+        sheen_color_texture: u32 = tex_data4,
+        /// The sheen's Charlie alpha, at least SHEEN_ALPHA_MIN.
+        sheen_alpha: f32 = color3.w,
+        /// Its alpha scales the sheen's roughness.
+        sheen_roughness_texture: u32 = tex_data5,
+        /// The first `tables` entry of the sheen's albedo table (`place_sheen_table`).
+        sheen_table: u32 = table,
     }
+}
+
+/// Whether a pbr material's record has a clearcoat (`HAS_CLEARCOAT`).
+pub fn has_clearcoat(m: &Material) -> bool {
+    Params::read(m).clearcoat > 0.0
+}
+
+/// Whether a pbr material's record has a sheen (`HAS_SHEEN`).
+pub fn has_sheen(m: &Material) -> bool {
+    Params::read(m).sheen_color != Vec3::ZERO
+}
+
+/// Whether a pbr material's clearcoat has a normal map (`HAS_NORMAL_MAP`).
+pub fn has_coat_normal_map(m: &Material) -> bool {
+    Params::read(m).coat_normal_texture != NO_TEXTURE
+}
+
+/// The Charlie sheen distribution at cos(theta_h) = c (pbr.wgsl's `charlie_d`), in f64.
+fn charlie_d(c: f64, alpha: f64) -> f64 {
+    let inv = 1.0 / alpha;
+    (2.0 + inv) * (1.0 - c * c).max(0.0).powf(0.5 * inv) / (2.0 * std::f64::consts::PI)
+}
+
+/// Estevez and Kulla's Lambda of the Charlie distribution (pbr.wgsl's `charlie_lambda`),
+/// in f64.
+fn charlie_lambda(c: f64, alpha: f64) -> f64 {
+    let t = (1.0 - alpha) * (1.0 - alpha);
+    let mix = |a: f64, b: f64| a + (b - a) * t;
+    let l = |x: f64| {
+        mix(21.5473, 25.3245) / (1.0 + mix(3.82987, 3.32435) * x.powf(mix(0.19823, 0.16801)))
+            + mix(-1.97760, -1.27393) * x
+            + mix(-4.32054, -4.85967)
+    };
+    if c < 0.5 {
+        l(c).exp()
+    } else {
+        (2.0 * l(0.5) - l(1.0 - c)).exp()
+    }
+}
+
+/// The directional albedo of a white sheen lobe, E(cos_o, alpha) = the integral over the
+/// hemisphere of D(h) / (4 cos_o (1 + Lambda(cos_o) + Lambda(cos_i))) d omega_i, at
+/// SHEEN_TABLE_SIZE cosines (their square roots i / (SIZE - 1), the first at 1e-4) by as
+/// many alphas (i / (SIZE - 1), at least SHEEN_ALPHA_MIN), alphas in rows: what pbr's
+/// sheen takes from the layer under it. The midpoint rule on 96 x 48 points of the half
+/// hemisphere (the lobe is symmetric about the plane of wo and the normal): within 2e-3
+/// of 400 x 400 points, and above it (the safe side: the layer under the sheen keeps
+/// less); computed once, rows in parallel.
+pub fn sheen_albedo_table() -> &'static [f32] {
+    static TABLE: OnceLock<Vec<f32>> = OnceLock::new();
+    TABLE.get_or_init(|| {
+        use rayon::prelude::*;
+        let size = SHEEN_TABLE_SIZE as usize;
+        let (nt, np) = (96, 48);
+        let (dt, dp) = (
+            std::f64::consts::FRAC_PI_2 / nt as f64,
+            std::f64::consts::PI / np as f64,
+        );
+        let rows: Vec<Vec<f32>> = (0..size)
+            .into_par_iter()
+            .map(|ia| {
+                let alpha = (ia as f64 / (size - 1) as f64).max(SHEEN_ALPHA_MIN as f64);
+                let mut row = Vec::with_capacity(size);
+                for ic in 0..size {
+                    let cos_o = (ic as f64 / (size - 1) as f64).powi(2).max(1e-4);
+                    let wo = glam::DVec3::new((1.0 - cos_o * cos_o).sqrt(), 0.0, cos_o);
+                    let lambda_o = charlie_lambda(cos_o, alpha);
+                    let mut e = 0.0;
+                    for i in 0..nt {
+                        let theta = (i as f64 + 0.5) * dt;
+                        let (s, cos_i) = theta.sin_cos();
+                        let lambda_i = charlie_lambda(cos_i, alpha);
+                        for j in 0..np {
+                            let phi = (j as f64 + 0.5) * dp;
+                            let wi = glam::DVec3::new(s * phi.cos(), s * phi.sin(), cos_i);
+                            let h = (wo + wi).normalize();
+                            e += charlie_d(h.z, alpha)
+                                / (4.0 * cos_o * (1.0 + lambda_o + lambda_i))
+                                * s;
+                        }
+                    }
+                    row.push((2.0 * e * dt * dp) as f32);
+                }
+                row
+            })
+            .collect();
+        rows.concat()
+    })
+}
+
+/// Points a pbr material's record at the sheen's albedo table, placed at `tables`
+/// entry `offset` (every pbr material of a scene with a sheen: the shader reads it for
+/// each).
+pub fn point_at_sheen_table(m: &mut Material, offset: u32) {
+    let mut p = Params::read(m);
+    p.sheen_table = offset;
+    p.write(m);
 }
 
 /// The lobes of its type: the diffuse base and the GGX lobe, with a density (alpha is
@@ -156,6 +324,28 @@ impl Model for Desc {
         }
         c.at_least("ior", self.ior, 1.0);
         c.color("emission", &self.emission, false);
+        c.color("sheen_color", &self.sheen_color, true);
+        for (name, v) in [
+            ("clearcoat", self.clearcoat),
+            ("clearcoat_roughness", self.clearcoat_roughness),
+            ("sheen_roughness", self.sheen_roughness),
+        ] {
+            c.unit(name, v);
+        }
+        c.finite("clearcoat_normal_scale", self.clearcoat_normal_scale);
+        for (name, t) in [
+            ("clearcoat_texture", &self.clearcoat_texture),
+            (
+                "clearcoat_roughness_texture",
+                &self.clearcoat_roughness_texture,
+            ),
+            ("clearcoat_normal_map", &self.clearcoat_normal_map),
+            ("sheen_roughness_texture", &self.sheen_roughness_texture),
+        ] {
+            if let Some(t) = t {
+                c.texture(name, t);
+            }
+        }
     }
 
     fn emission(&self) -> (&ColorDesc, bool) {
@@ -169,6 +359,7 @@ impl Model for Desc {
     fn pack(&self, t: &TextureNames, record: &mut Material) {
         let (base_color, base_color_texture) = t.color(&self.base_color);
         let (specular_color, specular_color_texture) = t.color(&self.specular_color);
+        let (sheen_color, sheen_color_texture) = t.color(&self.sheen_color);
         Params {
             base_color,
             base_color_texture,
@@ -180,6 +371,20 @@ impl Model for Desc {
             specular_color_texture,
             metallic_roughness_texture: t.optional(self.metallic_roughness.as_deref()),
             specular_texture: t.optional(self.specular_texture.as_deref()),
+            clearcoat: self.clearcoat,
+            coat_alpha: (self.clearcoat_roughness * self.clearcoat_roughness).max(ALPHA_SMOOTH),
+            coat_normal_scale: self.clearcoat_normal_scale,
+            base_normal_mapped: if self.normal_map.is_some() { 1.0 } else { 0.0 },
+            coat_normal: Vec3::ZERO,
+            clearcoat_texture: t.optional(self.clearcoat_texture.as_deref()),
+            clearcoat_roughness_texture: t.optional(self.clearcoat_roughness_texture.as_deref()),
+            coat_normal_texture: t.optional(self.clearcoat_normal_map.as_deref()),
+            sheen_color,
+            sheen_color_texture,
+            sheen_alpha: (self.sheen_roughness * self.sheen_roughness).max(SHEEN_ALPHA_MIN),
+            sheen_roughness_texture: t.optional(self.sheen_roughness_texture.as_deref()),
+            // placed by place_sheen_table
+            sheen_table: 0,
         }
         .write(record);
         let mut surface = Surface::read(record);
@@ -196,7 +401,9 @@ impl Model for Desc {
     }
 
     fn normal_map(&self) -> Option<&str> {
-        self.normal_map.as_deref()
+        self.normal_map
+            .as_deref()
+            .or(self.clearcoat_normal_map.as_deref())
     }
 }
 
@@ -218,6 +425,26 @@ pub const GLTF_KEYS: &[(&str, &str)] = &[
     ("alpha", "pbrMetallicRoughness.baseColorFactor[3]"),
     ("alpha_cutoff", "alphaCutoff"),
     ("emission", "emissiveFactor"),
+    (
+        "clearcoat",
+        "extensions.KHR_materials_clearcoat.clearcoatFactor",
+    ),
+    (
+        "clearcoat_roughness",
+        "extensions.KHR_materials_clearcoat.clearcoatRoughnessFactor",
+    ),
+    (
+        "clearcoat_normal_scale",
+        "extensions.KHR_materials_clearcoat.clearcoatNormalTexture.scale",
+    ),
+    (
+        "sheen_color",
+        "extensions.KHR_materials_sheen.sheenColorFactor",
+    ),
+    (
+        "sheen_roughness",
+        "extensions.KHR_materials_sheen.sheenRoughnessFactor",
+    ),
 ];
 
 /// A glTF material (not transmissive): its metallic-roughness values and textures, with
@@ -289,7 +516,117 @@ pub fn from_gltf(m: &gltf::Material, key: &str, r: &mut dyn MaterialReader) -> R
                 Some(r.texture(&info, false, &format!("{sk}.specularTexture"))?);
         }
     }
+    layers_from_gltf(m, key, &mut desc, r)?;
     Ok(desc)
+}
+
+/// A number of a glTF extension's JSON (`default` where it is left out), finite.
+fn json_number(ext: &gltf::json::Value, name: &str, default: f32, key: &str) -> Result<f32> {
+    match ext.get(name) {
+        None => Ok(default),
+        Some(v) => v
+            .as_f64()
+            .filter(|x| x.is_finite())
+            .map(|x| x as f32)
+            .ok_or_else(|| {
+                crate::scene::gltf::error::GltfError::new(
+                    format!("{key}.{name}"),
+                    format!("must be a finite number, got {v}"),
+                )
+            }),
+    }
+}
+
+/// KHR_materials_clearcoat and KHR_materials_sheen onto the coat and the sheen, with
+/// their textures (the crate reads neither extension: their JSON). Factors are checked
+/// as the format's keys are (the clearcoat and the roughnesses in [0, 1], the sheen
+/// colour a reflectance), under their JSON paths.
+fn layers_from_gltf(
+    m: &gltf::Material,
+    key: &str,
+    desc: &mut Desc,
+    r: &mut dyn MaterialReader,
+) -> Result<()> {
+    if let Some(cc) = m.extension_value("KHR_materials_clearcoat") {
+        let ck = format!("{key}.extensions.KHR_materials_clearcoat");
+        desc.clearcoat = json_number(cc, "clearcoatFactor", 0.0, &ck)?;
+        desc.clearcoat_roughness = json_number(cc, "clearcoatRoughnessFactor", 0.0, &ck)?;
+        if let Some(t) = cc.get("clearcoatTexture") {
+            let tk = format!("{ck}.clearcoatTexture");
+            desc.clearcoat_texture = Some(r.json_texture(t, false, [1.0; 3], &tk)?);
+        }
+        if let Some(t) = cc.get("clearcoatRoughnessTexture") {
+            let tk = format!("{ck}.clearcoatRoughnessTexture");
+            desc.clearcoat_roughness_texture = Some(r.json_texture(t, false, [1.0; 3], &tk)?);
+        }
+        if let Some(t) = cc.get("clearcoatNormalTexture") {
+            let tk = format!("{ck}.clearcoatNormalTexture");
+            desc.clearcoat_normal_map = Some(r.json_texture(t, false, [1.0; 3], &tk)?);
+            desc.clearcoat_normal_scale = json_number(t, "scale", 1.0, &tk)?;
+        }
+    }
+    if let Some(sh) = m.extension_value("KHR_materials_sheen") {
+        let sk = format!("{key}.extensions.KHR_materials_sheen");
+        let factor = match sh.get("sheenColorFactor") {
+            None => [0.0; 3],
+            Some(v) => {
+                let a: Vec<Option<f64>> = v
+                    .as_array()
+                    .map(|a| a.iter().map(|x| x.as_f64()).collect())
+                    .unwrap_or_default();
+                match a[..] {
+                    [Some(x), Some(y), Some(z)] => [x as f32, y as f32, z as f32],
+                    _ => {
+                        return Err(crate::scene::gltf::error::GltfError::new(
+                            format!("{sk}.sheenColorFactor"),
+                            format!("must be three numbers, got {v}"),
+                        ))
+                    }
+                }
+            }
+        };
+        reader::factor(&format!("{sk}.sheenColorFactor"), &factor, true)?;
+        desc.sheen_color = match sh.get("sheenColorTexture") {
+            Some(t) => ColorDesc::Texture(r.json_texture(
+                t,
+                true,
+                factor,
+                &format!("{sk}.sheenColorTexture"),
+            )?),
+            None => ColorDesc::Rgb(factor),
+        };
+        desc.sheen_roughness = json_number(sh, "sheenRoughnessFactor", 0.0, &sk)?;
+        if let Some(t) = sh.get("sheenRoughnessTexture") {
+            let tk = format!("{sk}.sheenRoughnessTexture");
+            desc.sheen_roughness_texture = Some(r.json_texture(t, false, [1.0; 3], &tk)?);
+        }
+    }
+    Ok(())
+}
+
+/// The JSON texture references of a material's KHR_materials_clearcoat and
+/// KHR_materials_sheen, for the uv sets it reads.
+pub fn layer_textures<'a>(m: &'a gltf::Material) -> Vec<&'a gltf::json::Value> {
+    let mut out = Vec::new();
+    for (ext, names) in [
+        (
+            "KHR_materials_clearcoat",
+            &[
+                "clearcoatTexture",
+                "clearcoatRoughnessTexture",
+                "clearcoatNormalTexture",
+            ][..],
+        ),
+        (
+            "KHR_materials_sheen",
+            &["sheenColorTexture", "sheenRoughnessTexture"][..],
+        ),
+    ] {
+        if let Some(e) = m.extension_value(ext) {
+            out.extend(names.iter().filter_map(|n| e.get(*n)));
+        }
+    }
+    out
 }
 
 /// The JSON path of KHR_materials_pbrSpecularGlossiness's fields.
