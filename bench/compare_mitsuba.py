@@ -8,7 +8,8 @@ first) on its default backend, Mitsuba 3 with its llvm_ad_rgb variant. The runs'
 gives each renderer's standard error; the report compares the two mean images over 8 x 8
 pixel tiles (the difference in each tile and channel against both standard errors) and
 over regions of the image named in the TOML file's comments as `# region NAME x0 y0 x1 y1`
-(pixels, exclusive ends). Needs `pip install mitsuba numpy` and an LLVM of 15 or newer named
+(pixels, exclusive ends); its comment lines `# report: TEXT` are copied under the figures.
+Needs `pip install mitsuba numpy` and an LLVM of 15 or newer named
 by DRJIT_LIBLLVM_PATH (Debian 12: `apt-get install libllvm19`,
 /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1).
 """
@@ -109,5 +110,8 @@ Over {z.shape[0]} x {z.shape[1]} tiles of 8 x 8 pixels and 3 channels ({n_tiles}
 more than {bound:.2f} standard errors (significance 1e-3 over all tests, Sidak); the largest |z| is
 {np.abs(z).max():.2f}.{"" if not worst else " Those outside (tile x, y counted from the top left):"}
 """ + "".join(f"\n- {w}" for w in worst) + "\n"
+notes = [line.split("# report:", 1)[1].strip() for line in open(toml) if line.startswith("# report:")]
+if notes:
+    report += "\n" + " ".join(notes) + "\n"
 open(out, "w").write(report)
 print(report)

@@ -721,11 +721,43 @@ material = "panel"
 "#,
         common::repo_path("scenes/meshes/icosphere.obj").display()
     );
+    // rough glass (no absorption: it has a density) over a floor, lit by a panel above:
+    // light sampling weighs its reflection and its transmission out of the sphere
+    let rough_glass = r#"
+[render]
+width = 32
+height = 24
+spp = 256
+max_depth = 6
+[camera]
+look_from = [0, 1.0, 3.5]
+look_at = [0, 0.6, 0]
+vfov = 40
+[materials]
+floor = { type = "lambertian", albedo = [0.5, 0.5, 0.5] }
+frosted = { type = "dielectric", ior = 1.5, roughness = 0.4, tint = [0.9, 0.95, 1] }
+panel = { type = "emissive", radiance = [4, 3.8, 3.5] }
+[[objects]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "floor"
+[[objects]]
+type = "sphere"
+center = [0, 0.7, 0]
+radius = 0.7
+material = "frosted"
+[[objects]]
+type = "polygon"
+vertices = [[-1, 3, -1], [1, 3, -1], [1, 3, 1], [-1, 3, 1]]
+material = "panel"
+"#;
     let cornell = std::fs::read_to_string(common::repo_path("scenes/cornell.toml")).unwrap();
     let dir = std::env::temp_dir();
     for (name, src, size) in [
         ("glossy", glossy.to_string(), None),
         ("smooth-shaded", smooth, None),
+        ("rough glass", rough_glass.to_string(), None),
         ("cornell", cornell, Some(32)),
     ] {
         let mut imgs = Vec::new();

@@ -620,6 +620,69 @@ fn rough_glass_samples_its_pdf_over_the_sphere() {
     }
 }
 
+/// Rough glass without absorption has a density, which light sampling weighs: entering and
+/// leaving, each sampled direction's pdf and weight are `bsdf_pdf` and `bsdf_eval /
+/// bsdf_pdf` of it (reflected and transmitted; the hit's side as `material_at` marks it),
+/// and the pdf over the sphere is the one its sampler follows (chi-square through
+/// `bsdf_pdf`). Absorbing rough glass is a delta, with no density.
+#[test]
+fn rough_glass_without_absorption_has_the_density_it_samples() {
+    use wgtrace::scene::materials::dielectric::Params;
+    let keys = "type = \"dielectric\"\nior = 1.5\nroughness = 0.5\ntint = [0.9, 0.8, 1]";
+    for entering in [true, false] {
+        let mut m = material(keys);
+        assert_eq!(lobes(&m), (true, false));
+        let mut p = Params::read(&m);
+        p.back_face = if entering { 0.0 } else { 1.0 };
+        p.write(&mut m);
+        for theta in [0.0f32, 40.0, 75.0] {
+            let t = theta.to_radians();
+            let wo_up = Vec3::new(t.sin(), 0.0, t.cos());
+            let wo = if entering { wo_up } else { -wo_up };
+            let (ray, hit) = hit_at_origin(-wo, wo);
+            let label = format!("rough glass, {theta} deg, entering {entering}");
+            let (mut reflected, mut transmitted) = (0, 0);
+            for u in grid() {
+                let s = scatter(&m, &ray, &hit, u);
+                if !s.ok {
+                    continue;
+                }
+                assert!(!s.delta, "{label}: a density");
+                let pdf = bsdf_pdf(&m, &ray, &hit, s.dir);
+                let f = bsdf_eval(&m, &ray, &hit, s.dir);
+                let rel = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b.abs().max(1e-3);
+                assert!(rel(s.pdf, pdf), "{label}: pdf {} vs {pdf}", s.pdf);
+                let w = f / pdf;
+                assert!(
+                    (0..3).all(|c| rel(s.weight[c], w[c])),
+                    "{label}: weight {} vs eval / pdf {w}",
+                    s.weight
+                );
+                if (s.dir.z > 0.0) == (wo.z > 0.0) {
+                    reflected += 1;
+                } else {
+                    transmitted += 1;
+                }
+            }
+            assert!(
+                reflected > 0 && transmitted > 0,
+                "{label}: {reflected} / {transmitted}"
+            );
+            chi_square(
+                &label,
+                true,
+                |u| {
+                    let s = scatter(&m, &ray, &hit, u);
+                    s.ok.then_some(s.dir)
+                },
+                |wi| bsdf_pdf(&m, &ray, &hit, wi),
+            );
+        }
+    }
+    let absorbing = material(&format!("{keys}\nabsorption = [0.5, 0.5, 0.5]"));
+    assert_eq!(lobes(&absorbing), (false, true));
+}
+
 /// Rough glass's BSDF is reciprocal as radiance's is across a boundary (Veach 1997,
 /// 5.14): f(wo, wi) = f(wi, wo) in reflection, f(wo, wi) = eta^2 f(wi, wo) in refraction
 /// (eta = eta_o / eta_i); its weights are finite and never negative.

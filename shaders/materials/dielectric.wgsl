@@ -110,9 +110,10 @@ fn dielectric_rough_lobes(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>
 // about it (with probability dielectric_reflect_prob, u.x reused) or the refraction
 // through it (the mirror direction where h reflects totally); weight = BSDF x cos / pdf
 // (dielectric_rough_lobes) times the tint (and absorption) in `weight`. A direction on
-// the wrong side of the geometric surface is absorbed. Sampled as a delta: next-event
-// estimation does not reach lights through it (its eval needs the side of the hit, which
-// the integrator's BSDF queries do not carry).
+// the wrong side of the geometric surface is absorbed. Without absorption it has a
+// density, which next-event estimation weighs (dielectric_eval, dielectric_pdf);
+// absorbing rough glass is sampled as a delta (scene::materials::dielectric::has_density
+// says why).
 fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, weight: vec3<f32>, u: vec2<f32>) -> Scatter {
     let wo = -ray.dir;
     let cos_o = dot(n, wo);
@@ -137,6 +138,35 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
     if (!(lobes.y > 0.0) || above != is_reflection) {
         return absorbed();
     }
-    return Scatter(true, wi, weight * (lobes.x / lobes.y), 0.0, true);
+    let delta = any(p.absorption != vec3<f32>(0.0));
+    return Scatter(true, wi, weight * (lobes.x / lobes.y), select(lobes.y, 0.0, delta), delta);
+}
+
+// eta = eta_o / eta_i at a hit: 1 / ior from outside (the front face), ior from inside.
+fn dielectric_eta(p: DielectricParams) -> f32 {
+    return select(1.0 / p.ior, p.ior, p.back_face > 0.0);
 }
 #endif
+
+// Rough glass without absorption: tint x BSDF x |cos(theta_i)| toward wi, reflected or
+// transmitted (dielectric_rough_lobes), n on wo's side; 0 for the deltas (smooth glass,
+// absorbing rough glass).
+fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+#ifdef HAS_ROUGH_DIELECTRIC
+    if (p.alpha >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0))) {
+        return p.tint * dielectric_rough_lobes(p.alpha, n, wo, wi, dielectric_eta(p)).x;
+    }
+#endif
+    return vec3<f32>(0.0);
+}
+
+// The density of dielectric_rough_scatter's directions where it has one (as
+// dielectric_eval), else 0.
+fn dielectric_pdf(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+#ifdef HAS_ROUGH_DIELECTRIC
+    if (p.alpha >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0))) {
+        return dielectric_rough_lobes(p.alpha, n, wo, wi, dielectric_eta(p)).y;
+    }
+#endif
+    return 0.0;
+}

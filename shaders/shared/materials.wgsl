@@ -30,6 +30,8 @@ fn emitted(mat: Material, hit: Hit) -> vec3<f32> {
 // still at most 1).
 fn material_at(m: Material, hit: Hit) -> Material {
     var mat = m;
+    // which side the hit is on, for a material whose eval needs it (rough glass's eta)
+    mat.normal2.w = select(0.0, 1.0, !hit.front_face);
 #ifdef HAS_TEXTURES
     // the .w of each colour is a scalar of its own
     if (mat.tex_color != NO_TEXTURE) {
@@ -130,32 +132,48 @@ fn mirrored(wi: vec3<f32>, hit: Hit) -> vec3<f32> {
     return wi - 2.0 * dot(wi, hit.ng) * hit.ng;
 }
 
+// Whether shading normals send a material's directions over the geometric surface
+// (over_surface): where they differ from the geometric normal, for a material that does
+// not transmit.
+fn folds(mat: Material, hit: Hit) -> bool {
+    return any(hit.ns != hit.ng) && (mat.flags & MAT_FLAG_TRANSMITS) == 0u;
+}
+
 // BSDF x cos toward wi: what scatter's weight is the ratio of, and 0 under the geometric
-// surface, where scatter absorbs, and for delta lobes. Where shading normals differ from
-// the geometric one, what the lobes send to wi's mirror image under the surface is sent
-// to wi too (over_surface).
+// surface, where scatter absorbs, and for delta lobes. A material that transmits
+// (MAT_FLAG_TRANSMITS: rough glass) weighs directions under the surface too, where the
+// shading normal agrees that they are. Where shading normals differ from the geometric
+// one, what the lobes of a material that does not send to wi's mirror image under the
+// surface is sent to wi too (over_surface).
 fn bsdf_eval(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> vec3<f32> {
     let side = select(-1.0, 1.0, hit.front_face);
     if (side * dot(wi, hit.ng) <= 0.0) {
+        if ((mat.flags & MAT_FLAG_TRANSMITS) == 0u || side * dot(wi, hit.ns) >= 0.0) {
+            return vec3<f32>(0.0);
+        }
+        return material_eval(mat, side * hit.ns, -ray.dir, wi);
+    }
+    if ((mat.flags & MAT_FLAG_TRANSMITS) != 0u && side * dot(wi, hit.ns) <= 0.0) {
+        // over the geometric surface, under the shading one: scatter absorbs it
         return vec3<f32>(0.0);
     }
     var f = material_eval(mat, side * hit.ns, -ray.dir, wi);
 #ifdef HAS_SHADING_NORMALS
-    if (any(hit.ns != hit.ng)) {
+    if (folds(mat, hit)) {
         f += material_eval(mat, side * hit.ns, -ray.dir, mirrored(wi, hit));
     }
 #endif
     return f;
 }
 
-// The density with which scatter draws wi (before it absorbs directions under the
-// geometric surface); with shading normals that differ, the density of its mirror image
-// too, which over_surface sends to wi.
+// The density with which scatter draws wi (before it absorbs directions on the wrong
+// side of the geometric surface); where shading normals fold, the density of its mirror
+// image too, which over_surface sends to wi.
 fn bsdf_pdf(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> f32 {
     let n = select(-hit.ns, hit.ns, hit.front_face);
     var pdf = material_pdf(mat, n, -ray.dir, wi);
 #ifdef HAS_SHADING_NORMALS
-    if (any(hit.ns != hit.ng)) {
+    if (folds(mat, hit)) {
         pdf += material_pdf(mat, n, -ray.dir, mirrored(wi, hit));
     }
 #endif
@@ -166,7 +184,7 @@ fn bsdf_pdf(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> f32 {
 // scatter's own, or bsdf_pdf's where shading normals may have sent it over the surface.
 fn scatter_pdf(mat: Material, ray: Ray, hit: Hit, s: Scatter) -> f32 {
 #ifdef HAS_SHADING_NORMALS
-    if (!s.delta && any(hit.ns != hit.ng)) {
+    if (!s.delta && folds(mat, hit)) {
         return bsdf_pdf(mat, ray, hit, s.dir);
     }
 #endif

@@ -511,7 +511,7 @@ impl ShaderSpec {
                     let env = f(Feature::EnvMap);
                     (f(Feature::Textures) || env) && f(Feature::NoiseTexture)
                         || env && (f(Feature::Mis) || f(Feature::Mixture))
-                        || f(Feature::Sheen)
+                        || f(Feature::Sheen) && f(Feature::Material(MaterialKind::Pbr))
                 }
             })
             .collect()

@@ -102,6 +102,9 @@ shared_constants! {
     /// Material flag: a texture of `color2` is clamped to 1, as one of `color` always is
     /// (the second colour is a reflectance).
     MAT_FLAG_COLOR2_CLAMPED: u32 = 32;
+    /// Material flag: its lobe with a density transmits (rough glass): `bsdf_eval` weighs
+    /// directions under the surface, and shading normals send nothing over it.
+    MAT_FLAG_TRANSMITS: u32 = 64;
 
     /// Texture tags: the cases of the `switch` in `textures.wgsl`.
     TEX_CONSTANT: u32 = 0;
@@ -259,10 +262,11 @@ pub struct Primitive {
 /// for every material: a texture in `tex_color` replaces `color.rgb` at a hit, clamped
 /// to 1 (a reflectance), and its alpha multiplies the surface's opacity; one in
 /// `tex_color2` replaces `color2.rgb`, clamped with `MAT_FLAG_COLOR2_CLAMPED`; one in
-/// `tex_emission` replaces `emission.rgb`; `tex_data0` to `tex_data5` and `tex_normal2`
-/// are read by the material's own texture hook only, which may also write `normal2` (a
-/// second shading normal at the hit: pbr's clearcoat's); `table` is the first `tables`
-/// entry of a table the material reads. Flags: `MAT_FLAG_*`.
+/// `tex_emission` replaces `emission.rgb`; `normal2.w` is 1 at a back-face hit, else 0;
+/// `tex_data0` to `tex_data5` and `tex_normal2` are read by the material's own texture
+/// hook only, which may also write `normal2.xyz` (a second shading normal at the hit:
+/// pbr's clearcoat's); `table` is the first `tables` entry of a table the material reads.
+/// Flags: `MAT_FLAG_*`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Material {

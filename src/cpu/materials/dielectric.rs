@@ -11,6 +11,22 @@ use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::dielectric::Params;
 
 impl Shading for Params {
+    /// Rough glass without absorption: tint x BSDF x |cos| (`rough_lobes`); 0 for the
+    /// deltas.
+    fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
+        if !has_density(self) {
+            return Vec3::ZERO;
+        }
+        self.tint * rough_lobes(self.alpha, n, wo, wi, eta(self)).0
+    }
+
+    fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
+        if !has_density(self) {
+            return 0.0;
+        }
+        rough_lobes(self.alpha, n, wo, wi, eta(self)).1
+    }
+
     /// Snell refraction (eta = 1 / ior entering, ior leaving, the normal turned toward
     /// the incoming ray), total internal reflection, reflection with the exact Fresnel
     /// probability; weight = tint, times the Beer-Lambert transmittance exp(-absorption x
@@ -124,7 +140,8 @@ pub fn rough_lobes(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f
 
 /// Rough glass: a visible normal, then the mirror direction about it or the refraction
 /// through it (the mirror direction where it reflects totally); weight = BSDF x cos / pdf
-/// (`rough_lobes`) times `weight`; sampled as a delta.
+/// (`rough_lobes`) times `weight`; with its pdf where it has a density (no absorption),
+/// else as a delta.
 pub fn rough_scatter(
     p: &Params,
     ray: &Ray,
@@ -170,11 +187,26 @@ pub fn rough_scatter(
     if !(pdf > 0.0) || above != reflect {
         return ABSORBED;
     }
+    let delta = p.absorption != Vec3::ZERO;
     Scatter {
         ok: true,
         dir: wi,
         weight: weight * (f / pdf),
-        pdf: 0.0,
-        delta: true,
+        pdf: if delta { 0.0 } else { pdf },
+        delta,
     }
+}
+
+/// eta = eta_o / eta_i at a hit (dielectric.wgsl's `dielectric_eta`).
+pub fn eta(p: &Params) -> f32 {
+    if p.back_face > 0.0 {
+        p.ior
+    } else {
+        1.0 / p.ior
+    }
+}
+
+/// Whether the record's glass has a density (dielectric.wgsl's test in `dielectric_eval`).
+fn has_density(p: &Params) -> bool {
+    p.alpha >= ALPHA_SMOOTH && p.absorption == Vec3::ZERO
 }

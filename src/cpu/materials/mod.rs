@@ -21,7 +21,7 @@ use crate::scene::materials::common::Surface;
 use crate::scene::materials::{for_each_material, MaterialKind};
 use crate::scene::records::{
     Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA,
-    MAT_FLAG_NEE, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
+    MAT_FLAG_NEE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -91,6 +91,8 @@ pub fn emitted(mat: &Material, hit: &Hit) -> Vec3 {
 /// is), then its own textures; the vertex colour multiplies `color` (at most 1).
 pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     let mut mat = *m;
+    // which side the hit is on, for a material whose eval needs it (rough glass's eta)
+    mat.normal2[3] = if hit.front_face { 0.0 } else { 1.0 };
     // the .w of each colour is a scalar of its own
     if mat.tex_color != NO_TEXTURE {
         mat.color = texture_value(b, mat.tex_color, hit.uv, hit.p)
@@ -178,36 +180,50 @@ pub fn mirrored(wi: Vec3, hit: &Hit) -> Vec3 {
     wi - 2.0 * wi.dot(hit.ng) * hit.ng
 }
 
-/// BSDF x cos toward wi, 0 under the geometric surface (where scatter absorbs) and for
-/// delta lobes; with a shading normal that differs from the geometric one, plus what the
-/// lobes send to wi's mirror image (which `over_surface` sends to wi).
+/// Whether shading normals send the material's directions over the geometric surface
+/// (materials.wgsl's `folds`).
+pub fn folds(mat: &Material, hit: &Hit) -> bool {
+    hit.ns != hit.ng && mat.flags & MAT_FLAG_TRANSMITS == 0
+}
+
+/// BSDF x cos toward wi (materials.wgsl's `bsdf_eval`): 0 under the geometric surface
+/// (where scatter absorbs), unless the material transmits and the shading normal agrees,
+/// and for delta lobes; where shading normals fold, plus what the lobes send to wi's
+/// mirror image (which `over_surface` sends to wi).
 pub fn bsdf_eval(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> Vec3 {
     let side = if hit.front_face { 1.0 } else { -1.0 };
+    let transmits = mat.flags & MAT_FLAG_TRANSMITS != 0;
     if side * wi.dot(hit.ng) <= 0.0 {
+        if !transmits || side * wi.dot(hit.ns) >= 0.0 {
+            return Vec3::ZERO;
+        }
+        return material_eval(mat, side * hit.ns, -ray.dir, wi);
+    }
+    if transmits && side * wi.dot(hit.ns) <= 0.0 {
         return Vec3::ZERO;
     }
     let f = material_eval(mat, side * hit.ns, -ray.dir, wi);
-    if hit.ns != hit.ng {
+    if folds(mat, hit) {
         return f + material_eval(mat, side * hit.ns, -ray.dir, mirrored(wi, hit));
     }
     f
 }
 
-/// The density with which scatter draws wi (before it absorbs directions under the
-/// geometric surface), plus its mirror image's where shading normals differ.
+/// The density with which scatter draws wi (before it absorbs directions on the wrong
+/// side of the geometric surface), plus its mirror image's where shading normals fold.
 pub fn bsdf_pdf(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> f32 {
     let n = if hit.front_face { hit.ns } else { -hit.ns };
     let pdf = material_pdf(mat, n, -ray.dir, wi);
-    if hit.ns != hit.ng {
+    if folds(mat, hit) {
         return pdf + material_pdf(mat, n, -ray.dir, mirrored(wi, hit));
     }
     pdf
 }
 
 /// The density of a scattered direction as MIS weighs it (materials.wgsl's
-/// `scatter_pdf`): scatter's own, or `bsdf_pdf`'s where shading normals differ.
+/// `scatter_pdf`): scatter's own, or `bsdf_pdf`'s where shading normals fold.
 pub fn scatter_pdf(mat: &Material, ray: &Ray, hit: &Hit, s: &Scatter) -> f32 {
-    if !s.delta && hit.ns != hit.ng {
+    if !s.delta && folds(mat, hit) {
         return bsdf_pdf(mat, ray, hit, s.dir);
     }
     s.pdf

@@ -84,6 +84,9 @@ pub struct Lobes {
     /// A delta lobe (a mirror, a refraction), found only by the material's own sampling:
     /// the 50/50 mixture, whose pdf cannot hold it, leaves the material out.
     pub delta: bool,
+    /// Its lobe with a density transmits (rough glass): `bsdf_eval` weighs directions
+    /// under the surface too, and shading normals send nothing over it.
+    pub transmission: bool,
 }
 
 impl Lobes {
@@ -94,7 +97,9 @@ impl Lobes {
 
     /// Whether every lobe of `self` is one of `kind`'s.
     pub fn within(self, kind: Lobes) -> bool {
-        (!self.density || kind.density) && (!self.delta || kind.delta)
+        (!self.density || kind.density)
+            && (!self.delta || kind.delta)
+            && (!self.transmission || kind.transmission)
     }
 }
 

@@ -46,15 +46,26 @@ material_view! {
         absorption: rgb = color2,
         /// GGX alpha = roughness^2; below ALPHA_SMOOTH smooth glass.
         alpha: f32 = scalars.y,
+        /// At a hit: 1 on the back face (inside), else 0 (`material_at`).
+        back_face: f32 = normal2.w,
     }
 }
 
-/// The lobes of its type: deltas (reflection, refraction, smooth; rough glass is sampled
-/// as one too: `dielectric_rough_scatter`).
+/// The lobes of its type: deltas (smooth glass's reflection and refraction, and rough
+/// glass that absorbs), and rough glass's reflection and transmission with a density.
 pub const LOBES: Lobes = Lobes {
-    density: false,
+    density: true,
     delta: true,
+    transmission: true,
 };
+
+/// Whether rough glass has a density that light sampling may weigh: without absorption.
+/// Next-event estimation at a hit inside absorbing glass would need the transmittance of
+/// the segment the ray ran, which the BSDF's questions do not carry: absorbing rough
+/// glass is found by its own sampling, as a delta.
+pub fn has_density(alpha: f32, absorption: [f32; 3]) -> bool {
+    alpha >= ALPHA_SMOOTH && absorption == [0.0; 3]
+}
 
 /// Whether a dielectric's record is rough glass (`HAS_ROUGH_DIELECTRIC`).
 pub fn is_rough(m: &Material) -> bool {
@@ -75,7 +86,12 @@ impl Model for Desc {
     }
 
     fn lobes(&self) -> Lobes {
-        LOBES
+        let density = has_density(self.roughness * self.roughness, self.absorption);
+        Lobes {
+            density,
+            delta: !density,
+            transmission: density,
+        }
     }
 
     fn pack(&self, t: &TextureNames, record: &mut Material) {
@@ -86,6 +102,7 @@ impl Model for Desc {
             ior: self.ior,
             absorption: self.absorption.into(),
             alpha: self.roughness * self.roughness,
+            back_face: 0.0,
         }
         .write(record);
     }

@@ -26,6 +26,7 @@ material_view! {
 pub const LOBES: Lobes = Lobes {
     density: false,
     delta: false,
+    transmission: false,
 };
 
 impl Model for Desc {

@@ -32,6 +32,7 @@ material_view! {
 pub const LOBES: Lobes = Lobes {
     density: true,
     delta: false,
+    transmission: false,
 };
 
 impl Model for Desc {

@@ -38,6 +38,7 @@ material_view! {
 pub const LOBES: Lobes = Lobes {
     density: false,
     delta: true,
+    transmission: false,
 };
 
 impl Model for Desc {

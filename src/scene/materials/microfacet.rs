@@ -46,6 +46,7 @@ material_view! {
 pub const LOBES: Lobes = Lobes {
     density: true,
     delta: true,
+    transmission: false,
 };
 
 impl Model for Desc {
@@ -67,6 +68,7 @@ impl Model for Desc {
         Lobes {
             density: true,
             delta: self.roughness < ALPHA_SMOOTH,
+            transmission: false,
         }
     }
 

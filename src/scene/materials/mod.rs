@@ -21,7 +21,9 @@ pub mod pbr;
 
 use serde::Deserialize;
 
-use crate::scene::records::{Material, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_TWO_SIDED};
+use crate::scene::records::{
+    Material, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
+};
 use common::{Check, Lobes, Model, Surface, TextureNames, View};
 
 /// Calls macro `$then` with the type list: for each material, its doc comment, its
@@ -179,7 +181,8 @@ impl MaterialDesc {
         let flag = |on: bool, f: u32| if on { f } else { 0 };
         record.flags = flag(two_sided, MAT_FLAG_TWO_SIDED)
             | flag(lobes.density, MAT_FLAG_NEE)
-            | flag(lobes.delta, MAT_FLAG_DELTA);
+            | flag(lobes.delta, MAT_FLAG_DELTA)
+            | flag(lobes.transmission, MAT_FLAG_TRANSMITS);
         let mut surface = Surface::read(&record);
         (surface.emission, surface.emission_texture) = names.color(emission);
         surface.write(&mut record);

@@ -297,6 +297,7 @@ pub fn point_at_sheen_table(m: &mut Material, offset: u32) {
 pub const LOBES: Lobes = Lobes {
     density: true,
     delta: false,
+    transmission: false,
 };
 
 impl Model for Desc {
