@@ -101,22 +101,45 @@ pub fn fnv1a64(hash: u64, bytes: &[u8]) -> u64 {
 /// FNV-1a's offset basis: the hash of nothing.
 pub const FNV1A64_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
 
+/// The size of a material record before pbr's layers grew it (`scene_hash`).
+const MATERIAL_BYTES_BEFORE_LAYERS: usize = 96;
+
 /// A hash of everything that decides a render's samples: the records both backends read,
 /// the tables, the texel banks (their kinds and sizes, then their bytes) and the
 /// parameters (camera, size, seed, sampler, light sampling, depth), as their
-/// little-endian bytes, each array preceded by its length. The sample count is left out,
+/// little-endian bytes, each array preceded by its length (a material's record only up to
+/// its layers' places unless it has a layer, so that a scene hashes as it did before
+/// records had them). The sample count is left out,
 /// so a resumed render may ask for more samples, except for samplers whose points depend
 /// on it (`SamplerKind::depends_on_spp`).
 pub fn scene_hash(scene: &FlatScene) -> u64 {
+    use crate::scene::materials::pbr;
     let mut params = scene.params(0, scene.full_band());
     if !scene.sampler.depends_on_spp() {
         params.spp = 0;
         params.strata_log2 = 0;
     }
+    // a material's places past its first 96 bytes (pbr's layers and the per-hit ones)
+    // where it has a layer: a scene without one hashes as it did before they existed
+    let pbr = crate::scene::materials::MaterialKind::Pbr.tag();
+    let materials: Vec<u8> = scene
+        .materials
+        .iter()
+        .flat_map(|m| {
+            let bytes = bytemuck::bytes_of(m);
+            let layered = m.tag == pbr && (pbr::has_clearcoat(m) || pbr::has_sheen(m));
+            let end = if layered {
+                bytes.len()
+            } else {
+                MATERIAL_BYTES_BEFORE_LAYERS
+            };
+            bytes[..end].to_vec()
+        })
+        .collect();
     let parts: [&[u8]; 8] = [
         bytemuck::bytes_of(&params),
         bytemuck::cast_slice(&scene.primitives),
-        bytemuck::cast_slice(&scene.materials),
+        &materials,
         bytemuck::cast_slice(&scene.emitters),
         bytemuck::cast_slice(&scene.bvh),
         bytemuck::cast_slice(&scene.shape_data),

@@ -4,6 +4,9 @@
 //!
 //! Build times are measured by `cargo bench --bench bvh` (docs/bench/bvh.md), not here.
 
+mod common;
+
+use common::icosphere;
 use glam::Vec3;
 use wgtrace::cpu::intersect::{intersect_aabb, safe_inverse as finite_inv_dir};
 use wgtrace::cpu::types::FAR;
@@ -325,34 +328,6 @@ fn random_triangles(rng: &mut Rng, n: usize, extent: f32, size: f32) -> Vec<[Vec
             [a, a + rng.vec(-size, size), a + rng.vec(-size, size)]
         })
         .collect()
-}
-
-/// Triangles of an icosphere of radius `r` with 20 * 4^levels triangles (levels >= 3): the
-/// shipped level-3 icosphere, subdivided further.
-fn icosphere(levels: u32, r: f32) -> Vec<[Vec3; 3]> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/icosphere.obj");
-    let mesh = wgtrace::scene::mesh::load_mesh(&path).expect("scenes/meshes/icosphere.obj");
-    let mut tris: Vec<[Vec3; 3]> = mesh
-        .triangles
-        .iter()
-        .map(|t| t.map(|i| mesh.positions[i as usize].normalize()))
-        .collect();
-    for _ in 3..levels {
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let ab = ((a + b) * 0.5).normalize();
-            let bc = ((b + c) * 0.5).normalize();
-            let ca = ((c + a) * 0.5).normalize();
-            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
-    for tri in &mut tris {
-        for p in tri.iter_mut() {
-            *p *= r;
-        }
-    }
-    tris
 }
 
 // ---------------------------------------------------------------- (1) structure

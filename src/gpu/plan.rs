@@ -390,7 +390,8 @@ impl ShaderSpec {
     /// and llvmpipe's compile of it went from 153 s to 232 s with them; a second uv set
     /// and vertex colours add reads to every triangle hit; rough glass a branch to
     /// every glass hit; shading normals a second eval and pdf to every light sample;
-    /// pbr's layers two lobes to every pbr hit.
+    /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
+    /// compile of the full shader took minutes longer).
     pub const OPTIONAL_IN_FULL: [Feature; 9] = [
         Feature::Alpha,
         Feature::NormalMap,

@@ -462,3 +462,31 @@ pub const MATERIALS: &[TestMaterial] = &[
         true,
     ),
 ];
+
+/// Triangles of an icosphere of radius `r` with 20 * 4^levels triangles (levels >= 3): the
+/// shipped level-3 icosphere, subdivided further.
+pub fn icosphere(levels: u32, r: f32) -> Vec<[glam::Vec3; 3]> {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/icosphere.obj");
+    let mesh = wgtrace::scene::mesh::load_mesh(&path).expect("scenes/meshes/icosphere.obj");
+    let mut tris: Vec<[glam::Vec3; 3]> = mesh
+        .triangles
+        .iter()
+        .map(|t| t.map(|i| mesh.positions[i as usize].normalize()))
+        .collect();
+    for _ in 3..levels {
+        let mut next = Vec::with_capacity(tris.len() * 4);
+        for [a, b, c] in tris {
+            let ab = ((a + b) * 0.5).normalize();
+            let bc = ((b + c) * 0.5).normalize();
+            let ca = ((c + a) * 0.5).normalize();
+            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    for tri in &mut tris {
+        for p in tri.iter_mut() {
+            *p *= r;
+        }
+    }
+    tris
+}
