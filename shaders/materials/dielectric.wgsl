@@ -138,8 +138,14 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
     if (!(lobes.y > 0.0) || above != is_reflection) {
         return absorbed();
     }
-    let delta = any(p.absorption != vec3<f32>(0.0));
+    let delta = !dielectric_has_density(p);
     return Scatter(true, wi, weight * (lobes.x / lobes.y), select(lobes.y, 0.0, delta), delta);
+}
+
+// Whether the glass has a density that light sampling weighs: rough and not absorbing
+// (scene::materials::dielectric::has_density says why).
+fn dielectric_has_density(p: DielectricParams) -> bool {
+    return p.alpha >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0));
 }
 
 // eta = eta_o / eta_i at a hit: 1 / ior from outside (the front face), ior from inside.
@@ -153,7 +159,7 @@ fn dielectric_eta(p: DielectricParams) -> f32 {
 // absorbing rough glass).
 fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 #ifdef HAS_ROUGH_DIELECTRIC
-    if (p.alpha >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0))) {
+    if (dielectric_has_density(p)) {
         return p.tint * dielectric_rough_lobes(p.alpha, n, wo, wi, dielectric_eta(p)).x;
     }
 #endif
@@ -164,7 +170,7 @@ fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
 // dielectric_eval), else 0.
 fn dielectric_pdf(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
 #ifdef HAS_ROUGH_DIELECTRIC
-    if (p.alpha >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0))) {
+    if (dielectric_has_density(p)) {
         return dielectric_rough_lobes(p.alpha, n, wo, wi, dielectric_eta(p)).y;
     }
 #endif

@@ -31,10 +31,16 @@ fn absorbed() -> Scatter {
 fn over_surface(wi: vec3<f32>, side: f32, hit: Hit) -> vec3<f32> {
 #ifdef HAS_SHADING_NORMALS
     if (any(hit.ns != hit.ng) && side * dot(wi, hit.ng) < 0.0) {
-        return wi - 2.0 * dot(wi, hit.ng) * hit.ng;
+        return mirrored(wi, hit);
     }
 #endif
     return wi;
+}
+
+// The direction mirrored over the hit's geometric surface: of two directions that
+// over_surface sends to the same place, the one from the other.
+fn mirrored(wi: vec3<f32>, hit: Hit) -> vec3<f32> {
+    return wi - 2.0 * dot(wi, hit.ng) * hit.ng;
 }
 
 // A direction wi drawn from a lobe with a density, weighted by BSDF x cos f over its pdf,

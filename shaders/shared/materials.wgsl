@@ -126,12 +126,6 @@ fn bent_normal(hit: Hit, ray: Ray) -> Hit {
 }
 #endif
 
-// The direction mirrored over the hit's geometric surface: the other direction that
-// over_surface sends to the same place.
-fn mirrored(wi: vec3<f32>, hit: Hit) -> vec3<f32> {
-    return wi - 2.0 * dot(wi, hit.ng) * hit.ng;
-}
-
 // Whether shading normals send a material's directions over the geometric surface
 // (over_surface): where they differ from the geometric normal, for a material that does
 // not transmit.

@@ -172,9 +172,14 @@ pub fn sample_ggx_lobes(p_s: f32, alpha: f32, n: Vec3, wo: Vec3, u: [f32; 2]) ->
 /// turned to the ray's `side`) is mirrored over it rather than lost; elsewhere `wi`.
 pub fn over_surface(wi: Vec3, side: f32, hit: &Hit) -> Vec3 {
     if hit.ns != hit.ng && side * wi.dot(hit.ng) < 0.0 {
-        return wi - 2.0 * wi.dot(hit.ng) * hit.ng;
+        return mirrored(wi, hit);
     }
     wi
+}
+
+/// The direction mirrored over the hit's geometric surface (bsdf.wgsl's `mirrored`).
+pub fn mirrored(wi: Vec3, hit: &Hit) -> Vec3 {
+    wi - 2.0 * wi.dot(hit.ng) * hit.ng
 }
 
 /// A direction `wi` drawn from a lobe with a density, weighted by BSDF x cos `f` over its

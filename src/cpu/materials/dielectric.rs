@@ -8,7 +8,7 @@ use crate::cpu::bsdf::{
 };
 use crate::cpu::sampling::onb_tangents;
 use crate::cpu::types::{Hit, Ray};
-use crate::scene::materials::dielectric::Params;
+use crate::scene::materials::dielectric::{self, Params};
 
 impl Shading for Params {
     /// Rough glass without absorption: tint x BSDF x |cos| (`rough_lobes`); 0 for the
@@ -187,7 +187,7 @@ pub fn rough_scatter(
     if !(pdf > 0.0) || above != reflect {
         return ABSORBED;
     }
-    let delta = p.absorption != Vec3::ZERO;
+    let delta = !has_density(p);
     Scatter {
         ok: true,
         dir: wi,
@@ -206,7 +206,8 @@ pub fn eta(p: &Params) -> f32 {
     }
 }
 
-/// Whether the record's glass has a density (dielectric.wgsl's test in `dielectric_eval`).
-fn has_density(p: &Params) -> bool {
-    p.alpha >= ALPHA_SMOOTH && p.absorption == Vec3::ZERO
+/// Whether the glass has a density (dielectric.wgsl's `dielectric_has_density`): the
+/// scene's own rule.
+pub fn has_density(p: &Params) -> bool {
+    dielectric::has_density(p.alpha, p.absorption.into())
 }

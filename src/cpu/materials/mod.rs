@@ -14,7 +14,7 @@ pub mod pbr;
 use glam::Vec3;
 
 use super::bindings::Bindings;
-use super::bsdf::{Scatter, Shading, ABSORBED};
+use super::bsdf::{mirrored, Scatter, Shading, ABSORBED};
 use super::textures::{map_normal, texture_alpha, texture_value};
 use super::types::{Hit, Ray};
 use crate::scene::materials::common::Surface;
@@ -173,11 +173,6 @@ pub fn bent_normal(hit: &Hit, ray: &Ray) -> Hit {
         }
     }
     h
-}
-
-/// The direction mirrored over the hit's geometric surface (materials.wgsl's `mirrored`).
-pub fn mirrored(wi: Vec3, hit: &Hit) -> Vec3 {
-    wi - 2.0 * wi.dot(hit.ng) * hit.ng
 }
 
 /// Whether shading normals send the material's directions over the geometric surface
