@@ -149,10 +149,23 @@ struct Path {
     prev_pdf: f32,
     prev_delta: bool,
     depth: u32,
+#ifdef HAS_AOVS
+    // the sample's AOVs: albedo and normal of the first vertex whose bounce is not a
+    // delta lobe's (found once it is known), distance and point of the first hit
+    albedo: vec3<f32>,
+    normal: vec3<f32>,
+    position: vec3<f32>,
+    distance: f32,
+    found: bool,
+#endif
 }
 
 fn start_path(camera: Ray) -> Path {
+#ifdef HAS_AOVS
+    return Path(camera, vec3<f32>(0.0), vec3<f32>(1.0), camera.origin, 0.0, true, 0u, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
+#else
     return Path(camera, vec3<f32>(0.0), vec3<f32>(1.0), camera.origin, 0.0, true, 0u);
+#endif
 }
 
 // Traces the path's next ray and adds what it finds; false when the path has ended.
@@ -199,6 +212,13 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
 #endif
     if (cand.prim == NO_HIT) {
         var le = background_radiance((*path).ray.dir);
+#ifdef HAS_AOVS
+        // the background's radiance, clamped, is the albedo of a path that escapes
+        if (!(*path).found) {
+            (*path).albedo = clamp(le, vec3<f32>(0.0), vec3<f32>(1.0));
+            (*path).found = true;
+        }
+#endif
 #ifdef HAS_MIS
         if (mis && params.env_light != NO_LIGHT) {
             le *= power_heuristic((*path).prev_pdf, light_pdf(params.env_light, (*path).prev_p, (*path).prev_p, (*path).ray.dir));
@@ -220,6 +240,21 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     let hit = mapped;
 #endif
     var le = emitted(mat, hit);
+#ifdef HAS_AOVS
+    if ((*path).depth == 0u) {
+        // prev_p is still the camera ray's origin (passing through alpha keeps it)
+        (*path).distance = distance(hit.p, (*path).prev_p);
+        (*path).position = hit.p;
+    }
+    if (!(*path).found) {
+        // the shading normal facing the ray; an emitter's albedo is its emission, clamped
+        (*path).normal = select(-hit.ns, hit.ns, dot(hit.ns, (*path).ray.dir) < 0.0);
+        if (any(le > vec3<f32>(0.0))) {
+            (*path).albedo = clamp(le, vec3<f32>(0.0), vec3<f32>(1.0));
+            (*path).found = true;
+        }
+    }
+#endif
 #ifdef HAS_MIS
     let light = primitive_record(cand.prim).flags >> PRIM_LIGHT_SHIFT;
     if (mis && light != 0u && any(le > vec3<f32>(0.0))) {
@@ -269,6 +304,12 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         if (!(pdf > 0.0) || all(f == vec3<f32>(0.0))) {
             return false;
         }
+#ifdef HAS_AOVS
+        if (!(*path).found) {
+            (*path).albedo = f / pdf;
+            (*path).found = true;
+        }
+#endif
         (*path).throughput *= f / pdf;
         (*path).ray = spawn_ray(hit, dir);
         (*path).depth += 1u;
@@ -280,6 +321,14 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         return false;
     }
     (*path).throughput *= s.weight;
+#ifdef HAS_AOVS
+    // the albedo is the weight of the first bounce off a lobe with a density: f cos / pdf,
+    // whose mean is the surface's directional albedo
+    if (!(*path).found && !s.delta) {
+        (*path).albedo = s.weight;
+        (*path).found = true;
+    }
+#endif
     if (all((*path).throughput == vec3<f32>(0.0))) {
         // nothing further along this path can add to the pixel
         return false;
@@ -310,8 +359,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     // dropped and counted in the otherwise unused .w of the squares.
     // The bound accumulation buffer holds the pixels of the band of rows from accum_y.
     let slot = (y - params.accum_y) * params.band_width + gid.x;
-    var sum = accum[2u * slot];
-    var sum2 = accum[2u * slot + 1u];
+#ifdef HAS_AOVS
+    let at = ACCUM_ENTRIES_AOVS * slot;
+    var albedo_depth = accum[at + 2u];
+    var normal = accum[at + 3u];
+    var position = accum[at + 4u];
+#else
+    let at = ACCUM_ENTRIES * slot;
+#endif
+    var sum = accum[at];
+    var sum2 = accum[at + 1u];
 #ifdef HAS_EMISSION
     var sample = params.sample_index;
     let end = sample + params.sample_count;
@@ -325,6 +382,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
             } else {
                 sum2.w += 1.0;
             }
+#ifdef HAS_AOVS
+            // every sample's AOVs, those of a colour dropped as not finite too
+            albedo_depth += vec4<f32>(select(vec3<f32>(0.0), path.albedo, all_finite(path.albedo)), path.distance);
+            normal += vec4<f32>(path.normal, 0.0);
+            position += vec4<f32>(path.position, 0.0);
+#endif
             sample++;
             if (sample >= end) {
                 break;
@@ -336,8 +399,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     // nothing in the scene emits, so no path can carry light: no ray is traced
     sum.w += f32(params.sample_count);
 #endif
-    accum[2u * slot] = sum;
-    accum[2u * slot + 1u] = sum2;
+    accum[at] = sum;
+    accum[at + 1u] = sum2;
+#ifdef HAS_AOVS
+    accum[at + 2u] = albedo_depth;
+    accum[at + 3u] = normal;
+    accum[at + 4u] = position;
+#endif
 }
 
 // Whether every component is a finite number, judged by its bits (an exponent of all ones

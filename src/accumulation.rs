@@ -1,37 +1,74 @@
 //! The per-pixel sums a render accumulates, and what they tell: means, variances, dropped
 //! samples and the estimated error.
 
-/// Per-pixel sums of samples: `data[2 i]` = (sum r, sum g, sum b, count),
-/// `data[2 i + 1]` = (sum r^2, sum g^2, sum b^2, samples dropped as not finite), pixel i
-/// row-major from the top-left.
+pub use crate::scene::records::accum_entries as entries_per_pixel;
+
+/// Per-pixel sums of samples, [`Accumulation::entries`] `[f32; 4]` per pixel i (row-major
+/// from the top-left) from `data[entries * i]`: (sum r, sum g, sum b, count), (sum r^2,
+/// sum g^2, sum b^2, samples dropped as not finite), and with `aovs` (sum albedo rgb, sum
+/// depth), (sum normal xyz, 0), (sum position xyz, 0) over every sample, dropped or not.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Accumulation {
     pub width: u32,
     pub height: u32,
+    /// Whether the sums hold the AOVs (`crate::aov`).
+    pub aovs: bool,
     pub data: Vec<[f32; 4]>,
 }
 
 impl Accumulation {
+    /// Sums of no samples.
+    pub fn zeros(width: u32, height: u32, aovs: bool) -> Self {
+        let n = width as usize * height as usize * entries_per_pixel(aovs);
+        Accumulation {
+            width,
+            height,
+            aovs,
+            data: vec![[0.0; 4]; n],
+        }
+    }
+
     pub fn pixel_count(&self) -> usize {
         self.width as usize * self.height as usize
     }
 
+    /// `[f32; 4]` entries per pixel.
+    pub fn entries(&self) -> usize {
+        entries_per_pixel(self.aovs)
+    }
+
+    /// Entry `k` of pixel `i`.
+    fn entry(&self, i: usize, k: usize) -> [f32; 4] {
+        self.data[self.entries() * i + k]
+    }
+
     /// Samples accumulated in pixel `i`.
     pub fn samples(&self, i: usize) -> f32 {
-        self.data[2 * i][3]
+        self.entry(i, 0)[3]
     }
 
     /// Mean radiance of pixel `i`.
     pub fn mean(&self, i: usize) -> [f32; 3] {
-        let s = self.data[2 * i];
+        let s = self.entry(i, 0);
         let n = s[3].max(1.0);
         [s[0] / n, s[1] / n, s[2] / n]
     }
 
+    /// The mean of AOV entry `k` (2: albedo and depth, 3: normal, 4: position) of pixel
+    /// `i` over every sample, those dropped from the colour as not finite too; zeros
+    /// without AOVs.
+    pub fn aov_mean(&self, i: usize, k: usize) -> [f32; 4] {
+        if !self.aovs {
+            return [0.0; 4];
+        }
+        let n = (self.entry(i, 0)[3] + self.entry(i, 1)[3]).max(1.0);
+        self.entry(i, k).map(|x| x / n)
+    }
+
     /// Unbiased sample variance of one sample of pixel `i`, per channel.
     pub fn variance(&self, i: usize) -> [f32; 3] {
-        let s = self.data[2 * i];
-        let q = self.data[2 * i + 1];
+        let s = self.entry(i, 0);
+        let q = self.entry(i, 1);
         let n = s[3];
         if n < 2.0 {
             return [0.0; 3];
@@ -42,7 +79,7 @@ impl Accumulation {
     /// Samples dropped because they were not finite (NaN or infinite), over all pixels.
     pub fn non_finite(&self) -> u64 {
         (0..self.pixel_count())
-            .map(|i| self.data[2 * i + 1][3] as u64)
+            .map(|i| self.entry(i, 1)[3] as u64)
             .sum()
     }
 

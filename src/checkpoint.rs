@@ -214,6 +214,9 @@ impl Checkpoint {
             if (a.width, a.height) != (b.width, b.height) {
                 return Err(mismatch("the image size"));
             }
+            if a.aovs != b.aovs {
+                return Err(mismatch("whether it holds AOVs (--aov)"));
+            }
             let all = merged.samples.iter().chain(&c.samples).cloned().collect();
             merged.samples = join_ranges(all).ok_or_else(|| CheckpointError::Mismatch {
                 path: path.clone(),
@@ -241,12 +244,13 @@ impl Checkpoint {
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
         let acc = &self.accumulation;
         let mut bytes = format!(
-            "{MAGIC}\nformat = {FORMAT}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\nsamples = {}\n\n",
+            "{MAGIC}\nformat = {FORMAT}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\nsamples = {}\naovs = {}\n\n",
             self.version,
             self.scene_hash,
             acc.width,
             acc.height,
-            format_ranges(&self.samples)
+            format_ranges(&self.samples),
+            if acc.aovs { "yes" } else { "no" }
         )
         .into_bytes();
         for v in acc.data.iter().flatten() {
@@ -323,8 +327,15 @@ impl Checkpoint {
         let samples = join_ranges(samples)
             .filter(|r| !r.is_empty())
             .ok_or_else(|| corrupt("samples: empty or overlapping ranges".into()))?;
+        // written before AOVs existed: none
+        let aovs = match field("aovs") {
+            Ok("yes") => true,
+            Ok("no") | Err(_) => false,
+            Ok(other) => return Err(corrupt(format!("aovs is {other}, not yes or no"))),
+        };
         let data = &bytes[end + 2..];
-        let expected = width as u64 * height as u64 * 32;
+        let expected =
+            width as u64 * height as u64 * 16 * crate::accumulation::entries_per_pixel(aovs) as u64;
         if data.len() as u64 != expected {
             return Err(corrupt(format!(
                 "{} bytes of sums where a {width}x{height} image has {expected} (truncated?)",
@@ -342,6 +353,7 @@ impl Checkpoint {
             accumulation: Accumulation {
                 width,
                 height,
+                aovs,
                 data: floats
                     .chunks_exact(4)
                     .map(|c| [c[0], c[1], c[2], c[3]])

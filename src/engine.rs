@@ -3,7 +3,7 @@
 use std::ops::Range;
 use std::time::Duration;
 
-use crate::accumulation::Accumulation;
+use crate::accumulation::{entries_per_pixel, Accumulation};
 use crate::cpu::trace::CpuRenderer;
 use crate::gpu::context::GpuContext;
 use crate::gpu::error::GpuError;
@@ -135,9 +135,11 @@ impl Engine {
             Engine::Gpu(g) => (g.size(), g.accumulation()?),
             Engine::Cpu(c) => (c.size(), c.accumulation()),
         };
+        let aovs = data.len() == width as usize * height as usize * entries_per_pixel(true);
         Ok(Accumulation {
             width,
             height,
+            aovs,
             data,
         })
     }

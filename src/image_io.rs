@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
 use image::{ImageEncoder, ImageFormat};
 
+use crate::aov::Layer;
+
 /// Output formats, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OutputFormat {
@@ -23,6 +25,11 @@ pub enum ImageError {
         path.display()
     )]
     UnknownExtension { path: PathBuf },
+    #[error("{}: cannot read image: {cause}", path.display())]
+    Read {
+        path: PathBuf,
+        cause: Box<dyn std::error::Error + Send + Sync>,
+    },
     #[error("{}: cannot write image: {cause}", path.display())]
     Write {
         path: PathBuf,
@@ -71,6 +78,104 @@ pub fn to_srgb8(rgb: &[f32]) -> Vec<u8> {
 /// it, so a reader never sees a half-written image.
 pub fn write_image(path: &Path, width: u32, height: u32, rgb: &[f32]) -> Result<(), ImageError> {
     write_pixels(path, width, height, rgb, || to_srgb8(rgb))
+}
+
+/// Writes layers of linear values (the colour as `R`, `G`, `B`, then AOVs as `albedo.R`,
+/// ...) to `path`, atomically. EXR holds them all as named channels of one part (the
+/// OpenEXR convention for layers, which Nuke, Blender and OIDN's tools read); PNG and PPM
+/// hold the colour only, so a second layer there is refused.
+pub fn write_layers(
+    path: &Path,
+    width: u32,
+    height: u32,
+    layers: &[Layer],
+) -> Result<(), ImageError> {
+    let format = OutputFormat::from_path(path)?;
+    let [first, rest @ ..] = layers else {
+        return Err(ImageError::Write {
+            path: path.to_path_buf(),
+            cause: "no layers to write".into(),
+        });
+    };
+    if rest.is_empty() {
+        return write_image(path, width, height, &first.values);
+    }
+    if format != OutputFormat::Exr {
+        return Err(ImageError::Write {
+            path: path.to_path_buf(),
+            cause: "only an EXR file holds AOVs (`albedo.R`, ...) beside the colour; name                     an .exr output"
+                .into(),
+        });
+    }
+    let tmp = temp_path(path);
+    let result = (|| -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+        use exr::prelude::*;
+        let n = width as usize * height as usize;
+        let mut channels = SmallVec::new();
+        for layer in layers {
+            let k = layer.channels.len();
+            if layer.values.len() != n * k {
+                return Err(format!("layer {:?} does not match the image size", layer.name).into());
+            }
+            for (c, name) in layer.channel_names().into_iter().enumerate() {
+                let samples: Vec<f32> = layer.values.iter().skip(c).step_by(k).copied().collect();
+                channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(samples)));
+            }
+        }
+        let image = Image::from_channels(
+            (width as usize, height as usize),
+            AnyChannels::sort(channels),
+        );
+        image.write().to_file(&tmp)?;
+        std::fs::rename(&tmp, path)?;
+        Ok(())
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result.map_err(|cause| ImageError::Write {
+        path: path.to_path_buf(),
+        cause,
+    })
+}
+
+/// An EXR file's channels, each as f32 by its full name (`R`, `albedo.R`; a part's name
+/// prefixed where a file has several parts), row-major from the top-left.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExrChannels {
+    pub width: u32,
+    pub height: u32,
+    pub channels: Vec<(String, Vec<f32>)>,
+}
+
+/// Every channel of an EXR file.
+pub fn read_exr(path: &Path) -> Result<ExrChannels, ImageError> {
+    let image =
+        exr::prelude::read_all_flat_layers_from_file(path).map_err(|e| ImageError::Read {
+            path: path.to_path_buf(),
+            cause: e.into(),
+        })?;
+    let mut size = (0, 0);
+    let mut channels = Vec::new();
+    let parts = image.layer_data.len();
+    for layer in &image.layer_data {
+        size = (layer.size.0 as u32, layer.size.1 as u32);
+        let prefix = match (&layer.attributes.layer_name, parts) {
+            (Some(name), 2..) => format!("{name}."),
+            _ => String::new(),
+        };
+        for ch in &layer.channel_data.list {
+            channels.push((
+                format!("{prefix}{}", ch.name),
+                ch.sample_data.values_as_f32().collect(),
+            ));
+        }
+    }
+    Ok(ExrChannels {
+        width: size.0,
+        height: size.1,
+        channels,
+    })
 }
 
 /// Writes a per-pixel relative error estimate (`width * height` values): EXR keeps the

@@ -9,9 +9,11 @@
 //! tests and the benchmarks.
 
 pub mod accumulation;
+pub mod aov;
 pub mod checkpoint;
 pub mod converge;
 pub mod cpu;
+pub mod denoise;
 pub mod engine;
 pub mod gpu;
 pub mod image_io;

@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use wgtrace::checkpoint::Checkpoint;
 use wgtrace::gpu::limits::DeviceFit;
 use wgtrace::gpu::plan::{Feature, GpuPlan};
-use wgtrace::image_io::{check_writable, write_image};
+use wgtrace::image_io::{check_writable, write_layers};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::session::{
     Output, Passes, Saving, Session, SessionError, SessionOptions, StopRule, Stopped,
@@ -74,6 +74,13 @@ enum Command {
         /// Also write the merged checkpoint here.
         #[arg(long, value_name = "PATH")]
         checkpoint: Option<PathBuf>,
+        /// AOVs to write beside the colour (EXR only), as `render --aov`; the checkpoints
+        /// must hold their sums (rendered with --aov or --denoise).
+        #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = wgtrace::aov::Aov::from_name)]
+        aov: Vec<wgtrace::aov::Aov>,
+        /// Denoise the merged image, as `render --denoise`.
+        #[arg(long)]
+        denoise: bool,
     },
 }
 
@@ -220,6 +227,16 @@ struct RenderArgs {
     /// (several samples per submission when quick, a few rows when slow).
     #[arg(long, value_name = "SECONDS", default_value_t = 0.5, value_parser = positive_f64)]
     submission_time: f64,
+    /// Write these AOVs beside the colour, as layers of the EXR output (albedo.R,
+    /// normal.X, depth.Z, ...): albedo, normal, depth, position, variance (comma-separated;
+    /// see docs/cli.md for what each holds).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', value_parser = wgtrace::aov::Aov::from_name)]
+    aov: Vec<wgtrace::aov::Aov>,
+    /// Denoise the image with Intel Open Image Denoise (`pip install pyoidn`, or OIDN_DIR),
+    /// guided by the albedo and normal AOVs; an EXR output keeps the noisy colour as its
+    /// `noisy` layer.
+    #[arg(long)]
+    denoise: bool,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -273,7 +290,9 @@ fn main() -> ExitCode {
             checkpoints,
             output,
             checkpoint,
-        } => merge(&checkpoints, &output, checkpoint.as_deref()),
+            aov,
+            denoise,
+        } => merge(&checkpoints, &output, checkpoint.as_deref(), &aov, denoise),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -286,15 +305,41 @@ fn main() -> ExitCode {
     }
 }
 
-fn merge(inputs: &[PathBuf], output: &Path, checkpoint: Option<&Path>) -> anyhow::Result<()> {
+fn merge(
+    inputs: &[PathBuf],
+    output: &Path,
+    checkpoint: Option<&Path>,
+    aovs: &[wgtrace::aov::Aov],
+    denoise: bool,
+) -> anyhow::Result<()> {
+    use wgtrace::image_io::OutputFormat;
     check_writable(output)?;
+    if !aovs.is_empty() && OutputFormat::from_path(output)? != OutputFormat::Exr {
+        anyhow::bail!(
+            "{}: only an EXR file holds AOVs beside the colour; name an .exr output",
+            output.display()
+        );
+    }
+    let denoiser = denoise
+        .then(wgtrace::denoise::Denoiser::shared)
+        .transpose()?;
     let parts = inputs
         .iter()
         .map(|p| Ok((p.clone(), Checkpoint::read(p)?)))
         .collect::<anyhow::Result<Vec<_>>>()?;
     let merged = Checkpoint::merge(&parts)?;
     let acc = &merged.accumulation;
-    write_image(output, acc.width, acc.height, &acc.to_rgb())?;
+    if (denoise || aovs.iter().any(|a| a.summed())) && !acc.aovs {
+        anyhow::bail!(
+            "{}: holds no AOV sums (render the ranges with --aov or --denoise)",
+            parts[0].0.display()
+        );
+    }
+    let mut layers = wgtrace::aov::image_layers(acc, aovs, denoiser)?;
+    if OutputFormat::from_path(output)? != OutputFormat::Exr {
+        layers.truncate(1);
+    }
+    write_layers(output, acc.width, acc.height, &layers)?;
     if let Some(path) = checkpoint {
         merged
             .write(path)
@@ -638,6 +683,8 @@ fn session_options(
             image: output,
             error_map: args.error_map.clone(),
             preview_every: args.preview_every,
+            aovs: args.aov.clone(),
+            denoise: args.denoise,
         }),
         submission_target: std::time::Duration::from_secs_f64(args.submission_time),
     }

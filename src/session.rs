@@ -14,11 +14,15 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::accumulation::Accumulation;
+use crate::aov::{image_layers, Aov};
 use crate::checkpoint::{Checkpoint, CheckpointError};
+use crate::denoise::{DenoiseError, Denoiser};
 use crate::engine::{BackendChoice, Engine};
 use crate::gpu::error::GpuError;
 use crate::gpu::render::DEFAULT_SUBMISSION_TARGET;
-use crate::image_io::{check_writable, probe_writable, write_error_map, write_image, ImageError};
+use crate::image_io::{
+    check_writable, probe_writable, write_error_map, write_layers, ImageError, OutputFormat,
+};
 use crate::scene::error::SceneError;
 use crate::scene::flat::FlatScene;
 use crate::scene::load::Overrides;
@@ -145,6 +149,12 @@ pub struct Output {
     pub error_map: Option<PathBuf>,
     /// Rewrite the image every N passes.
     pub preview_every: Option<u32>,
+    /// AOVs written beside the colour (an EXR file's layers); those summed need a scene
+    /// that accumulates them (`FlatScene::aovs`).
+    pub aovs: Vec<Aov>,
+    /// Denoise the colour with Open Image Denoise (the noisy one kept as the `noisy`
+    /// layer of an EXR file); needs the AOVs' sums.
+    pub denoise: bool,
 }
 
 /// What a session needs besides the scene.
@@ -191,6 +201,8 @@ pub enum SessionError {
     Checkpoint(#[from] CheckpointError),
     #[error(transparent)]
     Image(#[from] ImageError),
+    #[error(transparent)]
+    Denoise(#[from] DenoiseError),
     #[error("{}: cannot write checkpoint: {cause}", path.display())]
     WriteCheckpoint {
         path: PathBuf,
@@ -306,7 +318,12 @@ impl Session {
     /// output, error map or checkpoint that cannot be written, a sample range past the
     /// scene's samples and a checkpoint that does not fit are refused before the backend
     /// opens (which may compile a shader).
-    pub fn open(scene: FlatScene, opts: SessionOptions) -> Result<Session, SessionError> {
+    pub fn open(mut scene: FlatScene, opts: SessionOptions) -> Result<Session, SessionError> {
+        scene.aovs |= Self::needs_aovs(&opts);
+        if let Some(path) = &opts.resume {
+            // a checkpoint's AOV sums go on with it
+            scene.aovs |= Checkpoint::read(path).is_ok_and(|c| c.accumulation.aovs);
+        }
         let start = Self::prepare(&scene, &opts)?;
         let (engine, note) = if opts.cpu_fallback {
             Engine::open(&scene, opts.backend, &opts.tuning)?
@@ -335,6 +352,17 @@ impl Session {
     /// start).
     fn prepare(scene: &FlatScene, opts: &SessionOptions) -> Result<Start, SessionError> {
         Self::check_writable(opts)?;
+        if Self::needs_aovs(opts) && !scene.aovs {
+            return Err(SessionError::Invalid(
+                "the output asks for AOVs or denoising, which the scene was not opened to \
+                 accumulate (FlatScene::aovs)"
+                    .into(),
+            ));
+        }
+        if opts.output.as_ref().is_some_and(|o| o.denoise) {
+            // fail now rather than after the render
+            Denoiser::shared()?;
+        }
         let range = opts.passes.range(scene)?;
         let Some(path) = &opts.resume else {
             return Ok(Start {
@@ -344,6 +372,13 @@ impl Session {
         };
         let ckpt = Checkpoint::read(path)?;
         ckpt.check(scene, range.end, path)?;
+        if ckpt.accumulation.aovs != scene.aovs {
+            return Err(SessionError::Invalid(format!(
+                "{}: holds no AOV sums, which this render needs (--aov, --denoise); render \
+                 again with them from the start",
+                path.display()
+            )));
+        }
         match ckpt.contiguous().filter(|r| r.start == range.start) {
             Some(held) => Ok(Start {
                 range,
@@ -393,10 +428,25 @@ impl Session {
         })
     }
 
-    /// Refuses an output, error map or checkpoint that cannot be written.
+    /// Whether the output needs the AOVs' sums: an AOV summed per sample, or denoising.
+    fn needs_aovs(opts: &SessionOptions) -> bool {
+        opts.output
+            .as_ref()
+            .is_some_and(|o| o.denoise || o.aovs.iter().any(|a| a.summed()))
+    }
+
+    /// Refuses an output, error map or checkpoint that cannot be written, and AOVs asked
+    /// of an image format that cannot hold them.
     fn check_writable(opts: &SessionOptions) -> Result<(), SessionError> {
         if let Some(out) = &opts.output {
             check_writable(&out.image)?;
+            if !out.aovs.is_empty() && OutputFormat::from_path(&out.image)? != OutputFormat::Exr {
+                return Err(SessionError::Invalid(format!(
+                    "{}: only an EXR file holds AOVs beside the colour (albedo.R, normal.X, \
+                     depth.Z, ...); name an .exr output",
+                    out.image.display()
+                )));
+            }
             if let Some(map) = &out.error_map {
                 check_writable(map)?;
             }
@@ -546,7 +596,17 @@ impl Session {
 
     fn write_image(&self, acc: &Accumulation) -> Result<(), SessionError> {
         if let Some(out) = &self.opts.output {
-            write_image(&out.image, acc.width, acc.height, &acc.to_rgb())?;
+            let denoiser = if out.denoise {
+                Some(Denoiser::shared()?)
+            } else {
+                None
+            };
+            let mut layers = image_layers(acc, &out.aovs, denoiser)?;
+            if OutputFormat::from_path(&out.image)? != OutputFormat::Exr {
+                // the colour only (denoised, when asked)
+                layers.truncate(1);
+            }
+            write_layers(&out.image, acc.width, acc.height, &layers)?;
         }
         Ok(())
     }

@@ -68,6 +68,7 @@ fn an_older_checkpoint_format_is_refused_with_the_reason() {
     let acc = wgtrace::Accumulation {
         width: 4,
         height: 3,
+        aovs: false,
         data: vec![[0.5; 4]; 24],
     };
     let path = dir.join("new.ckpt");

@@ -875,6 +875,8 @@ fn a_device_lost_mid_render_keeps_the_samples_read_back() {
                 image: image.clone(),
                 error_map: None,
                 preview_every: None,
+                aovs: Vec::new(),
+                denoise: false,
             }),
             submission_target: std::time::Duration::from_millis(1),
             ..Default::default()

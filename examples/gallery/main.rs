@@ -148,6 +148,8 @@ fn render(
         image: out.join(format!("{}.png", entry.name)),
         error_map: None,
         preview_every: None,
+        aovs: Vec::new(),
+        denoise: false,
     };
     let opts = SessionOptions {
         output: Some(output),

@@ -18,8 +18,8 @@ use super::sampling::{offset_ray, sample_disk};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{
-    Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE, MAX_ALPHA_SKIPS,
-    NO_LIGHT, PRIM_LIGHT_SHIFT,
+    accum_entries, Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE,
+    MAX_ALPHA_SKIPS, NO_LIGHT, PRIM_LIGHT_SHIFT,
 };
 
 pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
@@ -200,6 +200,14 @@ pub struct Path {
     pub prev_pdf: f32,
     pub prev_delta: bool,
     pub depth: u32,
+    /// The sample's AOVs (the shader's, with `HAS_AOVS`): albedo and normal of the first
+    /// vertex whose bounce is not a delta lobe's (`found` once it is known), distance and
+    /// point of the first hit.
+    pub albedo: Vec3,
+    pub normal: Vec3,
+    pub position: Vec3,
+    pub distance: f32,
+    pub found: bool,
 }
 
 pub fn start_path(camera: Ray) -> Path {
@@ -211,6 +219,11 @@ pub fn start_path(camera: Ray) -> Path {
         prev_pdf: 0.0,
         prev_delta: true,
         depth: 0,
+        albedo: Vec3::ZERO,
+        normal: Vec3::ZERO,
+        position: Vec3::ZERO,
+        distance: 0.0,
+        found: false,
     }
 }
 
@@ -247,6 +260,11 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
     let mis = p.light_sampling == LIGHT_SAMPLING_MIS && !path.prev_delta;
     if cand.prim == NO_HIT {
         let mut le = background_radiance(b, path.ray.dir);
+        // the background's radiance, clamped, is the albedo of a path that escapes
+        if !path.found {
+            path.albedo = le.clamp(Vec3::ZERO, Vec3::ONE);
+            path.found = true;
+        }
         if mis && p.env_light != NO_LIGHT {
             le *= power_heuristic(
                 path.prev_pdf,
@@ -260,6 +278,23 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
     let mat = &material_at(b, &b.materials[surface.material as usize], &surface);
     let hit = bent_normal(&normal_mapped(b, mat, &surface), &path.ray);
     let mut le = emitted(mat, &hit);
+    if path.depth == 0 {
+        // prev_p is still the camera ray's origin (passing through alpha keeps it)
+        path.distance = hit.p.distance(path.prev_p);
+        path.position = hit.p;
+    }
+    if !path.found {
+        // the shading normal facing the ray; an emitter's albedo is its emission, clamped
+        path.normal = if hit.ns.dot(path.ray.dir) < 0.0 {
+            hit.ns
+        } else {
+            -hit.ns
+        };
+        if le.cmpgt(Vec3::ZERO).any() {
+            path.albedo = le.clamp(Vec3::ZERO, Vec3::ONE);
+            path.found = true;
+        }
+    }
     let light = b.primitives[cand.prim as usize].flags >> PRIM_LIGHT_SHIFT;
     if mis && light != 0 && le.cmpgt(Vec3::ZERO).any() {
         le *= power_heuristic(
@@ -307,6 +342,10 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         if !(pdf > 0.0) || f == Vec3::ZERO {
             return false;
         }
+        if !path.found {
+            path.albedo = f / pdf;
+            path.found = true;
+        }
         path.throughput *= f / pdf;
         path.ray = spawn_ray(&hit, dir);
         path.depth += 1;
@@ -317,6 +356,12 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         return false;
     }
     path.throughput *= s.weight;
+    // the albedo is the weight of the first bounce off a lobe with a density: f cos / pdf,
+    // whose mean is the surface's directional albedo
+    if !path.found && !s.delta {
+        path.albedo = s.weight;
+        path.found = true;
+    }
     if path.throughput == Vec3::ZERO {
         // nothing further along this path can add to the pixel
         return false;
@@ -331,16 +376,16 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
 
 /// Radiance along one camera path: extend_path until it ends, as the shader's `main`
 /// does for each sample of its group.
-pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Vec3 {
+pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Path {
     let mut path = start_path(camera);
     if b.params.max_depth > 0 {
         while extend_path(b, &mut path, pixel, sample) {}
     }
-    path.radiance
+    path
 }
 
-/// The shader's `main` for one pixel: the sample's radiance.
-pub fn trace_pixel(b: &Bindings, x: u32, y: u32) -> Vec3 {
+/// The shader's `main` for one pixel: the sample's path, its radiance and AOVs.
+pub fn trace_pixel(b: &Bindings, x: u32, y: u32) -> Path {
     let p = &b.params;
     let pixel = y * p.width + x;
     let sample = p.sample_index;
@@ -373,9 +418,28 @@ pub fn accumulate(sum: &mut [f32; 4], sq: &mut [f32; 4], c: Vec3) {
     }
 }
 
+/// Adds one sample's AOVs to a pixel's three AOV entries, as the shader's `main` does.
+pub fn accumulate_aovs(aovs: &mut [[f32; 4]], path: &Path) {
+    let albedo = if all_finite(path.albedo) {
+        path.albedo
+    } else {
+        Vec3::ZERO
+    };
+    let add = |e: &mut [f32; 4], v: Vec3, w: f32| {
+        e[0] += v.x;
+        e[1] += v.y;
+        e[2] += v.z;
+        e[3] += w;
+    };
+    add(&mut aovs[0], albedo, path.distance);
+    add(&mut aovs[1], path.normal, 0.0);
+    add(&mut aovs[2], path.position, 0.0);
+}
+
 /// Progressive CPU renderer: one sample per pixel per pass, accumulated as the GPU
-/// accumulates (two vec4 per pixel: sum and sum of squares, in f32, in pass order; the
-/// GPU adds a group of samples' sum at once, so the last bits may differ).
+/// accumulates (`accum_entries` vec4 per pixel: sum and sum of squares, then the AOVs', in
+/// f32, in pass order; the GPU adds a group of samples' sum at once, so the last bits may
+/// differ).
 pub struct CpuRenderer {
     scene: FlatScene,
     accum: Vec<[f32; 4]>,
@@ -386,7 +450,7 @@ impl CpuRenderer {
         let n = scene.width as usize * scene.height as usize;
         Self {
             scene: scene.clone(),
-            accum: vec![[0.0; 4]; 2 * n],
+            accum: vec![[0.0; 4]; accum_entries(scene.aovs) * n],
         }
     }
 
@@ -400,24 +464,30 @@ impl CpuRenderer {
         let scene = &self.scene;
         let bindings = Bindings::new(scene, scene.params(sample_index, scene.full_band()));
         let width = scene.width as usize;
+        let entries = accum_entries(scene.aovs);
         self.accum
-            .par_chunks_mut(2 * width)
+            .par_chunks_mut(entries * width)
             .enumerate()
             .for_each(|(y, row)| {
-                for x in 0..width {
-                    let c = trace_pixel(&bindings, x as u32, y as u32);
-                    let (sum, sq) = row.split_at_mut(2 * x + 1);
-                    accumulate(&mut sum[2 * x], &mut sq[0], c);
+                for (x, px) in row.chunks_exact_mut(entries).enumerate() {
+                    let path = trace_pixel(&bindings, x as u32, y as u32);
+                    let (sum, rest) = px.split_at_mut(1);
+                    let (sq, aovs) = rest.split_at_mut(1);
+                    accumulate(&mut sum[0], &mut sq[0], path.radiance);
+                    if scene.aovs {
+                        accumulate_aovs(aovs, &path);
+                    }
                 }
             });
     }
 
-    /// The accumulation buffer: two `[f32; 4]` per pixel, row-major from the top-left.
+    /// The accumulation buffer: `accum_entries` `[f32; 4]` per pixel, row-major from the
+    /// top-left.
     pub fn accumulation(&self) -> Vec<[f32; 4]> {
         self.accum.clone()
     }
 
-    /// Replaces the sums (a resumed render); `data` has two entries per pixel.
+    /// Replaces the sums (a resumed render); `data` has `accum_entries` entries per pixel.
     pub fn set_accumulation(&mut self, data: &[[f32; 4]]) {
         self.accum.copy_from_slice(data);
     }

@@ -89,6 +89,8 @@ pub enum Feature {
     EnvMap,
     /// Anything emits: without it no path is traced.
     Emission,
+    /// The AOVs' sums beside the colour's (albedo, normal, depth, position).
+    Aovs,
 }
 
 /// The features before the materials' in define order.
@@ -106,7 +108,7 @@ const GEOMETRY: [Feature; 10] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 22] = [
+const SHADING: [Feature; 23] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -129,6 +131,7 @@ const SHADING: [Feature; 22] = [
     Feature::Punctual,
     Feature::EnvMap,
     Feature::Emission,
+    Feature::Aovs,
 ];
 
 impl Feature {
@@ -173,6 +176,7 @@ impl Feature {
             Feature::Sobol => "HAS_SOBOL",
             Feature::Mis => "HAS_MIS",
             Feature::Mixture => "HAS_MIXTURE",
+            Feature::Aovs => "HAS_AOVS",
             Feature::Punctual => "HAS_PUNCTUAL",
             Feature::EnvMap => "HAS_ENV_MAP",
             Feature::Emission => "HAS_EMISSION",
@@ -189,7 +193,7 @@ impl Feature {
     /// Its bit in a [`FeatureSet`]: the others' order, the materials' from 32 on by tag.
     fn bit(self) -> u32 {
         match self {
-            Feature::Material(kind) => 32 + kind.tag(),
+            Feature::Material(kind) => 40 + kind.tag(),
             f => GEOMETRY
                 .iter()
                 .chain(&SHADING)
@@ -352,7 +356,8 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         )
         .with(Feature::Punctual, scene.num_punctual > 0 && nee)
         .with(Feature::EnvMap, scene.env.is_some())
-        .with(Feature::Emission, scene.emits())
+        .with(Feature::Emission, scene.emits() || scene.aovs)
+        .with(Feature::Aovs, scene.aovs)
 }
 
 /// What a shader is assembled from: its features, where its record arrays live, and the
@@ -392,7 +397,8 @@ impl ShaderSpec {
     /// every glass hit; shading normals a second eval and pdf to every light sample;
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
     /// compile of the full shader took minutes longer).
-    pub const OPTIONAL_IN_FULL: [Feature; 9] = [
+    pub const OPTIONAL_IN_FULL: [Feature; 10] = [
+        Feature::Aovs,
         Feature::Alpha,
         Feature::NormalMap,
         Feature::ShadingNormals,

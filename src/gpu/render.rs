@@ -11,11 +11,16 @@ use super::error::GpuError;
 use super::pipeline::TracePipeline;
 use super::plan::GpuPlan;
 use crate::scene::flat::{Band, FlatScene};
-use crate::scene::records::Params;
+use crate::scene::records::{accum_entries as entries_per_pixel, Params};
 use crate::tuning::Tuning;
 
 /// Accumulation bytes per pixel: two `vec4<f32>` (sum with count, sum of squares).
 pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
+
+/// Accumulation bytes per pixel with or without the AOVs' sums.
+pub fn accum_bytes_per_pixel(aovs: bool) -> u64 {
+    16 * entries_per_pixel(aovs) as u64
+}
 
 /// Workgroup side of `trace.wgsl`'s entry point: one invocation per column of the
 /// traversal stacks.
@@ -107,8 +112,8 @@ pub fn next_budget(
 
 /// Most pixels per band: the tuning's `band_pixels`, and no more than one storage binding
 /// of `limit` bytes holds.
-pub fn band_pixels(wanted: u32, limit: u64) -> u32 {
-    wanted.min((limit / ACCUM_BYTES_PER_PIXEL).min(u32::MAX as u64) as u32)
+pub fn band_pixels(wanted: u32, limit: u64, aovs: bool) -> u32 {
+    wanted.min((limit / accum_bytes_per_pixel(aovs)).min(u32::MAX as u64) as u32)
 }
 
 /// Splits the image into bands of whole rows of at most `max_pixels` pixels (one row at
@@ -146,7 +151,7 @@ impl GpuRenderer {
         let bands = bands_within(
             scene.width,
             scene.height,
-            band_pixels(tuning.band_pixels, plan.fit.storage_bytes),
+            band_pixels(tuning.band_pixels, plan.fit.storage_bytes, scene.aovs),
         );
         let stride = params_stride(device);
         let buffers = scene_buffers(
@@ -163,7 +168,9 @@ impl GpuRenderer {
             .map(|band| {
                 let accum = device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some("accumulation"),
-                    size: band.width as u64 * band.height as u64 * ACCUM_BYTES_PER_PIXEL,
+                    size: band.width as u64
+                        * band.height as u64
+                        * accum_bytes_per_pixel(scene.aovs),
                     usage: wgpu::BufferUsages::STORAGE
                         | wgpu::BufferUsages::COPY_SRC
                         | wgpu::BufferUsages::COPY_DST,
@@ -365,12 +372,17 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// Replaces the accumulation buffers' sums (a resumed render): two `[f32; 4]` per
-    /// pixel of the image, row-major.
+    /// `[f32; 4]` entries per pixel of the sums.
+    fn entries(&self) -> usize {
+        entries_per_pixel(self.scene.aovs)
+    }
+
+    /// Replaces the accumulation buffers' sums (a resumed render): `entries` `[f32; 4]`
+    /// per pixel of the image, row-major.
     pub fn set_accumulation(&mut self, data: &[[f32; 4]]) -> Result<(), GpuError> {
         let mut at = 0;
         for band in &self.bands {
-            let n = 2 * band.band.width as usize * band.band.height as usize;
+            let n = self.entries() * band.band.width as usize * band.band.height as usize;
             self.ctx
                 .queue
                 .write_buffer(&band.accum, 0, bytemuck::cast_slice(&data[at..at + n]));
@@ -380,11 +392,12 @@ impl GpuRenderer {
         self.ctx.wait()
     }
 
-    /// Copies the accumulation back, band by band: two `[f32; 4]` per pixel of the image,
-    /// row-major.
+    /// Copies the accumulation back, band by band: `entries` `[f32; 4]` per pixel of the
+    /// image, row-major.
     pub fn accumulation(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
-        let mut out =
-            Vec::with_capacity(2 * self.scene.width as usize * self.scene.height as usize);
+        let mut out = Vec::with_capacity(
+            self.entries() * self.scene.width as usize * self.scene.height as usize,
+        );
         for band in &self.bands {
             let mut encoder = self
                 .ctx
@@ -392,7 +405,7 @@ impl GpuRenderer {
                 .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
             encoder.copy_buffer_to_buffer(&band.accum, 0, &self.readback, 0, band.accum.size());
             self.ctx.queue.submit([encoder.finish()]);
-            let n = 2 * band.band.width as usize * band.band.height as usize;
+            let n = self.entries() * band.band.width as usize * band.band.height as usize;
             let data: Vec<[f32; 4]> = self.ctx.read_buffer(&self.readback)?;
             out.extend_from_slice(&data[..n]);
         }

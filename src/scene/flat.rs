@@ -81,6 +81,9 @@ pub struct FlatScene {
     /// The Perlin tables (at `Texture::offset`) and the image background's sampling
     /// distribution (at `EnvironmentMap::cdf`), four f32 scalars to an entry.
     pub tables: Vec<[f32; 4]>,
+    /// Whether renders accumulate the AOVs (albedo, normal, depth, position; `crate::aov`)
+    /// beside the colour. Not part of the scene file: a render asks for them.
+    pub aovs: bool,
 }
 
 /// An equirectangular image background.

@@ -618,6 +618,7 @@ pub fn flatten(
         shape_data,
         num_unbounded,
         use_bvh,
+        aovs: false,
         textures,
         texels,
         tables,

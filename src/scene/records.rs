@@ -68,6 +68,12 @@ shared_constants! {
     /// Most surfaces a ray passes through where they are transparent (alpha) before it
     /// stops at the next one, whatever it is: a bound on the loop, never met in practice.
     MAX_ALPHA_SKIPS: u32 = 16;
+    /// `vec4<f32>` entries per pixel of the accumulation: (sum rgb, count), (sum of squares
+    /// rgb, samples dropped as not finite).
+    ACCUM_ENTRIES: u32 = 2;
+    /// Entries per pixel with AOVs (`HAS_AOVS`): the two above, then (albedo rgb, depth),
+    /// (normal xyz, 0), (position xyz, 0), each summed over every sample.
+    ACCUM_ENTRIES_AOVS: u32 = 5;
 
     /// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
     /// within this depth.
@@ -224,6 +230,15 @@ shared_constants! {
     /// `shape_data` entries of one triangle's vertex colours: one (r, g, b, alpha) per
     /// corner.
     COLOR_ENTRIES: u32 = 3;
+}
+
+/// `[f32; 4]` accumulation entries per pixel with or without the AOVs' sums.
+pub fn accum_entries(aovs: bool) -> usize {
+    (if aovs {
+        ACCUM_ENTRIES_AOVS
+    } else {
+        ACCUM_ENTRIES
+    }) as usize
 }
 
 /// `shape_data` entries of one transform: world-to-object rows, then object-to-world rows.
