@@ -242,6 +242,19 @@ impl Checkpoint {
 
     /// Writes the checkpoint to `path` whole: to a temporary file beside it, then renamed.
     pub fn write(&self, path: &Path) -> std::io::Result<()> {
+        let bytes = self.to_bytes();
+        let mut tmp = path.as_os_str().to_owned();
+        tmp.push(format!(".tmp{}", std::process::id()));
+        let tmp = PathBuf::from(tmp);
+        std::fs::write(&tmp, &bytes)
+            .and_then(|_| std::fs::rename(&tmp, path))
+            .inspect_err(|_| {
+                let _ = std::fs::remove_file(&tmp);
+            })
+    }
+
+    /// The file's bytes: the text header, then the sums.
+    pub fn to_bytes(&self) -> Vec<u8> {
         let acc = &self.accumulation;
         let mut bytes = format!(
             "{MAGIC}\nformat = {FORMAT}\nversion = {}\nscene_hash = {:016x}\nwidth = {}\nheight = {}\nsamples = {}\naovs = {}\n\n",
@@ -256,14 +269,7 @@ impl Checkpoint {
         for v in acc.data.iter().flatten() {
             bytes.extend_from_slice(&v.to_le_bytes());
         }
-        let mut tmp = path.as_os_str().to_owned();
-        tmp.push(format!(".tmp{}", std::process::id()));
-        let tmp = PathBuf::from(tmp);
-        std::fs::write(&tmp, &bytes)
-            .and_then(|_| std::fs::rename(&tmp, path))
-            .inspect_err(|_| {
-                let _ = std::fs::remove_file(&tmp);
-            })
+        bytes
     }
 
     /// Reads a checkpoint, refusing anything that is not a whole one.
@@ -272,6 +278,12 @@ impl Checkpoint {
             path: path.to_path_buf(),
             cause,
         })?;
+        Self::from_bytes(&bytes, path)
+    }
+
+    /// A checkpoint from its bytes (as [`Checkpoint::to_bytes`] writes them); `path`
+    /// names it in errors.
+    pub fn from_bytes(bytes: &[u8], path: &Path) -> Result<Self, CheckpointError> {
         let corrupt = |reason: String| CheckpointError::Corrupt {
             path: path.to_path_buf(),
             reason,

@@ -114,9 +114,11 @@ struct ConvergeArgs {
     /// Backend of the measured renders.
     #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
     backend: BackendArg,
-    /// Which Vulkan adapter (index from `wgtrace info`).
-    #[arg(long, default_value_t = 0)]
-    adapter: usize,
+    /// Which Vulkan adapter: an index from `wgtrace info`, or part of its name. Default:
+    /// the GPU a cluster's scheduler assigned (CUDA_VISIBLE_DEVICES, ROCR_VISIBLE_DEVICES
+    /// or HIP_VISIBLE_DEVICES, matched by PCI bus order or UUID), else the first.
+    #[arg(long, value_name = "INDEX|NAME")]
+    adapter: Option<String>,
     /// Image width (overrides [render] width, for every render and the reference).
     #[arg(long)]
     width: Option<u32>,
@@ -126,6 +128,10 @@ struct ConvergeArgs {
     /// Rays per path of configurations that give none (overrides [render] max_depth).
     #[arg(long)]
     max_depth: Option<u32>,
+    /// Also measure every point denoised with Open Image Denoise (a `LABEL +oidn` curve
+    /// per configuration; its seconds include the denoiser's).
+    #[arg(long)]
+    denoise: bool,
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
@@ -150,9 +156,11 @@ struct RenderArgs {
     /// Which backend renders.
     #[arg(long, value_enum, default_value_t = BackendArg::Gpu)]
     backend: BackendArg,
-    /// Which Vulkan adapter (index from `wgtrace info`).
-    #[arg(long, default_value_t = 0)]
-    adapter: usize,
+    /// Which Vulkan adapter: an index from `wgtrace info`, or part of its name. Default:
+    /// the GPU a cluster's scheduler assigned (CUDA_VISIBLE_DEVICES, ROCR_VISIBLE_DEVICES
+    /// or HIP_VISIBLE_DEVICES, matched by PCI bus order or UUID), else the first.
+    #[arg(long, value_name = "INDEX|NAME")]
+    adapter: Option<String>,
     /// Samples per pixel (overrides [render] spp).
     #[arg(long)]
     spp: Option<u32>,
@@ -470,10 +478,18 @@ fn features(path: &Path) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn backend_choice(arg: BackendArg, adapter: usize) -> BackendChoice {
+/// The backend asked for, with the adapter `--adapter` or a scheduler's variables choose
+/// (`wgtrace::gpu::select`), and a line saying why when it is not the default.
+fn backend_choice(
+    arg: BackendArg,
+    adapter: Option<&str>,
+) -> anyhow::Result<(BackendChoice, Option<String>)> {
     match arg {
-        BackendArg::Gpu => BackendChoice::Gpu { adapter },
-        BackendArg::Cpu => BackendChoice::Cpu,
+        BackendArg::Gpu => {
+            let s = wgtrace::gpu::context::select_adapter(adapter)?;
+            Ok((BackendChoice::Gpu { adapter: s.index }, s.reason))
+        }
+        BackendArg::Cpu => Ok((BackendChoice::Cpu, None)),
     }
 }
 
@@ -494,12 +510,13 @@ fn converge(args: ConvergeArgs) -> anyhow::Result<()> {
         },
         reference: args.reference.clone(),
         reference_spp: args.reference_spp,
-        reference_backend: backend_choice(args.reference_backend, args.adapter),
+        reference_backend: backend_choice(args.reference_backend, args.adapter.as_deref())?.0,
         spp_max: args.spp_max,
         runs: args.runs,
         configs,
-        backend: backend_choice(args.backend, args.adapter),
+        backend: backend_choice(args.backend, args.adapter.as_deref())?.0,
         out: args.out.clone(),
+        denoise: args.denoise,
     };
     let bar = progress_bar(
         args.quiet,
@@ -598,7 +615,11 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
             loading.elapsed().as_secs_f64()
         );
     }
-    let opts = session_options(&args, tuning, output.clone(), limited);
+    let (backend, why) = backend_choice(args.backend, args.adapter.as_deref())?;
+    if let (Some(why), false) = (why, args.quiet) {
+        eprintln!("adapter: {why}");
+    }
+    let opts = session_options(&args, backend, tuning, output.clone(), limited);
     let mut session = Session::open(scene, opts)?;
     if let Some(note) = session.note() {
         eprintln!("{note}");
@@ -651,6 +672,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
 /// continue or merge it.
 fn session_options(
     args: &RenderArgs,
+    backend: BackendChoice,
     tuning: Tuning,
     output: PathBuf,
     limited: bool,
@@ -661,7 +683,7 @@ fn session_options(
         .or_else(|| args.resume.clone())
         .unwrap_or_else(|| output.with_extension("ckpt"));
     SessionOptions {
-        backend: backend_choice(args.backend, args.adapter),
+        backend,
         cpu_fallback: true,
         tuning,
         passes: match (&args.sample_range, limited, args.spp) {

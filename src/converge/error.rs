@@ -16,6 +16,8 @@ pub enum ConvergeError {
     Session(#[from] SessionError),
     #[error(transparent)]
     Image(#[from] crate::image_io::ImageError),
+    #[error(transparent)]
+    Denoise(#[from] crate::denoise::DenoiseError),
     #[error("{}: {message}", path.display())]
     File { path: PathBuf, message: String },
     #[error("{0}")]

@@ -28,6 +28,10 @@ pub struct Options {
     /// Backend of the measured renders.
     pub backend: BackendChoice,
     pub out: PathBuf,
+    /// Also measure each point denoised by Open Image Denoise (the renders then sum the
+    /// albedo and normal that guide it): a curve `LABEL +oidn` per configuration, its
+    /// seconds the render's plus the denoiser's.
+    pub denoise: bool,
 }
 
 /// Where a study stands, for a progress display.

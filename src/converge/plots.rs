@@ -16,10 +16,10 @@ pub(super) fn plot(study: &Study, out: &Path, by_time: bool) -> Result<(), Conve
     };
     let path = out.join(name);
     let curves: Vec<(String, Vec<(f64, f64)>)> = study
-        .configs
-        .iter()
-        .map(|c| {
-            let pts = curve(study, &c.label());
+        .labels()
+        .into_iter()
+        .map(|label| {
+            let pts = curve(study, &label);
             let xy = pts
                 .iter()
                 .map(|m| {
@@ -27,7 +27,7 @@ pub(super) fn plot(study: &Study, out: &Path, by_time: bool) -> Result<(), Conve
                     (x.max(1e-6), m.rmse.max(1e-12))
                 })
                 .collect();
-            (c.label(), xy)
+            (label, xy)
         })
         .filter(|(_, xy): &(String, Vec<(f64, f64)>)| !xy.is_empty())
         .collect();

@@ -80,8 +80,7 @@ fn results_table(study: &Study) -> String {
         rule += "---|";
     }
     let _ = writeln!(md, "{header}\n{rule}");
-    for c in &study.configs {
-        let label = c.label();
+    for label in study.labels() {
         let pts = curve(study, &label);
         let Some(last) = pts.last() else { continue };
         let slope = fit_loglog(
@@ -90,13 +89,18 @@ fn results_table(study: &Study) -> String {
                 .collect::<Vec<_>>(),
         )
         .map_or("-".to_string(), |(s, _)| format!("{s:.2}"));
+        let est = last.est_rel_mse / last.rel_mse;
         let mut row = format!(
-            "| {label} | {slope} | {:.2e} | {:.2} | {:.3} | {:.3e} | {:.2} |",
+            "| {label} | {slope} | {:.2e} | {:.2} | {:.3} | {:.3e} | {} |",
             last.rel_mse,
             last.seconds,
             last.msamples_per_s,
             last.efficiency,
-            last.est_rel_mse / last.rel_mse
+            if est.is_nan() {
+                "-".to_string()
+            } else {
+                format!("{est:.2}")
+            }
         );
         for t in TARGETS {
             let cell = match to_reach(&pts, t) {
@@ -139,16 +143,15 @@ fn estimate_table(study: &Study) -> String {
         rule += "---|";
     }
     let _ = writeln!(md, "{header}\n{rule}");
-    for c in &study.configs {
-        let label = c.label();
+    for label in study.configs.iter().map(|c| c.label()) {
         let pts = curve(study, &label);
         let mut row = format!("| {label} |");
         for spp in &spps {
             match pts.iter().find(|m| m.spp == *spp) {
-                Some(m) => {
+                Some(m) if !m.est_rel_mse.is_nan() => {
                     let _ = write!(row, " {:.2} |", (m.est_rel_mse / m.rel_mse).sqrt());
                 }
-                None => row += " - |",
+                _ => row += " - |",
             }
         }
         let _ = writeln!(md, "{row}");

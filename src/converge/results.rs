@@ -72,9 +72,26 @@ pub struct Study {
     pub reference: ReferenceInfo,
     pub configs: Vec<Config>,
     pub measurements: Vec<Measurement>,
+    /// Whether each point was also measured denoised ([`DENOISED`] curves).
+    pub denoised: bool,
 }
 
+/// What a configuration's label gains for its denoised curve.
+pub const DENOISED: &str = " +oidn";
+
 impl Study {
+    /// The curves' labels: every configuration's, then (when denoised) each one's
+    /// denoised curve.
+    pub fn labels(&self) -> Vec<String> {
+        let plain = self.configs.iter().map(Config::label);
+        let denoised = self
+            .configs
+            .iter()
+            .filter(|_| self.denoised)
+            .map(|c| c.label() + DENOISED);
+        plain.chain(denoised).collect()
+    }
+
     /// The scene's file name, for titles.
     pub fn scene_name(&self) -> String {
         std::path::Path::new(&self.scene)

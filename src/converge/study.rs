@@ -11,7 +11,9 @@ use super::metrics::{efficiency, rel_mse, rmse};
 use super::options::{ladder, Event, Options};
 use super::reference::{load, reference, session};
 use super::report::write_report;
-use super::results::{csv_row, Measurement, Study, CSV_HEADER};
+use super::results::{csv_row, Measurement, Study, CSV_HEADER, DENOISED};
+use crate::aov::denoise;
+use crate::denoise::Denoiser;
 use crate::engine::BackendChoice;
 use crate::scene::flat::FlatScene;
 use crate::scene::load::Overrides;
@@ -80,7 +82,10 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
         reference: info,
         configs: opts.configs.clone(),
         measurements: Vec::new(),
+        denoised: opts.denoise,
     };
+    // fail now rather than after the first render
+    let denoiser = opts.denoise.then(Denoiser::shared).transpose()?;
     for (ci, config) in opts.configs.iter().enumerate() {
         for run in 0..opts.runs {
             let overrides = Overrides {
@@ -98,17 +103,19 @@ pub fn run(opts: &Options, mut event: impl FnMut(Event)) -> Result<Study, Conver
             };
             for points in renders {
                 let last = *points.last().expect("a ladder has points");
-                let scene = load(
+                let mut scene = load(
                     &opts.scene,
                     &Overrides {
                         spp: Some(last),
                         ..overrides.clone()
                     },
                 )?;
+                scene.aovs = opts.denoise;
                 let render = Render {
                     config,
                     run,
                     points: &points,
+                    denoiser,
                 };
                 log.measure(
                     scene,
@@ -130,6 +137,8 @@ struct Render<'a> {
     config: &'a Config,
     run: u32,
     points: &'a [u32],
+    /// Also measure each point denoised.
+    denoiser: Option<&'static Denoiser>,
 }
 
 /// Where a study's measurements go as they are taken, and how far it has come.
@@ -173,13 +182,45 @@ impl Log {
             busy += finished.progress.elapsed;
             self.done = from + finished.progress.samples / pixels;
             let m = measurement(render.config, render.run, spp, busy, &finished, reference);
-            writeln!(self.csv, "{}", csv_row(&m)).map_err(|e| file_err(&self.path, e))?;
-            self.csv.flush().map_err(|e| file_err(&self.path, e))?;
-            event(Event::Measured(&m));
-            study.measurements.push(m);
+            let mut taken = vec![m];
+            if let Some(d) = render.denoiser {
+                taken.push(denoised(d, &taken[0], busy, &finished, reference)?);
+            }
+            for m in taken {
+                writeln!(self.csv, "{}", csv_row(&m)).map_err(|e| file_err(&self.path, e))?;
+                self.csv.flush().map_err(|e| file_err(&self.path, e))?;
+                event(Event::Measured(&m));
+                study.measurements.push(m);
+            }
         }
         Ok(())
     }
+}
+
+/// `plain`'s render denoised: its seconds the render's and the denoiser's.
+fn denoised(
+    d: &Denoiser,
+    plain: &Measurement,
+    busy: Duration,
+    finished: &Finished,
+    reference: &[f32],
+) -> Result<Measurement, ConvergeError> {
+    let acc = &finished.accumulation;
+    let start = std::time::Instant::now();
+    let rgb = denoise(d, acc, &acc.to_rgb())?;
+    let seconds = (busy + start.elapsed()).as_secs_f64();
+    let rel = rel_mse(&rgb, reference);
+    Ok(Measurement {
+        config: plain.config.clone() + DENOISED,
+        seconds,
+        msamples_per_s: f64::from(plain.spp) * acc.pixel_count() as f64 / seconds.max(1e-9) / 1e6,
+        rmse: rmse(&rgb, reference),
+        rel_mse: rel,
+        // the variance estimate says nothing of a denoised image
+        est_rel_mse: f64::NAN,
+        efficiency: efficiency(rel, seconds),
+        ..plain.clone()
+    })
 }
 
 /// The measurement of a render of `config` holding `spp` samples after `busy` seconds.

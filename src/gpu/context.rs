@@ -10,6 +10,7 @@ use super::error::GpuError;
 use super::limits::DeviceFit;
 use super::pipeline::{compile_trace_pipeline, TracePipeline};
 use super::plan::ShaderSpec;
+use super::select::{select, AdapterFacts, Selected};
 
 /// An open device on one adapter, with the trace pipelines compiled on it so far (one per
 /// shader spec: feature set and scene code) and, where the driver supports one, a pipeline cache kept on disk.
@@ -141,6 +142,44 @@ fn adapters() -> Vec<wgpu::Adapter> {
 /// Describes every Vulkan adapter this process can see.
 pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
     adapters().iter().map(|a| a.get_info()).collect()
+}
+
+/// What choosing an adapter needs to know of each (see [`select_adapter`]), in the order
+/// `--adapter` counts them.
+pub fn adapter_facts() -> Vec<AdapterFacts> {
+    adapters()
+        .iter()
+        .map(|a| {
+            let info = a.get_info();
+            AdapterFacts {
+                name: info.name.clone(),
+                vendor: info.vendor,
+                pci_bus_id: info.device_pci_bus_id.clone(),
+                uuid: device_uuid(a),
+            }
+        })
+        .collect()
+}
+
+/// Vulkan's `deviceUUID` of an adapter (VkPhysicalDeviceIDProperties, Vulkan 1.1), which
+/// wgpu does not report.
+fn device_uuid(adapter: &wgpu::Adapter) -> Option<[u8; 16]> {
+    // SAFETY: the raw handles are used only for this query, while `adapter` lives
+    let hal = unsafe { adapter.as_hal::<wgpu::hal::api::Vulkan>() }?;
+    let instance = hal.shared_instance().raw_instance();
+    let mut id = ash::vk::PhysicalDeviceIDProperties::default();
+    let mut props = ash::vk::PhysicalDeviceProperties2::default().push_next(&mut id);
+    // SAFETY: a valid physical device of this instance, and a valid chain
+    unsafe { instance.get_physical_device_properties2(hal.raw_physical_device(), &mut props) };
+    Some(id.device_uuid)
+}
+
+/// The adapter a render uses: `--adapter` (an index of [`list_adapters`], or part of a
+/// name) when given, else the GPU a cluster assigned (`CUDA_VISIBLE_DEVICES`,
+/// `ROCR_VISIBLE_DEVICES`, `HIP_VISIBLE_DEVICES`; `gpu::select`), else the preferred one.
+pub fn select_adapter(arg: Option<&str>) -> Result<Selected, GpuError> {
+    let var = |name: &str| std::env::var(name).ok();
+    select(arg, &var, &adapter_facts()).map_err(GpuError::Adapter)
 }
 
 /// One line naming an adapter for the user.

@@ -9,6 +9,9 @@ pub enum GpuError {
          `apt-get install mesa-vulkan-drivers`)"
     )]
     NoAdapter,
+    /// `--adapter` or a scheduler's variable names no usable adapter.
+    #[error("{0}")]
+    Adapter(String),
     #[error("adapter index {index} out of range: {count} Vulkan adapter(s) found")]
     BadAdapterIndex { index: usize, count: usize },
     #[error("cannot open the GPU device: {0}")]

@@ -17,6 +17,7 @@ pub mod limits;
 pub mod pipeline;
 pub mod plan;
 pub mod render;
+pub mod select;
 pub mod shader;
 
 pub use context::{list_adapters, GpuContext};
