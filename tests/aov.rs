@@ -1,0 +1,540 @@
+//! AOVs (albedo, normal, depth, position, variance) on both backends, through
+//! checkpoints, resume and merge and into EXR layers; and the adapter a cluster assigns.
+//! Denoising and the Python module are tested by python/tests (tests/python.rs runs them).
+
+mod common;
+
+use std::path::Path;
+
+use wgtrace::aov::Aov;
+use wgtrace::gpu::select::{assigned, by_argument, format_uuid, parse_uuid, AdapterFacts};
+use wgtrace::{Accumulation, FlatScene, Overrides};
+
+/// The Cornell box (tests read scenes/cornell.toml: camera at z = 3.9 looking down -z,
+/// vfov 39.3, back wall at z = -1) at `size` x `size`, summing the AOVs.
+fn cornell(size: u32, spp: u32) -> FlatScene {
+    let mut scene = wgtrace::load_scene(
+        &common::repo_path("scenes/cornell.toml"),
+        &Overrides {
+            width: Some(size),
+            height: Some(size),
+            spp: Some(spp),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    scene.aovs = true;
+    scene
+}
+
+/// Pixel (x, y)'s values of `aov`.
+fn at(acc: &Accumulation, aov: Aov, x: u32, y: u32) -> Vec<f32> {
+    let k = aov.channels().len();
+    let i = (y * acc.width + x) as usize;
+    aov.values(acc)[k * i..k * (i + 1)].to_vec()
+}
+
+/// The distances from the Cornell camera to the back wall along the rays through the
+/// corners of pixel (x, y): the depth of a pixel that sees only the wall lies between.
+fn back_wall_depth_bounds(size: u32, x: u32, y: u32) -> (f32, f32) {
+    let tan = (39.3f32.to_radians() / 2.0).tan();
+    let mut d = Vec::new();
+    for (cx, cy) in [(0.0, 0.0), (1.0, 0.0), (0.0, 1.0), (1.0, 1.0)] {
+        let s = (x as f32 + cx) / size as f32;
+        let t = (y as f32 + cy) / size as f32;
+        let (u, v) = ((2.0 * s - 1.0) * tan, (1.0 - 2.0 * t) * tan);
+        // a ray of forward component 1 reaches z = -1 after 4.9 of it
+        d.push(4.9 * (1.0 + u * u + v * v).sqrt());
+    }
+    let lo = d.iter().copied().fold(f32::MAX, f32::min);
+    let hi = d.iter().copied().fold(f32::MIN, f32::max);
+    (lo * (1.0 - 1e-5), hi * (1.0 + 1e-5))
+}
+
+fn close(a: &[f32], b: &[f32], tol: f32) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() <= tol)
+}
+
+/// The issue's check on both backends: a wall's albedo is its reflectance, the back
+/// wall's normal is +z and the left wall's +x, depth is the distance along the camera
+/// ray, position the point on the wall. A Lambertian wall's albedo is f cos / pdf of a
+/// cosine-sampled bounce, the reflectance in every sample, so only rounding is allowed.
+#[test]
+fn the_cornell_box_aovs_are_its_walls() {
+    let size = 32;
+    let scene = cornell(size, 16);
+    for (name, acc) in [
+        ("gpu", common::render_gpu(&scene)),
+        ("cpu", common::render_cpu(&scene)),
+    ] {
+        assert!(acc.aovs, "{name}: the sums hold AOVs");
+        // the back wall, at the centre
+        let (x, y) = (size / 2, size / 2);
+        let albedo = at(&acc, Aov::Albedo, x, y);
+        assert!(
+            close(&albedo, &[0.73; 3], 1e-5),
+            "{name}: back wall albedo {albedo:?}"
+        );
+        let normal = at(&acc, Aov::Normal, x, y);
+        assert!(
+            close(&normal, &[0.0, 0.0, 1.0], 1e-6),
+            "{name}: back wall normal {normal:?}"
+        );
+        let depth = at(&acc, Aov::Depth, x, y)[0];
+        let (lo, hi) = back_wall_depth_bounds(size, x, y);
+        assert!(
+            lo <= depth && depth <= hi,
+            "{name}: depth {depth} not in {lo}..{hi}"
+        );
+        let p = at(&acc, Aov::Position, x, y);
+        assert!(
+            (p[2] + 1.0).abs() < 1e-5 && p[0].abs() < 0.11 && p[1].abs() < 0.11,
+            "{name}: position {p:?}"
+        );
+        // the left wall, near the left edge (the first two columns see past its front
+        // edge)
+        let albedo = at(&acc, Aov::Albedo, 2, y);
+        assert!(
+            close(&albedo, &[0.65, 0.05, 0.05], 1e-5),
+            "{name}: left wall albedo {albedo:?}"
+        );
+        let normal = at(&acc, Aov::Normal, 2, y);
+        assert!(
+            close(&normal, &[1.0, 0.0, 0.0], 1e-6),
+            "{name}: left wall normal {normal:?}"
+        );
+        assert!((at(&acc, Aov::Position, 2, y)[0] + 1.0).abs() < 1e-5);
+        // the variance is the colour's own: a sample's variance over the samples
+        let i = (y * size + x) as usize;
+        let var = at(&acc, Aov::Variance, x, y);
+        let expected = acc.variance(i).map(|v| v / acc.samples(i));
+        assert_eq!(var, expected.to_vec(), "{name}");
+        assert!(
+            var.iter().all(|v| *v > 0.0),
+            "{name}: a lit wall is noisy at 16 spp"
+        );
+    }
+}
+
+/// Summing the AOVs leaves the colour as it was, bit for bit, on both backends.
+#[test]
+fn aovs_leave_the_colour_bit_for_bit() {
+    let with = cornell(24, 8);
+    let mut without = with.clone();
+    without.aovs = false;
+    for (name, a, b) in [
+        (
+            "gpu",
+            common::render_gpu(&with),
+            common::render_gpu(&without),
+        ),
+        (
+            "cpu",
+            common::render_cpu(&with),
+            common::render_cpu(&without),
+        ),
+    ] {
+        assert_eq!(a.to_rgb(), b.to_rgb(), "{name}");
+        assert_eq!(a.non_finite(), b.non_finite());
+    }
+}
+
+/// Through a perfect mirror the albedo and normal are those of the wall it shows (the
+/// first vertex that is not a delta bounce), the depth is the mirror's.
+const MIRROR: &str = r#"
+[render]
+width = 16
+height = 16
+spp = 8
+max_depth = 4
+
+[camera]
+look_from = [0, 0, 0]
+look_at = [0, 0, -1]
+up = [0, 1, 0]
+vfov = 20
+
+[materials]
+mirror = { type = "metal", albedo = [0.9, 0.9, 0.9], fuzz = 0 }
+red = { type = "lambertian", albedo = [0.6, 0.1, 0.2] }
+lamp = { type = "emissive", radiance = [1, 1, 1] }
+
+[[objects]]  # the mirror, facing the camera
+type = "polygon"
+vertices = [[-5, -5, -2], [5, -5, -2], [5, 5, -2], [-5, 5, -2]]
+material = "mirror"
+
+[[objects]]  # a red wall behind the camera, facing the mirror
+type = "polygon"
+vertices = [[-5, -5, 2], [-5, 5, 2], [5, 5, 2], [5, -5, 2]]
+material = "red"
+
+[[objects]]
+type = "sphere"
+center = [0, 4, 0]
+radius = 0.5
+material = "lamp"
+"#;
+
+#[test]
+fn a_mirror_shows_the_albedo_and_normal_of_what_it_reflects() {
+    let mut scene = common::scene_from_str(MIRROR);
+    scene.aovs = true;
+    for (name, acc) in [
+        ("gpu", common::render_gpu(&scene)),
+        ("cpu", common::render_cpu(&scene)),
+    ] {
+        for (x, y) in [(8, 8), (3, 12)] {
+            let albedo = at(&acc, Aov::Albedo, x, y);
+            assert!(close(&albedo, &[0.6, 0.1, 0.2], 1e-5), "{name}: {albedo:?}");
+            let normal = at(&acc, Aov::Normal, x, y);
+            assert!(
+                close(&normal, &[0.0, 0.0, -1.0], 1e-6),
+                "{name}: {normal:?}"
+            );
+            let depth = at(&acc, Aov::Depth, x, y)[0];
+            assert!(
+                (2.0..2.1).contains(&depth),
+                "{name}: the mirror is 2 away, got {depth}"
+            );
+        }
+    }
+}
+
+fn run(args: &[&str]) -> String {
+    let out = common::wgtrace(args);
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.status.success(), "wgtrace {args:?} failed:\n{text}");
+    text
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = common::wgtrace(args);
+    assert!(!out.status.success(), "wgtrace {args:?} should fail");
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn channels(path: &Path) -> Vec<(String, Vec<f32>)> {
+    wgtrace::image_io::read_exr(path)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .channels
+}
+
+/// The CLI writes the AOVs as named EXR layers; a checkpoint carries their sums, so a
+/// resumed render equals an uninterrupted one bit for bit, and ranges rendered apart
+/// merge into the same AOVs up to the order of the additions.
+#[test]
+fn aovs_travel_through_checkpoints_resume_and_merge() {
+    let dir = common::tmp_dir("aov-checkpoints");
+    let p = |n: &str| dir.join(n).display().to_string();
+    let scene = common::repo_path("scenes/cornell.toml")
+        .display()
+        .to_string();
+    let base = [scene.as_str(), "--width", "24", "--height", "24", "-q"];
+    let all = "albedo,normal,depth,position,variance";
+    let with = |extra: &[&str]| -> Vec<String> {
+        base.iter().chain(extra).map(|s| s.to_string()).collect()
+    };
+    let call = |args: Vec<String>| {
+        let v: Vec<&str> = std::iter::once("render")
+            .chain(args.iter().map(String::as_str))
+            .collect();
+        run(&v)
+    };
+    call(with(&["--spp", "8", "--aov", all, "-o", &p("whole.exr")]));
+    // stopped at 4 (a checkpoint at the end), then resumed to 8
+    call(with(&[
+        "--spp",
+        "4",
+        "--aov",
+        "depth",
+        "--checkpoint",
+        &p("part.ckpt"),
+        "-o",
+        &p("part.exr"),
+    ]));
+    call(with(&[
+        "--spp",
+        "8",
+        "--aov",
+        all,
+        "--resume",
+        &p("part.ckpt"),
+        "-o",
+        &p("resumed.exr"),
+    ]));
+    // two ranges, merged
+    call(with(&[
+        "--spp",
+        "8",
+        "--aov",
+        "albedo",
+        "--sample-range",
+        "0..3",
+        "--checkpoint",
+        &p("a.ckpt"),
+        "-o",
+        &p("a.exr"),
+    ]));
+    call(with(&[
+        "--spp",
+        "8",
+        "--aov",
+        "albedo",
+        "--sample-range",
+        "3..8",
+        "--checkpoint",
+        &p("b.ckpt"),
+        "-o",
+        &p("b.exr"),
+    ]));
+    run(&[
+        "merge",
+        &p("a.ckpt"),
+        &p("b.ckpt"),
+        "--aov",
+        all,
+        "-o",
+        &p("merged.exr"),
+    ]);
+
+    let whole = channels(&dir.join("whole.exr"));
+    let names: Vec<&str> = whole.iter().map(|(n, _)| n.as_str()).collect();
+    for name in [
+        "R",
+        "G",
+        "B",
+        "albedo.R",
+        "albedo.G",
+        "albedo.B",
+        "normal.X",
+        "normal.Y",
+        "normal.Z",
+        "depth.Z",
+        "position.X",
+        "position.Y",
+        "position.Z",
+        "variance.R",
+        "variance.G",
+        "variance.B",
+    ] {
+        assert!(names.contains(&name), "no {name} in {names:?}");
+    }
+    assert_eq!(names.len(), 16, "{names:?}");
+    assert_eq!(
+        channels(&dir.join("resumed.exr")),
+        whole,
+        "resumed != uninterrupted"
+    );
+    let merged = channels(&dir.join("merged.exr"));
+    for ((n, a), (m, b)) in whole.iter().zip(&merged) {
+        assert_eq!(n, m);
+        let scale = a.iter().fold(1.0f32, |s, x| s.max(x.abs()));
+        // sums of 8 samples added in another order: a few ulps of the largest value
+        assert!(
+            close(a, b, scale * 4e-6),
+            "{n}: merged differs from the whole render"
+        );
+    }
+}
+
+#[test]
+fn aovs_are_refused_where_they_cannot_be_kept() {
+    let dir = common::tmp_dir("aov-refusals");
+    let p = |n: &str| dir.join(n).display().to_string();
+    let scene = common::repo_path("scenes/cornell.toml")
+        .display()
+        .to_string();
+    let base = ["render", scene.as_str(), "--width", "8", "--height", "8"];
+    let args = |extra: &[&str]| -> Vec<String> {
+        base.iter().chain(extra).map(|s| s.to_string()).collect()
+    };
+    let fails_with = |extra: &[&str]| {
+        let a = args(extra);
+        fails(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let e = fails_with(&["--aov", "albedo", "-o", &p("x.png")]);
+    assert!(
+        e.contains("x.png") && e.contains("only an EXR file holds AOVs"),
+        "{e}"
+    );
+    let e = fails_with(&["--aov", "albedo,shadow", "-o", &p("x.exr")]);
+    assert!(
+        e.contains("unknown AOV \"shadow\"") && e.contains("albedo, normal, depth"),
+        "{e}"
+    );
+    // a checkpoint without the AOVs' sums cannot give them to the samples it holds
+    let a = args(&[
+        "--spp",
+        "2",
+        "--checkpoint",
+        &p("plain.ckpt"),
+        "-o",
+        &p("plain.exr"),
+    ]);
+    run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let e = fails_with(&[
+        "--spp",
+        "4",
+        "--aov",
+        "depth",
+        "--resume",
+        &p("plain.ckpt"),
+        "-o",
+        &p("y.exr"),
+    ]);
+    assert!(
+        e.contains("plain.ckpt") && e.contains("holds no AOV sums"),
+        "{e}"
+    );
+    let e = fails(&[
+        "merge",
+        &p("plain.ckpt"),
+        "--aov",
+        "normal",
+        "-o",
+        &p("m.exr"),
+    ]);
+    assert!(e.contains("holds no AOV sums"), "{e}");
+}
+
+/// A 4-GPU node as Vulkan lists it (not in PCI order), and llvmpipe.
+fn node() -> Vec<AdapterFacts> {
+    let gpu = |bus: &str, u: u8| AdapterFacts {
+        name: "NVIDIA H100 80GB HBM3".into(),
+        vendor: 0x10de,
+        pci_bus_id: bus.into(),
+        uuid: Some([u; 16]),
+    };
+    vec![
+        gpu("0000:c1:00.0", 0xc1),
+        gpu("0000:41:00.0", 0x41),
+        gpu("0000:81:00.0", 0x81),
+        gpu("0000:01:00.0", 0x01),
+        AdapterFacts {
+            name: "llvmpipe (LLVM 15.0.6, 256 bits)".into(),
+            vendor: 0x10005,
+            pci_bus_id: String::new(),
+            uuid: Some([7; 16]),
+        },
+    ]
+}
+
+fn env<'a>(pairs: &'a [(&'a str, &'a str)]) -> impl Fn(&str) -> Option<String> + 'a {
+    move |name| {
+        pairs
+            .iter()
+            .find(|(k, _)| *k == name)
+            .map(|(_, v)| v.to_string())
+    }
+}
+
+#[test]
+fn a_scheduler_s_gpu_is_the_adapter_chosen() {
+    let node = node();
+    let pick = |pairs: &[(&str, &str)]| assigned(&env(pairs), &node);
+    // indices count the vendor's GPUs in PCI bus order
+    for (k, bus) in [
+        ("0", "0000:01"),
+        ("1", "0000:41"),
+        ("2", "0000:81"),
+        ("3", "0000:c1"),
+    ] {
+        let s = pick(&[("CUDA_VISIBLE_DEVICES", k)]).unwrap().unwrap();
+        assert!(node[s.index].pci_bus_id.starts_with(bus), "{k}: {:?}", s);
+        assert!(s.reason.unwrap().contains(bus));
+    }
+    // the first of a list; a UUID by Vulkan's device UUID
+    let s = pick(&[("CUDA_VISIBLE_DEVICES", "2,3")]).unwrap().unwrap();
+    assert_eq!(node[s.index].pci_bus_id, "0000:81:00.0");
+    let uuid = format_uuid([0x41; 16]);
+    assert_eq!(parse_uuid(&uuid), Some([0x41; 16]));
+    let s = pick(&[("CUDA_VISIBLE_DEVICES", &uuid)]).unwrap().unwrap();
+    assert_eq!(node[s.index].pci_bus_id, "0000:41:00.0");
+    // nothing assigned: the default
+    assert_eq!(pick(&[]).unwrap(), None);
+    assert_eq!(pick(&[("CUDA_VISIBLE_DEVICES", "")]).unwrap(), None);
+    assert_eq!(
+        pick(&[("CUDA_VISIBLE_DEVICES", "NoDevFiles")]).unwrap(),
+        None
+    );
+    // a device no adapter is: refused with the reason
+    let e = pick(&[("CUDA_VISIBLE_DEVICES", "4")]).unwrap_err();
+    assert!(
+        e.contains("CUDA_VISIBLE_DEVICES=4") && e.contains("4 NVIDIA GPUs"),
+        "{e}"
+    );
+    let e = pick(&[("CUDA_VISIBLE_DEVICES", &format_uuid([9; 16]))]).unwrap_err();
+    assert!(e.contains("no Vulkan adapter has the UUID"), "{e}");
+    let e = pick(&[("CUDA_VISIBLE_DEVICES", "MIG-x")]).unwrap_err();
+    assert!(e.contains("neither a GPU index nor a GPU UUID"), "{e}");
+    // AMD's variables where Vulkan sees no AMD GPU: the default, with a note
+    let s = pick(&[("ROCR_VISIBLE_DEVICES", "0")]).unwrap().unwrap();
+    assert_eq!(s.index, 0);
+    assert!(s.reason.unwrap().contains("Vulkan sees none"));
+    // --adapter: an index, or part of a name
+    assert_eq!(by_argument("4", &node).unwrap().index, 4);
+    assert_eq!(by_argument("LLVMpipe", &node).unwrap().index, 4);
+    assert!(by_argument("5", &node).unwrap_err().contains("there are 5"));
+    assert!(by_argument("radeon", &node)
+        .unwrap_err()
+        .contains("names no Vulkan adapter"));
+}
+
+/// On this machine: `--adapter` by name renders; a name no adapter has fails naming the
+/// adapters; CUDA_VISIBLE_DEVICES without an NVIDIA adapter renders on the default with
+/// a note.
+#[test]
+fn the_cli_chooses_its_adapter() {
+    let dir = common::tmp_dir("aov-adapter");
+    let out = dir.join("a.png").display().to_string();
+    let scene = common::repo_path("scenes/cornell.toml")
+        .display()
+        .to_string();
+    let base = [
+        "render",
+        scene.as_str(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--spp",
+        "1",
+        "-o",
+        out.as_str(),
+    ];
+    let args = |extra: &[&str]| -> Vec<String> {
+        base.iter().chain(extra).map(|s| s.to_string()).collect()
+    };
+    let name = wgtrace::gpu::list_adapters()
+        .first()
+        .map(|a| a.name.clone())
+        .expect("GPU tests need a Vulkan adapter");
+    let word = name.split_whitespace().next().unwrap().to_string();
+    let a = args(&["--adapter", &word]);
+    let text = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(text.contains(&word), "{text}");
+    let a = args(&["--adapter", "no-such-gpu"]);
+    let e = fails(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(e.contains("no-such-gpu") && e.contains(&name), "{e}");
+    let facts = wgtrace::gpu::context::adapter_facts();
+    if !facts.iter().any(|f| f.vendor == 0x10de) {
+        let a: Vec<String> = args(&[]);
+        let cmd = std::process::Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+            .args(&a)
+            .env("CUDA_VISIBLE_DEVICES", "1")
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&cmd.stderr);
+        assert!(
+            cmd.status.success()
+                && e.contains("CUDA_VISIBLE_DEVICES=1")
+                && e.contains("Vulkan sees none"),
+            "{e}"
+        );
+    }
+}
