@@ -257,6 +257,28 @@ fn run(
     }
 }
 
+/// Checks that `acc` holds what `aovs` and `denoise` read, and loads the denoiser when
+/// asked (from this interpreter's pyoidn, else as the CLI finds it).
+fn layers_ready(
+    py: Python<'_>,
+    acc: &wgtrace::Accumulation,
+    aovs: &[Aov],
+    denoise: bool,
+) -> PyResult<Option<&'static Denoiser>> {
+    if (denoise || aovs.iter().any(|a| a.summed())) && !acc.aovs {
+        return Err(PyValueError::new_err(
+            "these sums hold no AOVs: render them with aovs (or denoise) asked for",
+        ));
+    }
+    if !denoise {
+        return Ok(None);
+    }
+    let dir = pyoidn_dir(py);
+    py.detach(|| Denoiser::shared_with(dir.as_deref()))
+        .map(Some)
+        .map_err(|e| DenoiseError::new_err(e.to_string()))
+}
+
 /// The layers of finished sums as a dict of float32 arrays: "color" (H, W, 3), then each
 /// AOV ((H, W) for depth); with `denoise`, "color" denoised and "noisy" beside it.
 fn image_dict<'py>(
@@ -266,20 +288,7 @@ fn image_dict<'py>(
     denoise: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let acc = &ckpt.accumulation;
-    if (denoise || aovs.iter().any(|a| a.summed())) && !acc.aovs {
-        return Err(PyValueError::new_err(
-            "these sums hold no AOVs: render them with aovs (or denoise) asked for",
-        ));
-    }
-    let denoiser = if denoise {
-        let dir = pyoidn_dir(py);
-        Some(
-            py.detach(|| Denoiser::shared_with(dir.as_deref()))
-                .map_err(|e| DenoiseError::new_err(e.to_string()))?,
-        )
-    } else {
-        None
-    };
+    let denoiser = layers_ready(py, acc, aovs, denoise)?;
     let layers = py
         .detach(|| image_layers(acc, aovs, denoiser))
         .map_err(|e| DenoiseError::new_err(e.to_string()))?;
@@ -522,6 +531,40 @@ impl Sums {
         let aovs = aov_list(arg("aovs", "a list of AOV names", aovs)?)?;
         let denoise = arg("denoise", "a bool", denoise)?.unwrap_or(false);
         image_dict(py, &self.ckpt, &aovs, denoise)
+    }
+
+    /// Writes the image to `path` as `wgtrace merge` does: .exr with the AOVs as layers
+    /// (`albedo.R`, ...; the noisy colour as `noisy` when denoised), .png or .ppm with the
+    /// colour only.
+    #[pyo3(signature = (path, *, aovs=None, denoise=None))]
+    fn write_image<'py>(
+        &self,
+        py: Python<'py>,
+        path: PathBuf,
+        aovs: Option<&Bound<'py, PyAny>>,
+        denoise: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<()> {
+        use wgtrace::image_io::{write_layers, OutputFormat};
+        let aovs = aov_list(arg("aovs", "a list of AOV names", aovs)?)?;
+        let denoise = arg("denoise", "a bool", denoise)?.unwrap_or(false);
+        let format = OutputFormat::from_path(&path).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        if !aovs.is_empty() && format != OutputFormat::Exr {
+            return Err(PyValueError::new_err(format!(
+                "{}: only an EXR file holds AOVs beside the colour",
+                path.display()
+            )));
+        }
+        let acc = &self.ckpt.accumulation;
+        let denoiser = layers_ready(py, acc, &aovs, denoise)?;
+        py.detach(|| {
+            let mut layers = image_layers(acc, &aovs, denoiser)
+                .map_err(|e| DenoiseError::new_err(e.to_string()))?;
+            if format != OutputFormat::Exr {
+                layers.truncate(1);
+            }
+            write_layers(&path, acc.width, acc.height, &layers)
+                .map_err(|e| WgtraceError::new_err(e.to_string()))
+        })
     }
 
     /// Writes the sums as a checkpoint file (`wgtrace merge` and `render --resume` read it).
