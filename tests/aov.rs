@@ -201,8 +201,10 @@ fn a_mirror_shows_the_albedo_and_normal_of_what_it_reflects() {
     }
 }
 
-fn run(args: &[&str]) -> String {
-    let out = common::wgtrace(args);
+/// Runs wgtrace with `args`; its stdout and stderr.
+fn run<S: AsRef<str>>(args: &[S]) -> String {
+    let args: Vec<&str> = args.iter().map(AsRef::as_ref).collect();
+    let out = common::wgtrace(&args);
     let text = format!(
         "{}{}",
         String::from_utf8_lossy(&out.stdout),
@@ -212,10 +214,31 @@ fn run(args: &[&str]) -> String {
     text
 }
 
-fn fails(args: &[&str]) -> String {
-    let out = common::wgtrace(args);
+/// Runs wgtrace with `args`, which must fail; its stderr.
+fn fails<S: AsRef<str>>(args: &[S]) -> String {
+    let args: Vec<&str> = args.iter().map(AsRef::as_ref).collect();
+    let out = common::wgtrace(&args);
     assert!(!out.status.success(), "wgtrace {args:?} should fail");
     String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// `wgtrace render` of the Cornell box at `size` x `size`, then `extra`.
+fn render_cornell(size: u32, extra: &[&str]) -> Vec<String> {
+    let scene = common::repo_path("scenes/cornell.toml");
+    let size = size.to_string();
+    let base = [
+        "render",
+        &scene.display().to_string(),
+        "--width",
+        &size,
+        "--height",
+        &size,
+        "-q",
+    ]
+    .map(String::from);
+    base.into_iter()
+        .chain(extra.iter().map(|s| s.to_string()))
+        .collect()
 }
 
 fn channels(path: &Path) -> Vec<(String, Vec<f32>)> {
@@ -231,23 +254,11 @@ fn channels(path: &Path) -> Vec<(String, Vec<f32>)> {
 fn aovs_travel_through_checkpoints_resume_and_merge() {
     let dir = common::tmp_dir("aov-checkpoints");
     let p = |n: &str| dir.join(n).display().to_string();
-    let scene = common::repo_path("scenes/cornell.toml")
-        .display()
-        .to_string();
-    let base = [scene.as_str(), "--width", "24", "--height", "24", "-q"];
     let all = "albedo,normal,depth,position,variance";
-    let with = |extra: &[&str]| -> Vec<String> {
-        base.iter().chain(extra).map(|s| s.to_string()).collect()
-    };
-    let call = |args: Vec<String>| {
-        let v: Vec<&str> = std::iter::once("render")
-            .chain(args.iter().map(String::as_str))
-            .collect();
-        run(&v)
-    };
-    call(with(&["--spp", "8", "--aov", all, "-o", &p("whole.exr")]));
+    let render = |extra: &[&str]| run(&render_cornell(24, extra));
+    render(&["--spp", "8", "--aov", all, "-o", &p("whole.exr")]);
     // stopped at 4 (a checkpoint at the end), then resumed to 8
-    call(with(&[
+    render(&[
         "--spp",
         "4",
         "--aov",
@@ -256,8 +267,8 @@ fn aovs_travel_through_checkpoints_resume_and_merge() {
         &p("part.ckpt"),
         "-o",
         &p("part.exr"),
-    ]));
-    call(with(&[
+    ]);
+    render(&[
         "--spp",
         "8",
         "--aov",
@@ -266,32 +277,24 @@ fn aovs_travel_through_checkpoints_resume_and_merge() {
         &p("part.ckpt"),
         "-o",
         &p("resumed.exr"),
-    ]));
+    ]);
     // two ranges, merged
-    call(with(&[
-        "--spp",
-        "8",
-        "--aov",
-        "albedo",
-        "--sample-range",
-        "0..3",
-        "--checkpoint",
-        &p("a.ckpt"),
-        "-o",
-        &p("a.exr"),
-    ]));
-    call(with(&[
-        "--spp",
-        "8",
-        "--aov",
-        "albedo",
-        "--sample-range",
-        "3..8",
-        "--checkpoint",
-        &p("b.ckpt"),
-        "-o",
-        &p("b.exr"),
-    ]));
+    for (range, name) in [("0..3", "a"), ("3..8", "b")] {
+        let ckpt = p(&format!("{name}.ckpt"));
+        let exr = p(&format!("{name}.exr"));
+        render(&[
+            "--spp",
+            "8",
+            "--aov",
+            "albedo",
+            "--sample-range",
+            range,
+            "--checkpoint",
+            &ckpt,
+            "-o",
+            &exr,
+        ]);
+    }
     run(&[
         "merge",
         &p("a.ckpt"),
@@ -346,38 +349,30 @@ fn aovs_travel_through_checkpoints_resume_and_merge() {
 fn aovs_are_refused_where_they_cannot_be_kept() {
     let dir = common::tmp_dir("aov-refusals");
     let p = |n: &str| dir.join(n).display().to_string();
-    let scene = common::repo_path("scenes/cornell.toml")
-        .display()
-        .to_string();
-    let base = ["render", scene.as_str(), "--width", "8", "--height", "8"];
-    let args = |extra: &[&str]| -> Vec<String> {
-        base.iter().chain(extra).map(|s| s.to_string()).collect()
-    };
-    let fails_with = |extra: &[&str]| {
-        let a = args(extra);
-        fails(&a.iter().map(String::as_str).collect::<Vec<_>>())
-    };
-    let e = fails_with(&["--aov", "albedo", "-o", &p("x.png")]);
+    let refused = |extra: &[&str]| fails(&render_cornell(8, extra));
+    let e = refused(&["--aov", "albedo", "-o", &p("x.png")]);
     assert!(
         e.contains("x.png") && e.contains("only an EXR file holds AOVs"),
         "{e}"
     );
-    let e = fails_with(&["--aov", "albedo,shadow", "-o", &p("x.exr")]);
+    let e = refused(&["--aov", "albedo,shadow", "-o", &p("x.exr")]);
     assert!(
         e.contains("unknown AOV \"shadow\"") && e.contains("albedo, normal, depth"),
         "{e}"
     );
     // a checkpoint without the AOVs' sums cannot give them to the samples it holds
-    let a = args(&[
-        "--spp",
-        "2",
-        "--checkpoint",
-        &p("plain.ckpt"),
-        "-o",
-        &p("plain.exr"),
-    ]);
-    run(&a.iter().map(String::as_str).collect::<Vec<_>>());
-    let e = fails_with(&[
+    run(&render_cornell(
+        8,
+        &[
+            "--spp",
+            "2",
+            "--checkpoint",
+            &p("plain.ckpt"),
+            "-o",
+            &p("plain.exr"),
+        ],
+    ));
+    let e = refused(&[
         "--spp",
         "4",
         "--aov",
@@ -492,40 +487,25 @@ fn a_scheduler_s_gpu_is_the_adapter_chosen() {
 fn the_cli_chooses_its_adapter() {
     let dir = common::tmp_dir("aov-adapter");
     let out = dir.join("a.png").display().to_string();
-    let scene = common::repo_path("scenes/cornell.toml")
-        .display()
-        .to_string();
-    let base = [
-        "render",
-        scene.as_str(),
-        "--width",
-        "8",
-        "--height",
-        "8",
-        "--spp",
-        "1",
-        "-o",
-        out.as_str(),
-    ];
-    let args = |extra: &[&str]| -> Vec<String> {
-        base.iter().chain(extra).map(|s| s.to_string()).collect()
+    let args = |extra: &[&str]| {
+        let mut a = render_cornell(8, &["--spp", "1", "-o", &out]);
+        a.retain(|s| s != "-q");
+        a.extend(extra.iter().map(|s| s.to_string()));
+        a
     };
     let name = wgtrace::gpu::list_adapters()
         .first()
         .map(|a| a.name.clone())
         .expect("GPU tests need a Vulkan adapter");
     let word = name.split_whitespace().next().unwrap().to_string();
-    let a = args(&["--adapter", &word]);
-    let text = run(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let text = run(&args(&["--adapter", &word]));
     assert!(text.contains(&word), "{text}");
-    let a = args(&["--adapter", "no-such-gpu"]);
-    let e = fails(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let e = fails(&args(&["--adapter", "no-such-gpu"]));
     assert!(e.contains("no-such-gpu") && e.contains(&name), "{e}");
     let facts = wgtrace::gpu::context::adapter_facts();
     if !facts.iter().any(|f| f.vendor == 0x10de) {
-        let a: Vec<String> = args(&[]);
         let cmd = std::process::Command::new(env!("CARGO_BIN_EXE_wgtrace"))
-            .args(&a)
+            .args(args(&[]))
             .env("CUDA_VISIBLE_DEVICES", "1")
             .output()
             .unwrap();

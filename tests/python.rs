@@ -44,6 +44,10 @@ fn the_python_module_passes_its_tests() {
                     "--disable-pip-version-check",
                 ])
                 .args(args)
+                // the same target folder as `cargo test`'s (which holds no lock on it
+                // while tests run), so the module's build reuses the library's
+                // compiled dependencies
+                .env("CARGO_TARGET_DIR", root().join("target"))
                 .current_dir(root()),
             what,
         )
@@ -52,21 +56,8 @@ fn the_python_module_passes_its_tests() {
         &["pytest", "numpy", "pyoidn"],
         "installing pytest, numpy and pyoidn",
     );
-    // the same target folder as `cargo test`'s (which holds no lock on it while tests
-    // run), so the module's build reuses the library's compiled dependencies
-    let target = root().join("target");
-    run(
-        Command::new(&python)
-            .args([
-                "-m",
-                "pip",
-                "install",
-                "--quiet",
-                "--disable-pip-version-check",
-            ])
-            .args(["--force-reinstall", "--no-deps", "./python"])
-            .env("CARGO_TARGET_DIR", &target)
-            .current_dir(root()),
+    pip(
+        &["--force-reinstall", "--no-deps", "./python"],
         "pip install ./python",
     );
     let bin = Path::new(env!("CARGO_BIN_EXE_wgtrace"));

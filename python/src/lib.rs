@@ -402,12 +402,9 @@ impl Scene {
     ) -> PyResult<Bound<'py, PyDict>> {
         let aovs = aov_list(arg("aovs", "a list of AOV names", aovs)?)?;
         let denoise = arg("denoise", "a bool", denoise)?.unwrap_or(false);
-        let (spp, seed) = (arg("spp", "an int", spp)?, arg("seed", "an int", seed)?);
-        let samples = arg("samples", "a (start, end) pair of ints", samples)?;
-        let backend: String =
-            arg("backend", "\"gpu\" or \"cpu\"", backend)?.unwrap_or("gpu".into());
+        let how = How::parse(spp, seed, samples, backend)?;
         let summed = denoise || aovs.iter().any(|a| a.summed());
-        let sums = self.sums(py, spp, seed, samples, summed, progress, &backend, adapter)?;
+        let sums = self.sums(py, how, summed, progress, adapter)?;
         image_dict(py, &sums.ckpt, &aovs, denoise)
     }
 
@@ -428,27 +425,50 @@ impl Scene {
         adapter: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Sums> {
         let aovs = arg("aovs", "a bool", aovs)?.unwrap_or(false);
-        let (spp, seed) = (arg("spp", "an int", spp)?, arg("seed", "an int", seed)?);
-        let samples = arg("samples", "a (start, end) pair of ints", samples)?;
-        let backend: String =
-            arg("backend", "\"gpu\" or \"cpu\"", backend)?.unwrap_or("gpu".into());
-        self.sums(py, spp, seed, samples, aovs, progress, &backend, adapter)
+        let how = How::parse(spp, seed, samples, backend)?;
+        self.sums(py, how, aovs, progress, adapter)
+    }
+}
+
+/// The keywords `Scene.render` and `Scene.accumulate` share: what to render, and where.
+struct How {
+    spp: Option<u32>,
+    seed: Option<u32>,
+    samples: Option<(u32, u32)>,
+    backend: String,
+}
+
+impl How {
+    fn parse<'py>(
+        spp: Option<&Bound<'py, PyAny>>,
+        seed: Option<&Bound<'py, PyAny>>,
+        samples: Option<&Bound<'py, PyAny>>,
+        backend: Option<&Bound<'py, PyAny>>,
+    ) -> PyResult<How> {
+        Ok(How {
+            spp: arg("spp", "an int", spp)?,
+            seed: arg("seed", "an int", seed)?,
+            samples: arg("samples", "a (start, end) pair of ints", samples)?,
+            backend: arg("backend", "\"gpu\" or \"cpu\"", backend)?.unwrap_or("gpu".into()),
+        })
     }
 }
 
 impl Scene {
-    #[allow(clippy::too_many_arguments)]
     fn sums<'py>(
         &self,
         py: Python<'py>,
-        spp: Option<u32>,
-        seed: Option<u32>,
-        samples: Option<(u32, u32)>,
+        how: How,
         aovs: bool,
         progress: Option<Py<PyAny>>,
-        backend_name: &str,
         adapter: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Sums> {
+        let How {
+            spp,
+            seed,
+            samples,
+            backend: backend_name,
+        } = how;
         let mut scene = self.scene.clone();
         if let Some(n) = spp {
             if !(1..=wgtrace::scene::MAX_SPP).contains(&n) {
@@ -478,7 +498,7 @@ impl Scene {
                 ));
             }
         }
-        let choice = backend(py, backend_name, adapter)?;
+        let choice = backend(py, &backend_name, adapter)?;
         let ckpt = run(py, scene, choice, range, aovs, None, progress)?;
         Ok(Sums { ckpt })
     }
@@ -547,7 +567,8 @@ impl Sums {
         use wgtrace::image_io::{write_layers, OutputFormat};
         let aovs = aov_list(arg("aovs", "a list of AOV names", aovs)?)?;
         let denoise = arg("denoise", "a bool", denoise)?.unwrap_or(false);
-        let format = OutputFormat::from_path(&path).map_err(|e| PyValueError::new_err(e.to_string()))?;
+        let format =
+            OutputFormat::from_path(&path).map_err(|e| PyValueError::new_err(e.to_string()))?;
         if !aovs.is_empty() && format != OutputFormat::Exr {
             return Err(PyValueError::new_err(format!(
                 "{}: only an EXR file holds AOVs beside the colour",
