@@ -273,9 +273,13 @@ fn layers_ready(
     if !denoise {
         return Ok(None);
     }
+    load_denoiser(py).map(Some)
+}
+
+/// The process's denoiser, from this interpreter's pyoidn, else as the CLI finds it.
+fn load_denoiser(py: Python<'_>) -> PyResult<&'static Denoiser> {
     let dir = pyoidn_dir(py);
     py.detach(|| Denoiser::shared_with(dir.as_deref()))
-        .map(Some)
         .map_err(|e| DenoiseError::new_err(e.to_string()))
 }
 
@@ -403,6 +407,10 @@ impl Scene {
         let aovs = aov_list(arg("aovs", "a list of AOV names", aovs)?)?;
         let denoise = arg("denoise", "a bool", denoise)?.unwrap_or(false);
         let how = How::parse(spp, seed, samples, backend)?;
+        if denoise {
+            // a missing denoiser fails now, not after the render
+            load_denoiser(py)?;
+        }
         let summed = denoise || aovs.iter().any(|a| a.summed());
         let sums = self.sums(py, how, summed, progress, adapter)?;
         image_dict(py, &sums.ckpt, &aovs, denoise)
