@@ -5,7 +5,7 @@
 
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Mutex, OnceLock};
 
 use libloading::Library;
 
@@ -65,9 +65,18 @@ struct Api {
 pub struct Denoiser {
     api: Api,
     path: PathBuf,
+    /// The device, committed on first use and kept (a CUDA device's start costs seconds);
+    /// one filter runs on it at a time.
+    device: Mutex<Option<Device>>,
     // keeps the entry points valid
     _lib: Library,
 }
+
+/// An OIDN device handle; OIDN's devices may be used from any thread, one call at a time
+/// (the mutex around it).
+struct Device(Handle);
+// SAFETY: see above
+unsafe impl Send for Device {}
 
 /// The places searched, in order: `OIDN_DIR` (its `lib/` and itself), an installed
 /// `pyoidn` (found by the `python3` on the path, or passed by the Python module), then the
@@ -173,6 +182,7 @@ impl Denoiser {
         Ok(Denoiser {
             api,
             path,
+            device: Mutex::new(None),
             _lib: lib,
         })
     }
@@ -203,14 +213,22 @@ impl Denoiser {
         let normal = normal.filter(|_| albedo.is_some());
         let api = &self.api;
         let bytes = n * 4;
-        // SAFETY: every handle is created here and released before returning; buffers are
-        // `bytes` long and read or written within that
+        let mut kept = self.device.lock().unwrap_or_else(|p| p.into_inner());
+        // SAFETY: the device is created once and kept; every other handle is created here
+        // and released before returning; buffers are `bytes` long and read or written
+        // within that
         unsafe {
-            let device = (api.new_device)(DEVICE_TYPE_DEFAULT);
-            if device.is_null() {
-                return Err(DenoiseError::Failed("no device".into()));
-            }
-            (api.commit_device)(device);
+            let device = match kept.as_ref() {
+                Some(d) => d.0,
+                None => {
+                    let d = (api.new_device)(DEVICE_TYPE_DEFAULT);
+                    if d.is_null() {
+                        return Err(DenoiseError::Failed("no device".into()));
+                    }
+                    (api.commit_device)(d);
+                    d
+                }
+            };
             let check = || -> Result<(), DenoiseError> {
                 let mut msg: *const c_char = std::ptr::null();
                 if (api.device_error)(device, &mut msg) == ERROR_NONE {
@@ -223,8 +241,15 @@ impl Denoiser {
                 };
                 Err(DenoiseError::Failed(text))
             };
-            let result = (|| {
-                check()?;
+            // a device that failed to commit is released, and the next call tries anew
+            if let Err(e) = check() {
+                if kept.is_none() {
+                    (api.release_device)(device);
+                }
+                return Err(e);
+            }
+            *kept = Some(Device(device));
+            (|| {
                 let filter = (api.new_filter)(device, c"RT".as_ptr());
                 check()?;
                 let mut buffers = Vec::new();
@@ -271,9 +296,7 @@ impl Denoiser {
                 }
                 (api.release_filter)(filter);
                 run.and(check()).map(|_| out)
-            })();
-            (api.release_device)(device);
-            result
+            })()
         }
     }
 }

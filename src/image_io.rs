@@ -103,7 +103,7 @@ pub fn write_layers(
     if format != OutputFormat::Exr {
         return Err(ImageError::Write {
             path: path.to_path_buf(),
-            cause: "only an EXR file holds AOVs (`albedo.R`, ...) beside the colour; name                     an .exr output"
+            cause: "only an EXR file holds AOVs (`albedo.R`, ...) beside the colour; name an .exr output"
                 .into(),
         });
     }
@@ -158,8 +158,19 @@ pub fn read_exr(path: &Path) -> Result<ExrChannels, ImageError> {
     let mut size = (0, 0);
     let mut channels = Vec::new();
     let parts = image.layer_data.len();
-    for layer in &image.layer_data {
-        size = (layer.size.0 as u32, layer.size.1 as u32);
+    for (i, layer) in image.layer_data.iter().enumerate() {
+        let this = (layer.size.0 as u32, layer.size.1 as u32);
+        if i > 0 && this != size {
+            return Err(ImageError::Read {
+                path: path.to_path_buf(),
+                cause: format!(
+                    "its parts differ in size ({}x{} and {}x{})",
+                    size.0, size.1, this.0, this.1
+                )
+                .into(),
+            });
+        }
+        size = this;
         let prefix = match (&layer.attributes.layer_name, parts) {
             (Some(name), 2..) => format!("{name}."),
             _ => String::new(),

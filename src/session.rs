@@ -523,8 +523,10 @@ impl Session {
             }
             Err(SessionError::Interrupted { .. }) => {
                 let acc = self.engine.accumulation()?;
+                // the checkpoint first: writing the image may fail (a denoiser that runs
+                // out of memory), and the work must not be lost with it
+                let checkpoint = self.save(acc.clone(), self.next, true)?;
                 self.write_image(&acc)?;
-                let checkpoint = self.save(acc, self.next, true)?;
                 Err(SessionError::Interrupted {
                     at: self.next,
                     image: self.opts.output.as_ref().map(|o| o.image.clone()),
@@ -564,9 +566,10 @@ impl Session {
             .as_ref()
             .map_or_else(PathBuf::new, |s| s.path.clone());
         let saved = match self.kept.take() {
+            // the checkpoint first, as on an interrupt
             Some((held, acc)) => self
-                .write_image(&acc)
-                .and_then(|_| self.save(acc, held, true))
+                .save(acc.clone(), held, true)
+                .and_then(|_| self.write_image(&acc))
                 .map(|_| Some(self.range.start..held)),
             None if self.on_disk => Checkpoint::read(&checkpoint)
                 .map_err(SessionError::from)

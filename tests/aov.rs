@@ -465,9 +465,39 @@ fn a_scheduler_s_gpu_is_the_adapter_chosen() {
     );
     let e = pick(&[("CUDA_VISIBLE_DEVICES", &format_uuid([9; 16]))]).unwrap_err();
     assert!(e.contains("no Vulkan adapter has the UUID"), "{e}");
-    let e = pick(&[("CUDA_VISIBLE_DEVICES", "MIG-x")]).unwrap_err();
+    let e = pick(&[("CUDA_VISIBLE_DEVICES", "GPU-x")]).unwrap_err();
     assert!(e.contains("neither a GPU index nor a GPU UUID"), "{e}");
+    // a MIG instance: Vulkan cannot render on one
+    let s = pick(&[("CUDA_VISIBLE_DEVICES", "MIG-3f1e")])
+        .unwrap()
+        .unwrap();
+    assert!(s.index == 0 && s.reason.unwrap().contains("MIG instance"));
     // AMD's variables where Vulkan sees no AMD GPU: the default, with a note
+    let amd = |bus: &str| AdapterFacts {
+        name: "AMD Instinct MI250X".into(),
+        vendor: 0x1002,
+        pci_bus_id: bus.into(),
+        uuid: None,
+    };
+    let amd_node = [
+        amd("0000:c1:00.0"),
+        amd("0000:01:00.0"),
+        amd("0000:41:00.0"),
+    ];
+    let on_amd = |pairs: &[(&str, &str)]| {
+        let s = assigned(&env(pairs), &amd_node).unwrap().unwrap();
+        amd_node[s.index].pci_bus_id.clone()
+    };
+    assert_eq!(on_amd(&[("ROCR_VISIBLE_DEVICES", "1")]), "0000:41:00.0");
+    assert_eq!(on_amd(&[("HIP_VISIBLE_DEVICES", "2")]), "0000:c1:00.0");
+    // HIP's index counts among the devices ROCR leaves visible: ROCR's second, GPU 0
+    assert_eq!(
+        on_amd(&[
+            ("ROCR_VISIBLE_DEVICES", "2,0"),
+            ("HIP_VISIBLE_DEVICES", "1")
+        ]),
+        "0000:01:00.0"
+    );
     let s = pick(&[("ROCR_VISIBLE_DEVICES", "0")]).unwrap().unwrap();
     assert_eq!(s.index, 0);
     assert!(s.reason.unwrap().contains("Vulkan sees none"));
@@ -517,4 +547,79 @@ fn the_cli_chooses_its_adapter() {
             "{e}"
         );
     }
+}
+
+/// The backends trace the same paths with the same random numbers, so their AOVs agree
+/// pixel by pixel wherever rounding does not send a path another way: under the mixture
+/// strategy (whose albedo is f / pdf of the mixture), an image background seen through
+/// glass (the background's albedo), pbr, and a normal-mapped glTF model.
+#[test]
+fn both_backends_give_the_same_aovs() {
+    use wgtrace::scene::format::LightSampling;
+    let cases = [
+        ("scenes/cornell.toml", Some(LightSampling::Mixture)),
+        ("scenes/sky.toml", None),
+        ("scenes/pbr.toml", None),
+        ("scenes/gltf/brick.glb", None),
+    ];
+    for (file, light_sampling) in cases {
+        let mut scene = wgtrace::load_scene(
+            &common::repo_path(file),
+            &Overrides {
+                width: Some(32),
+                height: Some(24),
+                spp: Some(4),
+                light_sampling,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        scene.aovs = true;
+        let (gpu, cpu) = (common::render_gpu(&scene), common::render_cpu(&scene));
+        for aov in [Aov::Albedo, Aov::Normal, Aov::Depth, Aov::Position] {
+            let k = aov.channels().len();
+            let (g, c) = (aov.values(&gpu), aov.values(&cpu));
+            let differ = g
+                .chunks(k)
+                .zip(c.chunks(k))
+                .filter(|(a, b)| {
+                    let scale = b.iter().fold(1.0f32, |s, x| s.max(x.abs()));
+                    !close(a, b, 1e-3 * scale)
+                })
+                .count();
+            println!("{file} {aov}: {differ} of {} pixels differ", g.len() / k);
+            assert!(
+                differ * 50 <= g.len() / k,
+                "{file} {aov}: {differ} of {} pixels differ",
+                g.len() / k
+            );
+        }
+    }
+}
+
+/// A checkpoint written before AOVs existed (no `aovs` line) still reads, without them;
+/// one with them reads back whole.
+#[test]
+fn checkpoints_say_whether_they_hold_aovs() {
+    use wgtrace::checkpoint::Checkpoint;
+    let scene = cornell(4, 2);
+    let mut acc = Accumulation::zeros(4, 4, false);
+    acc.data[0] = [1.0, 2.0, 3.0, 2.0];
+    let old = Checkpoint::new(&scene, 0..2, acc).to_bytes();
+    let line = b"aovs = no\n";
+    let at = old
+        .windows(line.len())
+        .position(|w| w == line)
+        .expect("the header says aovs = no");
+    let stripped: Vec<u8> = [&old[..at], &old[at + line.len()..]].concat();
+    let read = Checkpoint::from_bytes(&stripped, Path::new("old.ckpt")).unwrap();
+    assert!(!read.accumulation.aovs && read.accumulation.data[0] == [1.0, 2.0, 3.0, 2.0]);
+    let mut with = Accumulation::zeros(4, 4, true);
+    with.data[4] = [0.5; 4];
+    let bytes = Checkpoint::new(&scene, 0..2, with.clone()).to_bytes();
+    let back = Checkpoint::from_bytes(&bytes, Path::new("new.ckpt")).unwrap();
+    assert_eq!(back.accumulation, with);
+    // the sums' length follows the header: AOV sums cut off are refused
+    let e = Checkpoint::from_bytes(&bytes[..bytes.len() - 16], Path::new("cut.ckpt"));
+    assert!(e.unwrap_err().to_string().contains("truncated"));
 }

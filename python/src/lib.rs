@@ -751,6 +751,13 @@ fn read_exr<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyDict>>
     for (layer, mut chans) in groups {
         chans.sort_by(|a, b| order(&a.0).cmp(&order(&b.0)).then(a.0.cmp(&b.0)));
         let k = chans.len();
+        if let Some((c, v)) = chans.iter().find(|(_, v)| v.len() != n) {
+            return Err(WgtraceError::new_err(format!(
+                "{}: channel {layer}.{c} holds {} values, the image {n}",
+                path.display(),
+                v.len()
+            )));
+        }
         let mut values = vec![0.0f32; n * k];
         for (c, (_, v)) in chans.iter().enumerate() {
             for (i, x) in v.iter().enumerate() {

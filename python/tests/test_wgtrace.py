@@ -195,7 +195,16 @@ def test_progress_is_called_and_the_gil_is_released():
     assert len(during) >= 0.03 * (end - start) / 0.001, (len(during), end - start)
 
 
-def test_ctrl_c_raises_keyboard_interrupt_after_the_current_pass():
+@pytest.fixture
+def ctrl_c():
+    """Python's own SIGINT handler, as an interactive session has it: a process started
+    in the background (a CI job) inherits SIGINT ignored, and Python then installs none."""
+    old = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, old)
+
+
+def test_ctrl_c_raises_keyboard_interrupt_after_the_current_pass(ctrl_c):
     scene = wgtrace.load(CORNELL, width=64, height=64)
     calls = []
 
@@ -208,6 +217,22 @@ def test_ctrl_c_raises_keyboard_interrupt_after_the_current_pass():
         scene.render(spp=256, progress=progress, backend="cpu")
     # stopped at the next look after the signal, long before the end
     assert len(calls) <= 2 and calls[-1] < 256
+
+
+def test_ctrl_c_from_the_terminal_stops_a_render_without_a_callback(ctrl_c):
+    # SIGINT as a terminal sends it, to the process, while the render runs with the GIL
+    # released: the module looks for it after each batch of passes
+    scene = wgtrace.load(CORNELL, width=64, height=64)
+    timer = threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT))
+    start = time.perf_counter()
+    timer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            scene.render(spp=1 << 16, backend="cpu")
+    finally:
+        timer.cancel()
+    # 65536 passes would take minutes; it stopped within a few batches of the signal
+    assert time.perf_counter() - start < 30
 
 
 def test_a_callback_that_raises_stops_the_render():

@@ -10,7 +10,7 @@ use super::error::GpuError;
 use super::limits::DeviceFit;
 use super::pipeline::{compile_trace_pipeline, TracePipeline};
 use super::plan::ShaderSpec;
-use super::select::{select, AdapterFacts, Selected};
+use super::select::{select, wants_uuids, AdapterFacts, Selected};
 
 /// An open device on one adapter, with the trace pipelines compiled on it so far (one per
 /// shader spec: feature set and scene code) and, where the driver supports one, a pipeline cache kept on disk.
@@ -145,8 +145,13 @@ pub fn list_adapters() -> Vec<wgpu::AdapterInfo> {
 }
 
 /// What choosing an adapter needs to know of each (see [`select_adapter`]), in the order
-/// `--adapter` counts them.
+/// `--adapter` counts them, with their device UUIDs.
 pub fn adapter_facts() -> Vec<AdapterFacts> {
+    facts(true)
+}
+
+/// The adapters' facts; their UUIDs only when `uuids` (a query of its own per adapter).
+fn facts(uuids: bool) -> Vec<AdapterFacts> {
     adapters()
         .iter()
         .map(|a| {
@@ -155,17 +160,23 @@ pub fn adapter_facts() -> Vec<AdapterFacts> {
                 name: info.name.clone(),
                 vendor: info.vendor,
                 pci_bus_id: info.device_pci_bus_id.clone(),
-                uuid: device_uuid(a),
+                uuid: uuids.then(|| device_uuid(a)).flatten(),
             }
         })
         .collect()
 }
 
 /// Vulkan's `deviceUUID` of an adapter (VkPhysicalDeviceIDProperties, Vulkan 1.1), which
-/// wgpu does not report.
+/// wgpu does not report; None on a Vulkan 1.0 instance or device.
 fn device_uuid(adapter: &wgpu::Adapter) -> Option<[u8; 16]> {
     // SAFETY: the raw handles are used only for this query, while `adapter` lives
     let hal = unsafe { adapter.as_hal::<wgpu::hal::api::Vulkan>() }?;
+    let v1_1 = ash::vk::API_VERSION_1_1;
+    if hal.shared_instance().instance_api_version() < v1_1
+        || hal.physical_device_capabilities().properties().api_version < v1_1
+    {
+        return None;
+    }
     let instance = hal.shared_instance().raw_instance();
     let mut id = ash::vk::PhysicalDeviceIDProperties::default();
     let mut props = ash::vk::PhysicalDeviceProperties2::default().push_next(&mut id);
@@ -179,7 +190,8 @@ fn device_uuid(adapter: &wgpu::Adapter) -> Option<[u8; 16]> {
 /// `ROCR_VISIBLE_DEVICES`, `HIP_VISIBLE_DEVICES`; `gpu::select`), else the preferred one.
 pub fn select_adapter(arg: Option<&str>) -> Result<Selected, GpuError> {
     let var = |name: &str| std::env::var(name).ok();
-    select(arg, &var, &adapter_facts()).map_err(GpuError::Adapter)
+    let uuids = arg.is_none() && wants_uuids(&var);
+    select(arg, &var, &facts(uuids)).map_err(GpuError::Adapter)
 }
 
 /// One line naming an adapter for the user.

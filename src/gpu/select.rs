@@ -22,10 +22,11 @@ pub struct AdapterFacts {
 }
 
 /// The variables a scheduler sets, with the vendor whose GPUs they count.
+/// HIP's is read before ROCR's: with both set, HIP's index counts among ROCR's devices.
 pub const ASSIGNMENT_VARIABLES: [(&str, u32, &str); 3] = [
     ("CUDA_VISIBLE_DEVICES", 0x10de, "NVIDIA"),
-    ("ROCR_VISIBLE_DEVICES", 0x1002, "AMD"),
     ("HIP_VISIBLE_DEVICES", 0x1002, "AMD"),
+    ("ROCR_VISIBLE_DEVICES", 0x1002, "AMD"),
 ];
 
 /// The adapter chosen, and a line for the user saying why (none for the default).
@@ -80,13 +81,36 @@ pub fn assigned(
     var: &dyn Fn(&str) -> Option<String>,
     adapters: &[AdapterFacts],
 ) -> Result<Option<Selected>, String> {
+    let listed = |v: &Option<String>| {
+        v.as_deref()
+            .and_then(|v| v.split(',').map(str::trim).next())
+            .filter(|f| !f.is_empty() && *f != "NoDevFiles" && !f.starts_with('-'))
+            .map(str::to_string)
+    };
     for (name, vendor, vendor_name) in ASSIGNMENT_VARIABLES {
-        let Some(value) = var(name) else { continue };
-        let Some(first) = value.split(',').map(str::trim).next() else {
+        let value = var(name);
+        let Some(mut first) = listed(&value) else {
             continue;
         };
-        if first.is_empty() || first == "NoDevFiles" || first.starts_with('-') {
-            continue;
+        let value = value.unwrap_or_default();
+        // HIP_VISIBLE_DEVICES counts among the devices ROCR_VISIBLE_DEVICES leaves visible
+        if name == "HIP_VISIBLE_DEVICES" {
+            if let (Ok(k), Some(rocr)) = (first.parse::<usize>(), var("ROCR_VISIBLE_DEVICES")) {
+                if let Some(d) = rocr.split(',').map(str::trim).nth(k) {
+                    first = d.to_string();
+                }
+            }
+        }
+        let first = first.as_str();
+        if first.starts_with("MIG-") {
+            // Vulkan cannot render on a MIG instance
+            return Ok(Some(Selected {
+                index: 0,
+                reason: Some(format!(
+                    "{name}={value} assigns a MIG instance, which Vulkan cannot render on; \
+                     rendering on the preferred adapter"
+                )),
+            }));
         }
         // the vendor's adapters in PCI bus order (enumeration order where a driver
         // reports no bus)
@@ -144,6 +168,14 @@ pub fn assigned(
         }));
     }
     Ok(None)
+}
+
+/// Whether a scheduler's variable names a device by UUID (which must then be read from
+/// every adapter).
+pub fn wants_uuids(var: &dyn Fn(&str) -> Option<String>) -> bool {
+    ASSIGNMENT_VARIABLES.iter().any(|(name, ..)| {
+        var(name).is_some_and(|v| v.split(',').any(|d| parse_uuid(d.trim()).is_some()))
+    })
 }
 
 /// A GPU UUID as CUDA and ROCm write it: `GPU-` then 32 hex digits, with or without
