@@ -5,9 +5,11 @@
 //! colour's `R`, `G`, `B`: `albedo.R`, `normal.X`, `depth.Z`, ...
 
 use std::fmt;
+use std::path::{Path, PathBuf};
 
 use crate::accumulation::Accumulation;
 use crate::denoise::{DenoiseError, Denoiser};
+use crate::image_io::{write_layers, ImageError, Layer, OutputFormat};
 
 /// One output variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -111,6 +113,15 @@ impl Aov {
         }
         out
     }
+
+    /// Its layer of an image from `acc`.
+    pub fn layer(self, acc: &Accumulation) -> Layer {
+        Layer {
+            name: self.name().into(),
+            channels: self.channels().iter().map(|c| c.to_string()).collect(),
+            values: self.values(acc),
+        }
+    }
 }
 
 impl fmt::Display for Aov {
@@ -119,55 +130,59 @@ impl fmt::Display for Aov {
     }
 }
 
-/// A named set of channels of one image: the colour (prefix "") or an AOV.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Layer {
-    /// The channels' prefix: `albedo` makes `albedo.R`; "" for the colour.
-    pub name: String,
-    pub channels: Vec<String>,
-    /// `channels.len()` values per pixel, row-major from the top-left.
-    pub values: Vec<f32>,
+/// Why an image with AOVs or denoised cannot be made or written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error(transparent)]
+    Image(#[from] ImageError),
+    #[error(transparent)]
+    Denoise(#[from] DenoiseError),
+    #[error(
+        "{}: only an EXR file holds AOVs beside the colour (albedo.R, normal.X, depth.Z, \
+         ...); name an .exr output",
+        .0.display()
+    )]
+    NotExr(PathBuf),
+    /// AOVs or denoising asked of sums rendered without the AOVs' sums.
+    #[error("the render holds no AOV sums, which AOVs and denoising read (render with --aov or --denoise, aovs= in Python)")]
+    NoAovSums,
 }
 
-impl Layer {
-    /// The colour's layer: `R`, `G`, `B` of linear rgb (`name` "" in a file's main layer).
-    pub fn rgb(name: &str, rgb: Vec<f32>) -> Layer {
-        Layer {
-            name: name.into(),
-            channels: ["R", "G", "B"].map(String::from).to_vec(),
-            values: rgb,
-        }
+/// Refuses, before a render, AOVs asked of an output format that cannot hold them.
+pub fn check_output(path: &Path, aovs: &[Aov]) -> Result<(), OutputError> {
+    if !aovs.is_empty() && OutputFormat::from_path(path)? != OutputFormat::Exr {
+        return Err(OutputError::NotExr(path.to_path_buf()));
     }
+    Ok(())
+}
 
-    /// `aov`'s layer from `acc`.
-    pub fn of(aov: Aov, acc: &Accumulation) -> Layer {
-        Layer {
-            name: aov.name().into(),
-            channels: aov.channels().iter().map(|c| c.to_string()).collect(),
-            values: aov.values(acc),
-        }
+/// Writes the image of `acc` to `path`: an EXR file holds every layer of
+/// [`image_layers`], a PNG or PPM file the colour only (denoised when asked).
+pub fn write_output(
+    path: &Path,
+    acc: &Accumulation,
+    aovs: &[Aov],
+    denoiser: Option<&Denoiser>,
+) -> Result<(), OutputError> {
+    check_output(path, aovs)?;
+    let mut layers = image_layers(acc, aovs, denoiser)?;
+    if OutputFormat::from_path(path)? != OutputFormat::Exr {
+        layers.truncate(1);
     }
-
-    /// Its channels' full names in a file: `albedo.R`, or `R` for the main layer.
-    pub fn channel_names(&self) -> Vec<String> {
-        self.channels
-            .iter()
-            .map(|c| match self.name.as_str() {
-                "" => c.clone(),
-                prefix => format!("{prefix}.{c}"),
-            })
-            .collect()
-    }
+    Ok(write_layers(path, acc.width, acc.height, &layers)?)
 }
 
 /// The layers of a finished image: the colour (denoised when `denoiser` is given, the
-/// noisy colour then beside it as `noisy`), then each of `aovs`. Denoising reads the
-/// albedo and normal sums, which `acc` must hold.
+/// noisy colour then beside it as `noisy`), then each of `aovs`. Denoising and every AOV
+/// but variance read the AOVs' sums, which `acc` must hold.
 pub fn image_layers(
     acc: &Accumulation,
     aovs: &[Aov],
     denoiser: Option<&Denoiser>,
-) -> Result<Vec<Layer>, DenoiseError> {
+) -> Result<Vec<Layer>, OutputError> {
+    if (denoiser.is_some() || aovs.iter().any(|a| a.summed())) && !acc.aovs {
+        return Err(OutputError::NoAovSums);
+    }
     let color = acc.to_rgb();
     let mut layers = Vec::with_capacity(aovs.len() + 2);
     match denoiser {
@@ -178,7 +193,7 @@ pub fn image_layers(
         }
         None => layers.push(Layer::rgb("", color)),
     }
-    layers.extend(aovs.iter().map(|&a| Layer::of(a, acc)));
+    layers.extend(aovs.iter().map(|&a| a.layer(acc)));
     Ok(layers)
 }
 

@@ -5,8 +5,6 @@ use std::path::{Path, PathBuf};
 use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
 use image::{ImageEncoder, ImageFormat};
 
-use crate::aov::Layer;
-
 /// Output formats, chosen by file extension.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum OutputFormat {
@@ -281,4 +279,36 @@ fn temp_path(path: &Path) -> PathBuf {
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_default();
     path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
+}
+
+/// A named set of channels of one image: the colour (prefix "") or an AOV.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Layer {
+    /// The channels' prefix: `albedo` makes `albedo.R`; "" for the colour.
+    pub name: String,
+    pub channels: Vec<String>,
+    /// `channels.len()` values per pixel, row-major from the top-left.
+    pub values: Vec<f32>,
+}
+
+impl Layer {
+    /// The colour's layer: `R`, `G`, `B` of linear rgb (`name` "" in a file's main layer).
+    pub fn rgb(name: &str, rgb: Vec<f32>) -> Layer {
+        Layer {
+            name: name.into(),
+            channels: ["R", "G", "B"].map(String::from).to_vec(),
+            values: rgb,
+        }
+    }
+
+    /// Its channels' full names in a file: `albedo.R`, or `R` for the main layer.
+    pub fn channel_names(&self) -> Vec<String> {
+        self.channels
+            .iter()
+            .map(|c| match self.name.as_str() {
+                "" => c.clone(),
+                prefix => format!("{prefix}.{c}"),
+            })
+            .collect()
+    }
 }

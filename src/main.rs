@@ -10,7 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use wgtrace::checkpoint::Checkpoint;
 use wgtrace::gpu::limits::DeviceFit;
 use wgtrace::gpu::plan::{Feature, GpuPlan};
-use wgtrace::image_io::{check_writable, write_layers};
+use wgtrace::image_io::check_writable;
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::session::{
     Output, Passes, Saving, Session, SessionError, SessionOptions, StopRule, Stopped,
@@ -320,14 +320,8 @@ fn merge(
     aovs: &[wgtrace::aov::Aov],
     denoise: bool,
 ) -> anyhow::Result<()> {
-    use wgtrace::image_io::OutputFormat;
     check_writable(output)?;
-    if !aovs.is_empty() && OutputFormat::from_path(output)? != OutputFormat::Exr {
-        anyhow::bail!(
-            "{}: only an EXR file holds AOVs beside the colour; name an .exr output",
-            output.display()
-        );
-    }
+    wgtrace::aov::check_output(output, aovs)?;
     let denoiser = denoise
         .then(wgtrace::denoise::Denoiser::shared)
         .transpose()?;
@@ -343,11 +337,7 @@ fn merge(
             parts[0].0.display()
         );
     }
-    let mut layers = wgtrace::aov::image_layers(acc, aovs, denoiser)?;
-    if OutputFormat::from_path(output)? != OutputFormat::Exr {
-        layers.truncate(1);
-    }
-    write_layers(output, acc.width, acc.height, &layers)?;
+    wgtrace::aov::write_output(output, acc, aovs, denoiser)?;
     if let Some(path) = checkpoint {
         merged
             .write(path)

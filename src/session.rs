@@ -14,15 +14,13 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use crate::accumulation::Accumulation;
-use crate::aov::{image_layers, Aov};
+use crate::aov::{check_output, write_output, Aov, OutputError};
 use crate::checkpoint::{Checkpoint, CheckpointError};
 use crate::denoise::{DenoiseError, Denoiser};
 use crate::engine::{BackendChoice, Engine};
 use crate::gpu::error::GpuError;
 use crate::gpu::render::DEFAULT_SUBMISSION_TARGET;
-use crate::image_io::{
-    check_writable, probe_writable, write_error_map, write_layers, ImageError, OutputFormat,
-};
+use crate::image_io::{check_writable, probe_writable, write_error_map, ImageError};
 use crate::scene::error::SceneError;
 use crate::scene::flat::FlatScene;
 use crate::scene::load::Overrides;
@@ -203,6 +201,8 @@ pub enum SessionError {
     Image(#[from] ImageError),
     #[error(transparent)]
     Denoise(#[from] DenoiseError),
+    #[error(transparent)]
+    Output(#[from] OutputError),
     #[error("{}: cannot write checkpoint: {cause}", path.display())]
     WriteCheckpoint {
         path: PathBuf,
@@ -320,11 +320,7 @@ impl Session {
     /// opens (which may compile a shader).
     pub fn open(mut scene: FlatScene, opts: SessionOptions) -> Result<Session, SessionError> {
         scene.aovs |= Self::needs_aovs(&opts);
-        if let Some(path) = &opts.resume {
-            // a checkpoint's AOV sums go on with it
-            scene.aovs |= Checkpoint::read(path).is_ok_and(|c| c.accumulation.aovs);
-        }
-        let start = Self::prepare(&scene, &opts)?;
+        let start = Self::prepare(&mut scene, &opts, false)?;
         let (engine, note) = if opts.cpu_fallback {
             Engine::open(&scene, opts.backend, &opts.tuning)?
         } else {
@@ -339,18 +335,23 @@ impl Session {
     /// render on one backend, with no fallback); `opts.backend`, `opts.cpu_fallback` and
     /// `opts.tuning` are not read.
     pub fn with_engine(
-        scene: FlatScene,
+        mut scene: FlatScene,
         engine: Engine,
         opts: SessionOptions,
     ) -> Result<Session, SessionError> {
-        let start = Self::prepare(&scene, &opts)?;
+        let start = Self::prepare(&mut scene, &opts, true)?;
         Self::start(scene, engine, opts, start)
     }
 
     /// What can be checked before a backend opens: the files to write, the sample range,
     /// and the checkpoint to resume (read, checked, and holding samples from the range's
-    /// start).
-    fn prepare(scene: &FlatScene, opts: &SessionOptions) -> Result<Start, SessionError> {
+    /// start). A resumed checkpoint's AOV sums go on with it: they make `scene` sum the
+    /// AOVs, unless its engine is already open.
+    fn prepare(
+        scene: &mut FlatScene,
+        opts: &SessionOptions,
+        engine_open: bool,
+    ) -> Result<Start, SessionError> {
         Self::check_writable(opts)?;
         if Self::needs_aovs(opts) && !scene.aovs {
             return Err(SessionError::Invalid(
@@ -372,12 +373,22 @@ impl Session {
         };
         let ckpt = Checkpoint::read(path)?;
         ckpt.check(scene, range.end, path)?;
+        if !engine_open {
+            scene.aovs |= ckpt.accumulation.aovs;
+        }
         if ckpt.accumulation.aovs != scene.aovs {
-            return Err(SessionError::Invalid(format!(
-                "{}: holds no AOV sums, which this render needs (--aov, --denoise); render \
-                 again with them from the start",
-                path.display()
-            )));
+            return Err(SessionError::Invalid(if scene.aovs {
+                format!(
+                    "{}: holds no AOV sums, which this render needs (--aov, --denoise); \
+                     render again with them from the start",
+                    path.display()
+                )
+            } else {
+                format!(
+                    "{}: holds AOV sums, which the engine was opened without",
+                    path.display()
+                )
+            }));
         }
         match ckpt.contiguous().filter(|r| r.start == range.start) {
             Some(held) => Ok(Start {
@@ -440,13 +451,7 @@ impl Session {
     fn check_writable(opts: &SessionOptions) -> Result<(), SessionError> {
         if let Some(out) = &opts.output {
             check_writable(&out.image)?;
-            if !out.aovs.is_empty() && OutputFormat::from_path(&out.image)? != OutputFormat::Exr {
-                return Err(SessionError::Invalid(format!(
-                    "{}: only an EXR file holds AOVs beside the colour (albedo.R, normal.X, \
-                     depth.Z, ...); name an .exr output",
-                    out.image.display()
-                )));
-            }
+            check_output(&out.image, &out.aovs)?;
             if let Some(map) = &out.error_map {
                 check_writable(map)?;
             }
@@ -604,12 +609,7 @@ impl Session {
             } else {
                 None
             };
-            let mut layers = image_layers(acc, &out.aovs, denoiser)?;
-            if OutputFormat::from_path(&out.image)? != OutputFormat::Exr {
-                // the colour only (denoised, when asked)
-                layers.truncate(1);
-            }
-            write_layers(&out.image, acc.width, acc.height, &layers)?;
+            write_output(&out.image, acc, &out.aovs, denoiser)?;
         }
         Ok(())
     }

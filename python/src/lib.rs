@@ -21,9 +21,10 @@ use pyo3::exceptions::{
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
-use wgtrace::aov::{image_layers, Aov, Layer};
+use wgtrace::aov::{check_output, image_layers, write_output, Aov, OutputError};
 use wgtrace::checkpoint::Checkpoint;
 use wgtrace::denoise::Denoiser;
+use wgtrace::image_io::Layer;
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::session::{Passes, Session, SessionError, SessionOptions, StopRule};
 use wgtrace::{BackendChoice, FlatScene, Overrides};
@@ -73,6 +74,7 @@ fn session_error(e: SessionError) -> PyErr {
     match e {
         SessionError::Scene(e) => scene_error(e),
         SessionError::Denoise(e) => DenoiseError::new_err(e.to_string()),
+        SessionError::Output(e) => output_error(e),
         e => WgtraceError::new_err(e.to_string()),
     }
 }
@@ -257,23 +259,19 @@ fn run(
     }
 }
 
-/// Checks that `acc` holds what `aovs` and `denoise` read, and loads the denoiser when
-/// asked (from this interpreter's pyoidn, else as the CLI finds it).
-fn layers_ready(
-    py: Python<'_>,
-    acc: &wgtrace::Accumulation,
-    aovs: &[Aov],
-    denoise: bool,
-) -> PyResult<Option<&'static Denoiser>> {
-    if (denoise || aovs.iter().any(|a| a.summed())) && !acc.aovs {
-        return Err(PyValueError::new_err(
-            "these sums hold no AOVs: render them with aovs (or denoise) asked for",
-        ));
+/// The denoiser when `denoise` asks for it.
+fn denoiser_if(py: Python<'_>, denoise: bool) -> PyResult<Option<&'static Denoiser>> {
+    denoise.then(|| load_denoiser(py)).transpose()
+}
+
+/// An image that cannot be made or written, as a Python exception: what the caller asked
+/// wrongly as ValueError, a denoiser's failure as DenoiseError, a file's as WgtraceError.
+fn output_error(e: OutputError) -> PyErr {
+    match e {
+        OutputError::NotExr(_) | OutputError::NoAovSums => PyValueError::new_err(e.to_string()),
+        OutputError::Denoise(e) => DenoiseError::new_err(e.to_string()),
+        OutputError::Image(e) => WgtraceError::new_err(e.to_string()),
     }
-    if !denoise {
-        return Ok(None);
-    }
-    load_denoiser(py).map(Some)
 }
 
 /// The process's denoiser, from this interpreter's pyoidn, else as the CLI finds it.
@@ -292,10 +290,10 @@ fn image_dict<'py>(
     denoise: bool,
 ) -> PyResult<Bound<'py, PyDict>> {
     let acc = &ckpt.accumulation;
-    let denoiser = layers_ready(py, acc, aovs, denoise)?;
+    let denoiser = denoiser_if(py, denoise)?;
     let layers = py
         .detach(|| image_layers(acc, aovs, denoiser))
-        .map_err(|e| DenoiseError::new_err(e.to_string()))?;
+        .map_err(output_error)?;
     let dict = PyDict::new(py);
     for layer in layers {
         let key = if layer.name.is_empty() {
@@ -572,28 +570,13 @@ impl Sums {
         aovs: Option<&Bound<'py, PyAny>>,
         denoise: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<()> {
-        use wgtrace::image_io::{write_layers, OutputFormat};
         let aovs = aov_list(arg("aovs", "a list of AOV names", aovs)?)?;
         let denoise = arg("denoise", "a bool", denoise)?.unwrap_or(false);
-        let format =
-            OutputFormat::from_path(&path).map_err(|e| PyValueError::new_err(e.to_string()))?;
-        if !aovs.is_empty() && format != OutputFormat::Exr {
-            return Err(PyValueError::new_err(format!(
-                "{}: only an EXR file holds AOVs beside the colour",
-                path.display()
-            )));
-        }
+        check_output(&path, &aovs).map_err(output_error)?;
+        let denoiser = denoiser_if(py, denoise)?;
         let acc = &self.ckpt.accumulation;
-        let denoiser = layers_ready(py, acc, &aovs, denoise)?;
-        py.detach(|| {
-            let mut layers = image_layers(acc, &aovs, denoiser)
-                .map_err(|e| DenoiseError::new_err(e.to_string()))?;
-            if format != OutputFormat::Exr {
-                layers.truncate(1);
-            }
-            write_layers(&path, acc.width, acc.height, &layers)
-                .map_err(|e| WgtraceError::new_err(e.to_string()))
-        })
+        py.detach(|| write_output(&path, acc, &aovs, denoiser))
+            .map_err(output_error)
     }
 
     /// Writes the sums as a checkpoint file (`wgtrace merge` and `render --resume` read it).
