@@ -8,10 +8,27 @@ mod common;
 
 use common::icosphere;
 use glam::Vec3;
-use wgtrace::cpu::intersect::{intersect_aabb, safe_inverse as finite_inv_dir};
-use wgtrace::cpu::types::FAR;
-use wgtrace::scene::bvh::{build, Aabb, Bvh, BVH_MAX_DEPTH, BVH_MAX_LEAF_DEPTH, BVH_MAX_LEAF_SIZE};
-use wgtrace::scene::records::BvhNode;
+use wgtrace::cpu::intersect::{bvh_walk, safe_inverse as finite_inv_dir};
+use wgtrace::cpu::types::{Ray, FAR};
+use wgtrace::scene::bvh::{
+    build, collapse, Aabb, Bvh, Node as BvhNode, WideBvh, BVH_MAX_DEPTH, BVH_MAX_LEAF_DEPTH,
+    BVH_MAX_LEAF_SIZE, BVH_WIDTH, WIDE_LEAF_SIZE,
+};
+
+/// Entry distance into a box (clamped to 0), or FAR: the slab test, its exit distance
+/// widened by 1 + 2 gamma(3) (pbrt-v4's robust bounds test), so rounding never culls a
+/// box the ray touches. The binary tree's traversal below tests its boxes with it.
+fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
+    let t0 = (lo - origin) * inv_dir;
+    let t1 = (hi - origin) * inv_dir;
+    let t_min = t0.min(t1);
+    let t_far = t0.max(t1).min_element() * (1.0 + 3.0 * f32::EPSILON);
+    let t_near = t_min.max_element().max(0.0);
+    if t_near <= t_far && t_near < t_max {
+        return t_near;
+    }
+    FAR
+}
 
 // ---------------------------------------------------------------- helpers
 
@@ -143,6 +160,7 @@ fn validate(bvh: &Bvh, boxes: &[Aabb]) {
         "depth field is not the deepest leaf"
     );
     assert!(bvh.depth <= BVH_MAX_LEAF_DEPTH);
+    validate_wide(&collapse(bvh, boxes), boxes);
 }
 
 /// Closest hit `(primitive, t)` over all primitives (lowest index on ties).
@@ -184,18 +202,155 @@ fn via_bvh(
     best
 }
 
-/// For every ray, the BVH finds exactly the brute-force closest hit (same
-/// primitive and bit-identical t; a different primitive only for an exact tie).
-/// Returns the number of rays that hit something.
-fn compare_rays<H>(bvh: &Bvh, n: usize, rays: &[(Vec3, Vec3)], hit: H) -> usize
+/// Closest hit through the renderers' wide BVH (`cpu::intersect::bvh_walk`, the
+/// walk of both backends).
+fn via_wide(
+    wide: &WideBvh,
+    o: Vec3,
+    d: Vec3,
+    hit: &impl Fn(usize) -> Option<f32>,
+) -> Option<(usize, f32)> {
+    let mut best = None;
+    let ray = Ray { origin: o, dir: d };
+    bvh_walk(&wide.nodes, &ray, FAR, |k, t_max| {
+        let p = wide.order[k as usize] as usize;
+        match hit(p) {
+            Some(t) if t < t_max => {
+                best = Some((p, t));
+                Some(t)
+            }
+            _ => Some(t_max),
+        }
+    });
+    best
+}
+
+/// Checks the wide BVH collapsed from a binary tree over `boxes`: every node reached
+/// once from the root, at most [`BVH_MAX_LEAF_DEPTH`] deep (its `depth`); every
+/// primitive in one leaf of at most [`WIDE_LEAF_SIZE`], a node's leaves' primitives
+/// side by side from its `prim`; the meta bytes as documented; and every child's
+/// quantized box, decoded in exact arithmetic, holding the boxes of the primitives
+/// below it.
+fn validate_wide(wide: &WideBvh, boxes: &[Aabb]) {
+    let n = boxes.len();
+    assert_eq!(wide.order.len(), n);
+    let mut sorted = wide.order.clone();
+    sorted.sort_unstable();
+    assert!(
+        sorted.iter().enumerate().all(|(i, &p)| p as usize == i),
+        "order is not a permutation"
+    );
+    if n == 0 {
+        assert!(wide.nodes.is_empty());
+        return;
+    }
+    struct Walk<'a> {
+        wide: &'a WideBvh,
+        boxes: &'a [Aabb],
+        reached: Vec<bool>,
+        covered: Vec<bool>,
+        depth: u32,
+    }
+    impl Walk<'_> {
+        /// The primitive boxes below node i, their union.
+        fn walk(&mut self, i: usize, depth: u32) -> Aabb {
+            assert!(!self.reached[i], "node {i} reached twice");
+            self.reached[i] = true;
+            assert!(depth <= BVH_MAX_LEAF_DEPTH);
+            self.depth = self.depth.max(depth);
+            let node = self.wide.nodes[i];
+            let imask = node.scale >> 24;
+            let step = |a: u32| f32::from_bits((node.scale >> (8 * a) & 255) << 23) as f64;
+            let words = [node.q0, node.q1, node.q2].concat();
+            // plane p (lo x, y, z, hi x, y, z) of child s, in the grid
+            let q = |p: usize, s: usize| (words[2 * p + s / 4] >> (8 * (s % 4)) & 255) as f64;
+            let (mut rank, mut next_prim, mut all) = (0, 0, Aabb::empty());
+            for s in 0..BVH_WIDTH {
+                let meta = [node.meta0, node.meta1][s / 4] >> (8 * (s % 4)) & 255;
+                let below = if imask >> s & 1 == 1 {
+                    assert_eq!(meta, 0b0011_1000 | s as u32, "meta of a child node");
+                    rank += 1;
+                    self.walk((node.child + rank - 1) as usize, depth + 1)
+                } else if meta == 0 {
+                    continue;
+                } else {
+                    let (count, offset) = (meta >> 5, meta & 31);
+                    assert!(
+                        matches!(count, 0b001 | 0b011 | 0b111),
+                        "unary count {count:b}"
+                    );
+                    let count = count.count_ones();
+                    assert!(count <= WIDE_LEAF_SIZE);
+                    assert_eq!(offset, next_prim, "leaves not side by side in slot order");
+                    next_prim += count;
+                    let mut b = Aabb::empty();
+                    for k in node.prim + offset..node.prim + offset + count {
+                        assert!(!self.covered[k as usize], "position {k} in two leaves");
+                        self.covered[k as usize] = true;
+                        b = b.union(&self.boxes[self.wide.order[k as usize] as usize]);
+                    }
+                    b
+                };
+                for a in 0..3 {
+                    let origin = node.origin[a as usize] as f64;
+                    let lo = origin + step(a) * q(a as usize, s);
+                    let hi = origin + step(a) * q(3 + a as usize, s);
+                    assert!(
+                        lo <= below.lo[a as usize] as f64 && below.hi[a as usize] as f64 <= hi,
+                        "child {s} of node {i}: axis {a} [{lo}, {hi}] does not hold [{}, {}]",
+                        below.lo[a as usize],
+                        below.hi[a as usize]
+                    );
+                }
+                all = all.union(&below);
+            }
+            assert!(next_prim as usize <= BVH_WIDTH * WIDE_LEAF_SIZE as usize);
+            all
+        }
+    }
+    let mut w = Walk {
+        wide,
+        boxes,
+        reached: vec![false; wide.nodes.len()],
+        covered: vec![false; n],
+        depth: 0,
+    };
+    w.walk(0, 0);
+    assert!(w.reached.iter().all(|&r| r), "unreachable nodes");
+    assert!(w.covered.iter().all(|&c| c), "primitive in no leaf");
+    assert_eq!(w.depth, wide.depth);
+}
+
+/// For every ray, the BVH and the wide BVH collapsed from it find exactly the
+/// brute-force closest hit (same primitive and bit-identical t; a different primitive
+/// only for an exact tie). Returns the number of rays that hit something.
+fn compare_rays<H>(bvh: &Bvh, boxes: &[Aabb], rays: &[(Vec3, Vec3)], hit: H) -> usize
 where
     H: Fn(usize, Vec3, Vec3) -> Option<f32>,
 {
+    let n = boxes.len();
+    let wide = collapse(bvh, boxes);
+    validate_wide(&wide, boxes);
     let mut hits = 0;
     for (i, &(o, d)) in rays.iter().enumerate() {
         let h = |p: usize| hit(p, o, d);
         let expected = brute_force(n, &h);
         let got = via_bvh(bvh, o, d, &h);
+        let got_wide = via_wide(&wide, o, d, &h);
+        match (expected, got_wide) {
+            (None, None) => {}
+            (Some((ep, et)), Some((gp, gt))) => {
+                assert_eq!(
+                    et.to_bits(),
+                    gt.to_bits(),
+                    "ray {i}: wide t differs ({ep} vs {gp})"
+                );
+                if ep != gp {
+                    assert_eq!(hit(gp, o, d), Some(et), "ray {i}: wide: not an exact tie");
+                }
+            }
+            _ => panic!("ray {i} ({o}, {d}): brute force {expected:?}, wide bvh {got_wide:?}"),
+        }
         match (expected, got) {
             (None, None) => {}
             (Some((ep, et)), Some((gp, gt))) => {
@@ -376,7 +531,7 @@ fn traversal_spheres_matches_brute_force() {
     validate(&bvh, &boxes);
     let centers: Vec<Vec3> = spheres.iter().map(|s| s.0).collect();
     let rays = random_rays(&mut rng, 10_000, -14.0, 14.0, &centers);
-    let hits = compare_rays(&bvh, spheres.len(), &rays, |p, o, d| {
+    let hits = compare_rays(&bvh, &boxes, &rays, |p, o, d| {
         ray_sphere(spheres[p].0, spheres[p].1, o, d)
     });
     assert!(hits > 5000, "too few hits to be meaningful: {hits}");
@@ -397,7 +552,7 @@ fn traversal_boxes_matches_brute_force() {
     let centers: Vec<Vec3> = boxes.iter().map(Aabb::centroid).collect();
     let mut rays = random_rays(&mut rng, 10_000, -14.0, 14.0, &centers);
     rays.extend(axis_rays(&mut rng, 2000, -11.0, 11.0));
-    let hits = compare_rays(&bvh, boxes.len(), &rays, |p, o, d| ray_box(&boxes[p], o, d));
+    let hits = compare_rays(&bvh, &boxes, &rays, |p, o, d| ray_box(&boxes[p], o, d));
     assert!(hits > 5000, "too few hits: {hits}");
 }
 
@@ -412,10 +567,97 @@ fn traversal_triangles_matches_brute_force() {
     let centers: Vec<Vec3> = tris.iter().map(|t| (t[0] + t[1] + t[2]) / 3.0).collect();
     let mut rays = random_rays(&mut rng, 10_000, -13.0, 13.0, &centers);
     rays.extend(axis_rays(&mut rng, 2000, -11.0, 11.0));
-    let hits = compare_rays(&bvh, tris.len(), &rays, |p, o, d| {
-        ray_triangle(&tris[p], o, d)
-    });
+    let hits = compare_rays(&bvh, &boxes, &rays, |p, o, d| ray_triangle(&tris[p], o, d));
     assert!(hits > 5000, "too few hits: {hits}");
+}
+
+/// Whether the ray touches box b at a distance in [0, FAR), in f64 (29 more bits than
+/// the walk's arithmetic: its rounding is far below the walk's error bound).
+fn touches_f64(b: &Aabb, o: Vec3, d: Vec3) -> bool {
+    let (mut near, mut far) = (0.0f64, f32::MAX as f64);
+    for a in 0..3 {
+        let (o, d) = (o[a] as f64, d[a] as f64);
+        let (lo, hi) = (b.lo[a] as f64, b.hi[a] as f64);
+        if d == 0.0 {
+            if o < lo || o > hi {
+                return false;
+            }
+            continue;
+        }
+        let (t0, t1) = ((lo - o) / d, (hi - o) / d);
+        near = near.max(t0.min(t1));
+        far = far.min(t0.max(t1));
+    }
+    near <= far
+}
+
+/// The walk never culls a box a ray touches, however it grazes it: rays through the
+/// corners, edges and faces of boxes whose planes lie on the nodes' grids (so the
+/// quantized boxes are exact, with no slack), from near and far, along and across the
+/// axes. Each must be offered every primitive whose box it touches (in f64).
+#[test]
+fn traversal_never_culls_a_grazed_box() {
+    let mut rng = Rng(11);
+    let grid = |rng: &mut Rng| (rng.range(-32.0, 32.0) * 8.0).round() / 8.0;
+    let boxes: Vec<Aabb> = (0..2000)
+        .map(|_| {
+            let lo = Vec3::new(grid(&mut rng), grid(&mut rng), grid(&mut rng));
+            let size = Vec3::new(
+                rng.range(0.0, 2.0),
+                rng.range(0.0, 2.0),
+                rng.range(0.0, 2.0),
+            );
+            let size = (size * 8.0).round() / 8.0;
+            Aabb::new(lo, lo + size)
+        })
+        .collect();
+    let bvh = build(&boxes);
+    let wide = collapse(&bvh, &boxes);
+    validate_wide(&wide, &boxes);
+    let mut culled = 0;
+    let mut touched = 0;
+    for i in 0..20_000 {
+        let b = boxes[rng.next_u64() as usize % boxes.len()];
+        // a corner, an edge or a face point
+        let pick = |rng: &mut Rng, a: usize| match rng.next_u64() % 3 {
+            0 => b.lo[a],
+            1 => b.hi[a],
+            _ => rng.range(b.lo[a], b.hi[a]),
+        };
+        let p = Vec3::new(pick(&mut rng, 0), pick(&mut rng, 1), pick(&mut rng, 2));
+        let d = match i % 3 {
+            0 => rng.dir(),
+            1 => Vec3::new(
+                rng.range(-1.0, 1.0),
+                1e-3 * rng.range(-1.0, 1.0),
+                rng.range(-1.0, 1.0),
+            )
+            .normalize(),
+            _ => [
+                Vec3::X,
+                Vec3::NEG_Y,
+                Vec3::Z,
+                Vec3::new(1.0, 1.0, 0.0).normalize(),
+            ][i % 4],
+        };
+        let dist = [0.0, 0.5, 100.0, 1e5][(i / 3) % 4];
+        let o = p - d * dist;
+        let mut offered = vec![false; boxes.len()];
+        bvh_walk(&wide.nodes, &Ray { origin: o, dir: d }, FAR, |k, t| {
+            offered[wide.order[k as usize] as usize] = true;
+            Some(t)
+        });
+        for (j, bj) in boxes.iter().enumerate() {
+            if touches_f64(bj, o, d) {
+                touched += 1;
+                if !offered[j] {
+                    culled += 1;
+                }
+            }
+        }
+    }
+    assert!(touched > 20_000, "too few boxes touched: {touched}");
+    assert_eq!(culled, 0, "{culled} of {touched} touched boxes culled");
 }
 
 #[test]
@@ -526,7 +768,7 @@ fn degenerate_one_and_two() {
     let centers = [spheres[0].0, spheres[1].0];
     let mut rays = random_rays(&mut rng, 2000, -4.0, 4.0, &centers);
     rays.extend(axis_rays(&mut rng, 500, -3.0, 3.0));
-    compare_rays(&bvh, 2, &rays, |p, o, d| {
+    compare_rays(&bvh, &two, &rays, |p, o, d| {
         ray_sphere(spheres[p].0, spheres[p].1, o, d)
     });
 }
@@ -540,7 +782,7 @@ fn degenerate_identical_boxes() {
     assert_eq!(bvh.nodes.len(), 1, "identical centroids -> one leaf");
     assert_eq!(bvh.nodes[0].count, 10_000);
     let rays = [(Vec3::ZERO, (b.centroid()).normalize())];
-    compare_rays(&bvh, boxes.len(), &rays, |p, o, d| ray_box(&boxes[p], o, d));
+    compare_rays(&bvh, &boxes, &rays, |p, o, d| ray_box(&boxes[p], o, d));
 }
 
 #[test]
@@ -594,7 +836,7 @@ fn degenerate_flat_boxes() {
         };
         rays.push((o, d));
     }
-    let hits = compare_rays(&bvh, rects.len(), &rays, hit_rect);
+    let hits = compare_rays(&bvh, &rects, &rays, hit_rect);
     assert!(hits > 500, "too few hits: {hits}");
 }
 
@@ -616,7 +858,7 @@ fn degenerate_points_on_a_line() {
         bvh.depth
     );
     let rays = axis_rays(&mut rng, 500, -100.0, 100.0);
-    compare_rays(&bvh, boxes.len(), &rays, |p, o, d| ray_box(&boxes[p], o, d));
+    compare_rays(&bvh, &boxes, &rays, |p, o, d| ray_box(&boxes[p], o, d));
 }
 
 #[test]
@@ -653,6 +895,13 @@ fn degenerate_non_finite_boxes_do_not_panic() {
     }
     assert!(seen.iter().all(|&s| s));
     assert!(bvh.depth <= BVH_MAX_LEAF_DEPTH);
+    let wide = collapse(&bvh, &boxes);
+    let mut seen = vec![false; boxes.len()];
+    for &p in &wide.order {
+        assert!(!std::mem::replace(&mut seen[p as usize], true));
+    }
+    assert!(seen.iter().all(|&s| s));
+    assert!(wide.depth <= BVH_MAX_LEAF_DEPTH);
 }
 
 // ---------------------------------------------------------------- (4) depth limit
@@ -726,7 +975,7 @@ fn depth_limit_adversarial() {
             ),
             (Vec3::new(-1.0, -1.0, -1.0), Vec3::ONE.normalize()),
         ];
-        compare_rays(&bvh, boxes.len(), &rays, |p, o, d| ray_box(&boxes[p], o, d));
+        compare_rays(&bvh, &boxes, &rays, |p, o, d| ray_box(&boxes[p], o, d));
         // A closure that never reports a hit must be offered every primitive.
         let mut tested = 0;
         traverse(

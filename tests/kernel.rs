@@ -12,8 +12,8 @@ use wgtrace::cpu::bindings::Bindings;
 use wgtrace::cpu::intersect::{intersect_scene, occluded, surface_at};
 use wgtrace::cpu::types::{Ray, FAR, NO_HIT};
 use wgtrace::gpu::kernel::intersect_rays;
-use wgtrace::gpu::plan::{scene_features, Feature};
-use wgtrace::scene::records::{KernelHit, KernelRay, BVH_COUNT_MASK};
+use wgtrace::scene::bvh::WIDE_LEAF_SIZE;
+use wgtrace::scene::records::{KernelHit, KernelRay};
 use wgtrace::FlatScene;
 
 const HEADER: &str = "[camera]\nlook_from = [0, 0, 10]\nlook_at = [0, 0, 0]\n\
@@ -226,14 +226,15 @@ fn gpu_bvh_and_brute_force_find_the_same_hits() {
     bvh_matches_brute_force(&ctx, &src, 2000);
 }
 
-/// Spheres about the origin have equal centroids (lo + hi = 0 exactly), so the builder keeps them in one leaf, larger
-/// than a traversal stack entry's count holds: the walk must read that leaf's node
-/// (HAS_BVH_LARGE_LEAVES) and find the same hits as brute force, on both backends.
+/// Spheres about the origin have equal centroids (lo + hi = 0 exactly), so the binary
+/// builder keeps them in one leaf, more than a leaf of the wide BVH holds: the collapse
+/// cuts it into runs under nodes of their own, whose boxes nest, and the walk must find
+/// the same hits as brute force, on both backends.
 #[test]
 fn gpu_bvh_walks_a_leaf_of_many_primitives() {
     let ctx = common::gpu_context();
     let mut src = HEADER.trim_end_matches("[[objects]]\n").to_string();
-    let count = 2 * BVH_COUNT_MASK + 3;
+    let count = 8 * WIDE_LEAF_SIZE + 5;
     for k in 0..count {
         let radius = 0.3 + 0.25 * k as f32;
         src += &format!(
@@ -249,13 +250,8 @@ fn gpu_bvh_walks_a_leaf_of_many_primitives() {
         );
     }
     let with = common::scene_from_str(&src);
-    let leaf = with.bvh.iter().map(|n| n.count).max().unwrap();
-    assert!(
-        leaf >= count,
-        "the spheres are not one leaf (largest {leaf})"
-    );
-    assert!(with.bvh_has_large_leaves());
-    assert!(scene_features(&with).contains(Feature::BvhLargeLeaves));
+    // the spheres' runs take nodes below the one that holds the boxes' leaves
+    assert!(with.bvh_depth >= 2, "depth {}", with.bvh_depth);
     bvh_matches_brute_force(&ctx, &src, 2000);
 }
 

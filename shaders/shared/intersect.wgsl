@@ -330,61 +330,81 @@ fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
     return closer_hit(best, i, intersect_primitive(i, ray, best.t));
 }
 
-// Entry distance of the ray into a BVH node's box (clamped to 0), or FAR when the box is
-// missed or entered at or beyond t_max. t_far is widened by 2 gamma(3) (pbrt-v4's robust
-// bounds test) so rounding never culls a box the ray grazes.
-fn intersect_aabb(lo: vec3<f32>, hi: vec3<f32>, origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32) -> f32 {
-    let t0 = (lo - origin) * inv_dir;
-    let t1 = (hi - origin) * inv_dir;
-    // min and max as selects: the slab distances are never NaN (safe_inverse), and
-    // llvmpipe's min and max also handle NaN operands, one more instruction each
-    let near = t0 < t1;
-    let t_min = select(t1, t0, near);
-    let t_max3 = select(t0, t1, near);
-    let t_near = max2(max2(t_min.x, max2(t_min.y, t_min.z)), 0.0);
-    let t_far = min2(t_max3.x, min2(t_max3.y, t_max3.z)) * BOX_WIDEN;
-    if (t_near <= t_far && t_near < t_max) {
-        return t_near;
-    }
-    return FAR;
+// The walk's order among a node's children: a child node hit is marked in bit 24 + (slot ^
+// bvh_order) of the hit mask and the highest bit is taken first, so a ray whose direction
+// has the signs of octant o (bit 0: x < 0, bit 1: y, bit 2: z) takes slot o first, where
+// scene::bvh::collapse puts the child such rays enter first.
+fn bvh_order(inv_dir: vec3<f32>) -> u32 {
+    let neg = select(vec3<u32>(0u), vec3<u32>(1u, 2u, 4u), inv_dir < vec3<f32>(0.0));
+    return (neg.x | neg.y | neg.z) ^ 7u;
 }
 
-// Node `index` (record n) as one word, its offset above its count: what the traversal
-// stack holds, so that a node popped needs no fetch (its box was tested by its parent).
-// A leaf of BVH_COUNT_MASK or more primitives is linked by its index with that count
-// (HAS_BVH_LARGE_LEAVES: only scenes that have one); bvh_leaf reads its node.
-fn bvh_link(n: BvhNode, index: u32) -> u32 {
-#ifdef HAS_BVH_LARGE_LEAVES
-    if (n.count >= BVH_COUNT_MASK) {
-        return (index << BVH_COUNT_BITS) | BVH_COUNT_MASK;
-    }
-#endif
-    return (n.offset << BVH_COUNT_BITS) | n.count;
+// Four bytes of a word, from the low one, as numbers.
+fn bvh_bytes(w: u32) -> vec4<f32> {
+    return vec4<f32>((vec4<u32>(w) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(255u));
 }
 
-// The first primitive and the count of the leaf linked as `link` (0: none).
-fn bvh_leaf(link: u32) -> vec2<u32> {
-    var leaf = vec2<u32>(link >> BVH_COUNT_BITS, link & BVH_COUNT_MASK);
-#ifdef HAS_BVH_LARGE_LEAVES
-    if (leaf.y == BVH_COUNT_MASK) {
-        let n = bvh_node(leaf.x);
-        leaf = vec2<u32>(n.offset, n.count);
-    }
-#endif
-    return leaf;
-}
-
-// min and max of two numbers that are not NaN (intersect_aabb)
-fn min2(a: f32, b: f32) -> f32 {
+// min and max of numbers that are not NaN: selects (llvmpipe's min and max also handle
+// NaN operands, one more instruction each)
+fn min4(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
     return select(b, a, a < b);
 }
 
-fn max2(a: f32, b: f32) -> f32 {
+fn max4(a: vec4<f32>, b: vec4<f32>) -> vec4<f32> {
     return select(b, a, a > b);
 }
 
-// BOX_WIDEN (types.wgsl's constants) = 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps)
-// with eps = 2^-24.
+// Which of four children a ray enters before t_max: their planes' bytes on the near and
+// the far side of each axis, the slab distance of a step per axis and of the node's
+// origin, less (near) or plus (far) its error bound.
+fn bvh_slabs(near: vec3<u32>, far: vec3<u32>, step_t: vec3<f32>, near_t: vec3<f32>, far_t: vec3<f32>, t_max: f32) -> vec4<bool> {
+    let t_near = max4(
+        max4(bvh_bytes(near.x) * step_t.x + near_t.x, bvh_bytes(near.y) * step_t.y + near_t.y),
+        max4(bvh_bytes(near.z) * step_t.z + near_t.z, vec4<f32>(0.0)),
+    );
+    let t_far = min4(
+        min4(bvh_bytes(far.x) * step_t.x + far_t.x, bvh_bytes(far.y) * step_t.y + far_t.y),
+        bvh_bytes(far.z) * step_t.z + far_t.z,
+    );
+    return (t_near <= t_far) & (t_near < vec4<f32>(t_max));
+}
+
+// The bits four children mark in the hit mask when hit (BvhNode's meta bytes): a node's
+// moved by the walk's order, a leaf's its primitives.
+fn bvh_child_bits(bytes: u32, inner: u32, order: u32) -> vec4<u32> {
+    var m = (vec4<u32>(bytes) >> vec4<u32>(0u, 8u, 16u, 24u)) & vec4<u32>(255u);
+    m ^= ((vec4<u32>(inner) >> vec4<u32>(0u, 1u, 2u, 3u)) & vec4<u32>(1u)) * order;
+    return (m >> vec4<u32>(5u)) << (m & vec4<u32>(31u));
+}
+
+// Node n's children that a ray enters before t_max, as the walk's next two groups: (first
+// child node, hit child nodes' bits | imask, first primitive, hit primitives' bits). The
+// quantized boxes' slab distances are (origin - ray origin) / d + q step / d per axis;
+// widened by BVH_SLAB_ERROR of the magnitudes that form them, they bound the exact ones
+// whatever cancels.
+fn bvh_node_hits(n: BvhNode, origin: vec3<f32>, inv_dir: vec3<f32>, order: u32, t_max: f32) -> vec4<u32> {
+    let step = bitcast<vec3<f32>>(((vec3<u32>(n.scale) >> vec3<u32>(0u, 8u, 16u)) & vec3<u32>(255u)) << vec3<u32>(23u));
+    let rel = n.origin - origin;
+    let origin_t = rel * inv_dir;
+    let step_t = min(max(step * inv_dir, vec3<f32>(-FAR)), vec3<f32>(FAR));
+    let err = min((abs(rel) + 256.0 * step) * abs(inv_dir), vec3<f32>(FAR)) * BVH_SLAB_ERROR;
+    let near_t = origin_t - err;
+    let far_t = origin_t + err;
+    let neg = inv_dir < vec3<f32>(0.0);
+    // the planes' words: lo x, y, z in q0.xy, q0.zw, q1.xy, hi in q1.zw, q2.xy, q2.zw
+    let lo0 = vec3<u32>(n.q0.x, n.q0.z, n.q1.x);
+    let lo1 = vec3<u32>(n.q0.y, n.q0.w, n.q1.y);
+    let hi0 = vec3<u32>(n.q1.z, n.q2.x, n.q2.z);
+    let hi1 = vec3<u32>(n.q1.w, n.q2.y, n.q2.w);
+    let imask = n.scale >> 24u;
+    let hit0 = bvh_slabs(select(lo0, hi0, neg), select(hi0, lo0, neg), step_t, near_t, far_t, t_max);
+    let hit1 = bvh_slabs(select(lo1, hi1, neg), select(hi1, lo1, neg), step_t, near_t, far_t, t_max);
+    let b0 = select(vec4<u32>(0u), bvh_child_bits(n.meta0, imask, order), hit0);
+    let b1 = select(vec4<u32>(0u), bvh_child_bits(n.meta1, imask >> 4u, order), hit1);
+    let b = b0 | b1;
+    let hits = b.x | b.y | b.z | b.w;
+    return vec4<u32>(n.child, (hits & BVH_NODE_BITS) | imask, n.prim, hits & ~BVH_NODE_BITS);
+}
 
 // Closest hit along the ray before t_max (FAR: anywhere; a shadow ray's length: whether
 // anything lies in between): every unbounded primitive (planes), then the BVH in order
@@ -465,58 +485,47 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
         return best;
     }
     let inv_dir = safe_inverse(ray.dir);
-    // a stack entry: the node's offset and count (bvh_link), and its entry distance; sp
-    // indexes bvh_stack (the entries of this lane are BVH_STACK_LANES apart)
+    let order = bvh_order(inv_dir);
+    // the walk's two groups (bvh_node_hits): child nodes still to visit (a stack entry)
+    // and primitives to test; sp indexes bvh_stack (the entries of this lane are
+    // BVH_STACK_LANES apart); the root is a group of one child node, in slot 0
     var sp = stack_lane;
-    let root = bvh_node(0u);
-    var n = bvh_link(root, 0u);
-    var t_node = intersect_aabb(root.lo, root.hi, ray.origin, inv_dir, best.t);
+    var group = vec2<u32>(0u, (1u << (24u + order)) | 1u);
+    var prims = vec2<u32>(0u, 0u);
     var live = true;
     loop {
-        // Interior nodes until a leaf is found (its primitives are tested after the
-        // loop, when every lane of the subgroup has one) or none is left.
-        var leaf = 0u;
+        // Nodes until the lane has primitives to test (tested after the loop, when every
+        // lane of the subgroup has some) or none is left.
         loop {
-            if (t_node < best.t) {
-                let offset = n >> BVH_COUNT_BITS;
-                if ((n & BVH_COUNT_MASK) == 0u) {
-                    // the two children side by side (scene::bvh::pair_layout): one cache line
-                    let c0 = bvh_node(offset);
-                    let c1 = bvh_node(offset + 1u);
-                    let t0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, best.t);
-                    let t1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, best.t);
-                    let first_near = t0 <= t1;
-                    let l0 = bvh_link(c0, offset);
-                    let l1 = bvh_link(c1, offset + 1u);
-                    let t_near = select(t1, t0, first_near);
-                    let t_far = select(t0, t1, first_near);
-                    if (t_far < FAR) {
-                        bvh_stack[sp] = vec2<u32>(select(l0, l1, first_near), bitcast<u32>(t_far));
-                        sp += BVH_STACK_LANES;
-                    }
-                    if (t_near < FAR) {
-                        n = select(l1, l0, first_near);
-                        t_node = t_near;
-                        continue;
-                    }
-                } else {
-                    leaf = n;
+            if ((group.y & BVH_NODE_BITS) == 0u) {
+                if (sp == stack_lane) {
+                    live = false;
+                    break;
                 }
-            }
-            if (sp == stack_lane) {
-                live = false;
-            } else {
                 sp -= BVH_STACK_LANES;
-                let entry = bvh_stack[sp];
-                n = entry.x;
-                t_node = bitcast<f32>(entry.y);
+                group = bvh_stack[sp];
             }
-            if (leaf != 0u || !live) {
+            let bit = firstLeadingBit(group.y);
+            group.y ^= 1u << bit;
+            let slot = (bit - 24u) ^ order;
+            let index = group.x + countOneBits(group.y & ((1u << slot) - 1u));
+            if ((group.y & BVH_NODE_BITS) != 0u) {
+                bvh_stack[sp] = group;
+                sp += BVH_STACK_LANES;
+            }
+            let h = bvh_node_hits(bvh_node(index), ray.origin, inv_dir, order, best.t);
+            group = h.xy;
+            prims = h.zw;
+            if (prims.y != 0u) {
                 break;
             }
         }
-        let range = bvh_leaf(leaf);
-        for (var k = range.x; k < range.x + range.y; k++) {
+        loop {
+            if (prims.y == 0u) {
+                break;
+            }
+            let k = prims.x + firstTrailingBit(prims.y);
+            prims.y &= prims.y - 1u;
             best = closer_hit(best, k, intersect_bounded(k, ray, best.t));
         }
         if (!live) {
@@ -567,50 +576,43 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
         return false;
     }
     let inv_dir = safe_inverse(ray.dir);
-    // a stack entry: the node's offset and count (bvh_link) in .x
+    let order = bvh_order(inv_dir);
+    // as in intersect_scene
     var sp = stack_lane;
-    let root = bvh_node(0u);
-    var n = bvh_link(root, 0u);
-    var hit = intersect_aabb(root.lo, root.hi, ray.origin, inv_dir, t_max) < FAR;
+    var group = vec2<u32>(0u, (1u << (24u + order)) | 1u);
+    var prims = vec2<u32>(0u, 0u);
     var live = true;
     loop {
-        // as in intersect_scene: interior nodes until a leaf is found or none is left
-        var leaf = 0u;
         loop {
-            if (hit) {
-                let offset = n >> BVH_COUNT_BITS;
-                if ((n & BVH_COUNT_MASK) == 0u) {
-                    let c0 = bvh_node(offset);
-                    let c1 = bvh_node(offset + 1u);
-                    let h0 = intersect_aabb(c0.lo, c0.hi, ray.origin, inv_dir, t_max) < FAR;
-                    let h1 = intersect_aabb(c1.lo, c1.hi, ray.origin, inv_dir, t_max) < FAR;
-                    let l0 = bvh_link(c0, offset);
-                    let l1 = bvh_link(c1, offset + 1u);
-                    if (h0 && h1) {
-                        bvh_stack[sp].x = l1;
-                        sp += BVH_STACK_LANES;
-                    }
-                    if (h0 || h1) {
-                        n = select(l1, l0, h0);
-                        continue;
-                    }
-                } else {
-                    leaf = n;
+            if ((group.y & BVH_NODE_BITS) == 0u) {
+                if (sp == stack_lane) {
+                    live = false;
+                    break;
                 }
-            }
-            if (sp == stack_lane) {
-                live = false;
-            } else {
                 sp -= BVH_STACK_LANES;
-                n = bvh_stack[sp].x;
-                hit = true;
+                group = bvh_stack[sp];
             }
-            if (leaf != 0u || !live) {
+            let bit = firstLeadingBit(group.y);
+            group.y ^= 1u << bit;
+            let slot = (bit - 24u) ^ order;
+            let index = group.x + countOneBits(group.y & ((1u << slot) - 1u));
+            if ((group.y & BVH_NODE_BITS) != 0u) {
+                bvh_stack[sp] = group;
+                sp += BVH_STACK_LANES;
+            }
+            let h = bvh_node_hits(bvh_node(index), ray.origin, inv_dir, order, t_max);
+            group = h.xy;
+            prims = h.zw;
+            if (prims.y != 0u) {
                 break;
             }
         }
-        let range = bvh_leaf(leaf);
-        for (var k = range.x; k < range.x + range.y; k++) {
+        loop {
+            if (prims.y == 0u) {
+                break;
+            }
+            let k = prims.x + firstTrailingBit(prims.y);
+            prims.y &= prims.y - 1u;
             if (intersect_bounded(k, ray, t_max).x < t_max) {
                 return true;
             }

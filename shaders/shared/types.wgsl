@@ -24,13 +24,21 @@ struct Primitive {
     c: vec4<f32>,
 }
 
-// Flattened BVH node (scene::bvh::pair_layout). Interior (count = 0): the children are
-// nodes[offset] and nodes[offset + 1]. Leaf: primitives offset .. offset + count.
+// A node of the compressed 8-wide BVH (scene::records::BvhNode has the layout): the
+// quantization grid's origin, its steps' exponent bytes and imask (top byte), the first
+// child node, the first primitive of the leaf children, a meta byte per child, and each
+// child's planes as bytes of the grid (q0: lo.x, lo.y; q1: lo.z, hi.x; q2: hi.y, hi.z;
+// two words each, children 0-3 then 4-7).
 struct BvhNode {
-    lo: vec3<f32>,
-    offset: u32,
-    hi: vec3<f32>,
-    count: u32,
+    origin: vec3<f32>,
+    scale: u32,
+    child: u32,
+    prim: u32,
+    meta0: u32,
+    meta1: u32,
+    q0: vec4<u32>,
+    q1: vec4<u32>,
+    q2: vec4<u32>,
 }
 
 // Storage: each material names its places in its view (NAMEParams, written from

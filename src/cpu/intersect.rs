@@ -7,8 +7,8 @@ use super::bindings::Bindings;
 use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
-    BvhNode, Primitive, ATTRIBUTE_ENTRIES, BVH_COUNT_BITS, BVH_COUNT_MASK, BVH_STACK_SIZE,
-    PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_COLORS,
+    BvhNode, Primitive, ATTRIBUTE_ENTRIES, BVH_NODE_BITS, BVH_SLAB_ERROR, BVH_STACK_SIZE, PRIM_BOX,
+    PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_COLORS,
     PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS, PRIM_FLAG_TRANSFORM, PRIM_FLAG_UV1, PRIM_PLANE,
     PRIM_SPHERE, PRIM_TRIANGLE, TANGENT_ENTRIES, UV1_ENTRIES,
 };
@@ -324,59 +324,169 @@ pub fn closer(b: &Bindings, best: Candidate, i: u32, ray: &Ray) -> Candidate {
     closer_hit(best, i, intersect_primitive(b, i, ray, best.t))
 }
 
-/// Node `index` (record n) as one word, its offset above its count: what the traversal
-/// stack holds, so that a node popped needs no fetch. A leaf of BVH_COUNT_MASK or more
-/// primitives is linked by its index with that count (the shader only in scenes that
-/// have one, HAS_BVH_LARGE_LEAVES); bvh_leaf reads its node.
-pub fn bvh_link(n: &BvhNode, index: u32) -> u32 {
-    if n.count >= BVH_COUNT_MASK {
-        return (index << BVH_COUNT_BITS) | BVH_COUNT_MASK;
-    }
-    (n.offset << BVH_COUNT_BITS) | n.count
+/// The walk's order among a node's children: a child node hit is marked in bit 24 + (slot
+/// ^ bvh_order) of the hit mask and the highest bit is taken first, so a ray whose
+/// direction has the signs of octant o (bit 0: x < 0, bit 1: y, bit 2: z) takes slot o
+/// first, where `bvh::collapse` puts the child such rays enter first.
+pub fn bvh_order(inv_dir: Vec3) -> u32 {
+    let octant = (inv_dir.x < 0.0) as u32
+        | ((inv_dir.y < 0.0) as u32) << 1
+        | ((inv_dir.z < 0.0) as u32) << 2;
+    octant ^ 7
 }
 
-/// The first primitive and the count of the leaf linked as `link` (0: none).
-pub fn bvh_leaf(b: &Bindings, link: u32) -> (u32, u32) {
-    let leaf = (link >> BVH_COUNT_BITS, link & BVH_COUNT_MASK);
-    if leaf.1 == BVH_COUNT_MASK {
-        let n = &b.bvh[leaf.0 as usize];
-        return (n.offset, n.count);
-    }
-    leaf
+/// Four bytes of a word, from the low one, as numbers.
+pub fn bvh_bytes(w: u32) -> Vec4 {
+    Vec4::new(
+        (w & 255) as f32,
+        (w >> 8 & 255) as f32,
+        (w >> 16 & 255) as f32,
+        (w >> 24) as f32,
+    )
 }
 
-/// min and max of two numbers that are not NaN (the shader's selects in intersect_aabb).
-pub fn min2(a: f32, b: f32) -> f32 {
-    if a < b {
-        a
-    } else {
-        b
-    }
+/// min and max of numbers that are not NaN, as the shader's selects.
+pub fn min4(a: Vec4, b: Vec4) -> Vec4 {
+    Vec4::select(a.cmplt(b), a, b)
 }
 
-pub fn max2(a: f32, b: f32) -> f32 {
-    if a > b {
-        a
-    } else {
-        b
-    }
+pub fn max4(a: Vec4, b: Vec4) -> Vec4 {
+    Vec4::select(a.cmpgt(b), a, b)
 }
 
-pub use crate::scene::records::BOX_WIDEN;
+/// Which of four children a ray enters before t_max: their planes' bytes on the near
+/// and the far side of each axis, the slab distance of a step per axis and of the
+/// node's origin, less (near) or plus (far) its error bound.
+pub fn bvh_slabs(
+    near: [u32; 3],
+    far: [u32; 3],
+    step_t: Vec3,
+    near_t: Vec3,
+    far_t: Vec3,
+    t_max: f32,
+) -> [bool; 4] {
+    let plane = |w: u32, a: usize, t0: Vec3| bvh_bytes(w) * step_t[a] + Vec4::splat(t0[a]);
+    let t_near = max4(
+        max4(plane(near[0], 0, near_t), plane(near[1], 1, near_t)),
+        max4(plane(near[2], 2, near_t), Vec4::ZERO),
+    );
+    let t_far = min4(
+        min4(plane(far[0], 0, far_t), plane(far[1], 1, far_t)),
+        plane(far[2], 2, far_t),
+    );
+    (t_near.cmple(t_far) & t_near.cmplt(Vec4::splat(t_max))).into()
+}
 
-/// Entry distance into a BVH node's box (clamped to 0), or FAR.
-pub fn intersect_aabb(lo: Vec3, hi: Vec3, origin: Vec3, inv_dir: Vec3, t_max: f32) -> f32 {
-    let t0 = (lo - origin) * inv_dir;
-    let t1 = (hi - origin) * inv_dir;
-    let near = t0.cmplt(t1);
-    let t_min = Vec3::select(near, t0, t1);
-    let t_max3 = Vec3::select(near, t1, t0);
-    let t_near = max2(max2(t_min.x, max2(t_min.y, t_min.z)), 0.0);
-    let t_far = min2(t_max3.x, min2(t_max3.y, t_max3.z)) * BOX_WIDEN;
-    if t_near <= t_far && t_near < t_max {
-        return t_near;
+/// The bits four children mark in the hit mask when hit (`BvhNode`'s meta bytes): a
+/// node's moved by the walk's order, a leaf's its primitives.
+pub fn bvh_child_bits(bytes: u32, inner: u32, order: u32) -> [u32; 4] {
+    let mut bits = [0; 4];
+    for (i, b) in bits.iter_mut().enumerate() {
+        let mut m = bytes >> (8 * i) & 255;
+        m ^= (inner >> i & 1) * order;
+        *b = (m >> 5) << (m & 31);
     }
-    FAR
+    bits
+}
+
+/// Node n's children that a ray enters before t_max, as the walk's next two groups:
+/// (first child node, hit child nodes' bits | imask, first primitive, hit primitives'
+/// bits). The quantized boxes' slab distances are (origin - ray origin) / d + q step / d
+/// per axis; widened by BVH_SLAB_ERROR of the magnitudes that form them, they bound the
+/// exact ones whatever cancels.
+pub fn bvh_node_hits(n: &BvhNode, origin: Vec3, inv_dir: Vec3, order: u32, t_max: f32) -> [u32; 4] {
+    let step = Vec3::new(
+        f32::from_bits((n.scale & 255) << 23),
+        f32::from_bits((n.scale >> 8 & 255) << 23),
+        f32::from_bits((n.scale >> 16 & 255) << 23),
+    );
+    let rel = Vec3::from(n.origin) - origin;
+    let origin_t = rel * inv_dir;
+    let step_t = (step * inv_dir)
+        .max(Vec3::splat(-f32::MAX))
+        .min(Vec3::splat(f32::MAX));
+    let err =
+        ((rel.abs() + 256.0 * step) * inv_dir.abs()).min(Vec3::splat(f32::MAX)) * BVH_SLAB_ERROR;
+    let near_t = origin_t - err;
+    let far_t = origin_t + err;
+    let lo = [[n.q0[0], n.q0[1]], [n.q0[2], n.q0[3]], [n.q1[0], n.q1[1]]];
+    let hi = [[n.q1[2], n.q1[3]], [n.q2[0], n.q2[1]], [n.q2[2], n.q2[3]]];
+    let imask = n.scale >> 24;
+    let mut hits = 0;
+    for (h, meta) in [n.meta0, n.meta1].into_iter().enumerate() {
+        let side = |a: usize, near: bool| {
+            if (inv_dir[a] < 0.0) == near {
+                hi[a][h]
+            } else {
+                lo[a][h]
+            }
+        };
+        let near = [side(0, true), side(1, true), side(2, true)];
+        let far = [side(0, false), side(1, false), side(2, false)];
+        let hit = bvh_slabs(near, far, step_t, near_t, far_t, t_max);
+        let bits = bvh_child_bits(meta, imask >> (4 * h), order);
+        for i in 0..4 {
+            if hit[i] {
+                hits |= bits[i];
+            }
+        }
+    }
+    [
+        n.child,
+        (hits & BVH_NODE_BITS) | imask,
+        n.prim,
+        hits & !BVH_NODE_BITS,
+    ]
+}
+
+/// The BVH walk of intersect_scene and occluded_bvh, over a closure: `test(k, t)` tests
+/// primitive k against the bound t and returns the new bound, or None to end the walk.
+/// A walk holds two groups of a node's children hit by the ray: child nodes (the first's
+/// index, their bits in the hit mask above the node's imask) and primitives (the first's
+/// index, their bits). It takes the child nodes one at a time in the hit mask's order,
+/// pushing the rest of their group, and tests a group of primitives as soon as it has one
+/// (the shader when every lane of its subgroup has one: the same order per lane).
+pub fn bvh_walk(
+    nodes: &[BvhNode],
+    ray: &Ray,
+    t_max: f32,
+    mut test: impl FnMut(u32, f32) -> Option<f32>,
+) {
+    let inv_dir = safe_inverse(ray.dir);
+    let order = bvh_order(inv_dir);
+    let mut stack = [[0u32; 2]; BVH_STACK_SIZE as usize];
+    let mut sp = 0usize;
+    // the root: a group of one child node, in slot 0
+    let mut group = [0u32, (1 << (24 + order)) | 1];
+    let mut t = t_max;
+    loop {
+        if group[1] & BVH_NODE_BITS == 0 {
+            if sp == 0 {
+                return;
+            }
+            sp -= 1;
+            group = stack[sp];
+        }
+        let bit = 31 - group[1].leading_zeros();
+        group[1] ^= 1 << bit;
+        let slot = (bit - 24) ^ order;
+        let index = group[0] + (group[1] & ((1 << slot) - 1)).count_ones();
+        if group[1] & BVH_NODE_BITS != 0 {
+            stack[sp] = group;
+            sp += 1;
+        }
+        let [child, nodes_hit, prim, mut prims] =
+            bvh_node_hits(&nodes[index as usize], ray.origin, inv_dir, order, t);
+        group = [child, nodes_hit];
+        while prims != 0 {
+            let k = prim + prims.trailing_zeros();
+            prims &= prims - 1;
+            match test(k, t) {
+                Some(bound) => t = bound,
+                None => return,
+            }
+        }
+    }
 }
 
 /// Whether anything lies along the ray before t_max (a shadow ray): the same answer as
@@ -400,61 +510,12 @@ pub fn occluded_bvh(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
     if p.num_primitives == p.num_unbounded {
         return false;
     }
-    let nodes = b.bvh;
-    let inv_dir = safe_inverse(ray.dir);
-    let enters =
-        |n: &BvhNode| intersect_aabb(n.lo.into(), n.hi.into(), ray.origin, inv_dir, t_max) < FAR;
-    // a stack entry: the node's offset and count (bvh_link)
-    let mut stack = [0u32; BVH_STACK_SIZE as usize];
-    let mut sp = 0usize;
-    let mut n = bvh_link(&nodes[0], 0);
-    let mut hit = enters(&nodes[0]);
-    let mut live = true;
-    loop {
-        // as in intersect_scene: interior nodes until a leaf is found or none is left
-        let mut leaf = 0u32;
-        loop {
-            if hit {
-                let offset = n >> BVH_COUNT_BITS;
-                if n & BVH_COUNT_MASK == 0 {
-                    let (c0, c1) = (&nodes[offset as usize], &nodes[offset as usize + 1]);
-                    let (h0, h1) = (enters(c0), enters(c1));
-                    if h0 && h1 {
-                        stack[sp] = bvh_link(c1, offset + 1);
-                        sp += 1;
-                    }
-                    if h0 || h1 {
-                        n = if h0 {
-                            bvh_link(c0, offset)
-                        } else {
-                            bvh_link(c1, offset + 1)
-                        };
-                        continue;
-                    }
-                } else {
-                    leaf = n;
-                }
-            }
-            if sp == 0 {
-                live = false;
-            } else {
-                sp -= 1;
-                n = stack[sp];
-                hit = true;
-            }
-            if leaf != 0 || !live {
-                break;
-            }
-        }
-        let (first, count) = bvh_leaf(b, leaf);
-        if (first..first + count).any(|k| intersect_bounded(b, k, ray, t_max).x < t_max) {
-            return true;
-        }
-        if !live {
-            break;
-        }
-    }
-    false
+    let mut hit = false;
+    bvh_walk(b.bvh, ray, t_max, |k, t| {
+        hit = intersect_bounded(b, k, ray, t).x < t;
+        (!hit).then_some(t)
+    });
+    hit
 }
 
 /// Closest hit along the ray before t_max: planes, then the BVH in order (or every
@@ -479,64 +540,10 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
     if p.num_primitives == p.num_unbounded {
         return best;
     }
-    let nodes = b.bvh;
-    let inv_dir = safe_inverse(ray.dir);
-    // a stack entry: the node's offset and count (bvh_link), and its entry distance
-    let mut stack = [(0u32, 0f32); BVH_STACK_SIZE as usize];
-    let mut sp = 0usize;
-    let root = &nodes[0];
-    let mut n = bvh_link(root, 0);
-    let mut t_node = intersect_aabb(root.lo.into(), root.hi.into(), ray.origin, inv_dir, best.t);
-    let mut live = true;
-    loop {
-        // Interior nodes until a leaf is found or none is left. The shader tests the
-        // leaf's primitives after this loop, when every lane of its subgroup has one; the
-        // nodes are visited in the same order either way.
-        let mut leaf = 0u32;
-        loop {
-            if t_node < best.t {
-                let offset = n >> BVH_COUNT_BITS;
-                if n & BVH_COUNT_MASK == 0 {
-                    // the two children side by side (scene::bvh::pair_layout)
-                    let (c0, c1) = (&nodes[offset as usize], &nodes[offset as usize + 1]);
-                    let t0 =
-                        intersect_aabb(c0.lo.into(), c0.hi.into(), ray.origin, inv_dir, best.t);
-                    let t1 =
-                        intersect_aabb(c1.lo.into(), c1.hi.into(), ray.origin, inv_dir, best.t);
-                    let first_near = t0 <= t1;
-                    let (l0, l1) = (bvh_link(c0, offset), bvh_link(c1, offset + 1));
-                    let (t_near, t_far) = if first_near { (t0, t1) } else { (t1, t0) };
-                    if t_far < FAR {
-                        stack[sp] = (if first_near { l1 } else { l0 }, t_far);
-                        sp += 1;
-                    }
-                    if t_near < FAR {
-                        n = if first_near { l0 } else { l1 };
-                        t_node = t_near;
-                        continue;
-                    }
-                } else {
-                    leaf = n;
-                }
-            }
-            if sp == 0 {
-                live = false;
-            } else {
-                sp -= 1;
-                (n, t_node) = stack[sp];
-            }
-            if leaf != 0 || !live {
-                break;
-            }
-        }
-        let (first, count) = bvh_leaf(b, leaf);
-        for k in first..first + count {
-            best = closer_hit(best, k, intersect_bounded(b, k, ray, best.t));
-        }
-        if !live {
-            break;
-        }
-    }
+    bvh_walk(b.bvh, ray, best.t, |k, t| {
+        best = closer_hit(best, k, intersect_bounded(b, k, ray, t));
+        Some(best.t)
+    });
     best
 }
 

@@ -184,6 +184,7 @@ pub fn texture_accessor<R: SharedRecord + bytemuck::Zeroable>(
                 FieldValue::F32(_) => format!("bitcast<f32>(t{t}.{})", lanes(1)),
                 FieldValue::Vec3(_) => format!("bitcast<vec3<f32>>(t{t}.{})", lanes(3)),
                 FieldValue::Vec4(_) => format!("bitcast<vec4<f32>>(t{t})"),
+                FieldValue::UVec4(_) => format!("t{t}"),
             }
         })
         .collect();
@@ -200,6 +201,9 @@ pub fn wgsl_record<R: SharedRecord>(r: &R) -> String {
             FieldValue::F32(x) => wgsl_f32(x),
             FieldValue::Vec3(x) => wgsl_vec(&x),
             FieldValue::Vec4(x) => wgsl_vec(&x),
+            FieldValue::UVec4(x) => {
+                format!("vec4<u32>({}u, {}u, {}u, {}u)", x[0], x[1], x[2], x[3])
+            }
         })
         .collect();
     format!("{}({})", R::NAME, values.join(", "))

@@ -39,9 +39,6 @@ pub enum Feature {
     Transforms,
     /// The BVH walk.
     Bvh,
-    /// Leaves of `BVH_COUNT_MASK` or more primitives (the BVH's depth limit, equal
-    /// centroids): the walk reads such a leaf's node (`bvh_leaf`).
-    BvhLargeLeaves,
     /// The plain loop over a list of primitives grouped by type.
     PrimitiveLoop,
     /// A material's type: its shading (`shaders/materials/NAME.wgsl`) and its case of
@@ -94,7 +91,7 @@ pub enum Feature {
 }
 
 /// The features before the materials' in define order.
-const GEOMETRY: [Feature; 10] = [
+const GEOMETRY: [Feature; 9] = [
     Feature::Sphere,
     Feature::Triangle,
     Feature::Plane,
@@ -103,7 +100,6 @@ const GEOMETRY: [Feature; 10] = [
     Feature::Disk,
     Feature::Transforms,
     Feature::Bvh,
-    Feature::BvhLargeLeaves,
     Feature::PrimitiveLoop,
 ];
 
@@ -154,7 +150,6 @@ impl Feature {
             Feature::Disk => "HAS_DISK",
             Feature::Transforms => "HAS_TRANSFORMS",
             Feature::Bvh => "HAS_BVH",
-            Feature::BvhLargeLeaves => "HAS_BVH_LARGE_LEAVES",
             Feature::PrimitiveLoop => "HAS_PRIMITIVE_LOOP",
             Feature::Material(kind) => kind.define(),
             Feature::Textures => "HAS_TEXTURES",
@@ -285,10 +280,6 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .any(|p| p.flags & r::PRIM_FLAG_TRANSFORM != 0),
         )
         .with(Feature::Bvh, bounded && scene.use_bvh)
-        .with(
-            Feature::BvhLargeLeaves,
-            bounded && scene.use_bvh && scene.bvh_has_large_leaves(),
-        )
         .with(Feature::PrimitiveLoop, bounded && !scene.use_bvh)
         .with(Feature::Textures, !scene.textures.is_empty())
         .with(

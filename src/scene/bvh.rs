@@ -1,7 +1,9 @@
-//! Bounding volume hierarchy over primitive boxes: a parallel binned-SAH builder. The
-//! traversal is `intersect_scene` in `shaders/shared/intersect.wgsl` and its CPU twin.
+//! Bounding volume hierarchy over primitive boxes: a parallel binned-SAH builder of a
+//! binary tree ([`build`]), which [`collapse`] turns into the compressed 8-wide tree the
+//! renderers walk ([`BvhNode`]; `intersect_scene` in `shaders/shared/intersect.wgsl` and
+//! its CPU twin).
 //!
-//! # Layout (shared with WGSL through [`BvhNode`])
+//! # Layout of the binary tree ([`Node`])
 //!
 //! * `nodes` is in depth-first (pre-)order; `nodes[0]` is the root.
 //! * Interior node (`count == 0`): its first child is `nodes[index + 1]`, its
@@ -12,9 +14,6 @@
 //!   permutes its primitive buffer once by `order` (`new[k] = old[order[k]]`)
 //!   so that the GPU indexes primitives directly with `offset + i`.
 //! * A box of a node is the exact union of the boxes of the primitives below it.
-//!
-//! Renderers traverse the same tree in [`pair_layout`], which puts the two children of
-//! each node side by side.
 //!
 //! # Depth limit
 //!
@@ -27,9 +26,20 @@
 //! the root pushed first, already popped by then). Both therefore fit in a
 //! `BVH_MAX_DEPTH`-entry stack. [`build`] asserts the limit.
 
-use super::records::{BvhNode, BVH_COUNT_BITS, BVH_COUNT_MASK, BVH_STACK_SIZE};
-use glam::{Vec3, Vec3A};
+use super::records::{BvhNode, BVH_STACK_SIZE};
+use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
+
+/// A node of the binary tree [`build`] makes. Interior (`count` = 0): the first child is
+/// the next node and the second `nodes[offset]`. Leaf: positions `offset..offset + count`
+/// of [`Bvh::order`].
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Node {
+    pub lo: [f32; 3],
+    pub offset: u32,
+    pub hi: [f32; 3],
+    pub count: u32,
+}
 
 /// Size of the traversal stack (`BVH_STACK_SIZE` in WGSL and the CPU twin).
 pub const BVH_MAX_DEPTH: u32 = BVH_STACK_SIZE;
@@ -42,10 +52,7 @@ pub const BVH_MAX_LEAF_DEPTH: u32 = BVH_MAX_DEPTH - 1;
 /// split (all centroids equal) or sits at [`BVH_MAX_LEAF_DEPTH`].
 /// Nodes with at most this many primitives become leaves when SAH says a leaf
 /// is not more expensive than the best split.
-pub const BVH_MAX_LEAF_SIZE: usize = 4;
-// a leaf the SAH makes is linked directly (`bvh_link`): only the oversized leaves of the
-// depth limit and of equal centroids take the walk's extra node read
-const _: () = assert!(BVH_MAX_LEAF_SIZE < BVH_COUNT_MASK as usize);
+pub const BVH_MAX_LEAF_SIZE: usize = 3;
 
 /// SAH cost of visiting an interior node (testing the boxes of its two
 /// children), relative to [`SAH_INTERSECTION_COST`].
@@ -61,45 +68,6 @@ pub const SAH_BINS: usize = 16;
 /// Subtrees with at least this many primitives build their two children in
 /// parallel (`rayon::join`); smaller ones are built sequentially.
 const PARALLEL_MIN_PRIMS: usize = 16 * 1024;
-
-/// The nodes of a depth-first BVH laid out for traversal: the root at entry 0 (entry 1
-/// unused), and the two children of every interior node side by side at its `offset`
-/// (even) and `offset + 1`, so that one 64-byte fetch gives both child boxes (a cache
-/// line, where the depth-first layout touches up to three per step). Leaves keep their
-/// primitive range. Pairs are placed in depth-first order of their parents, the first
-/// child's subtree before the second's, so a subtree's pairs lie together. The children
-/// keep their order: a traversal that takes the first child first where the depth-first
-/// layout takes `index + 1` visits the same nodes in the same order.
-pub fn pair_layout(dfs: &[BvhNode]) -> Vec<BvhNode> {
-    if dfs.is_empty() {
-        return Vec::new();
-    }
-    let mut out = vec![BvhNode::default(); dfs.len() + 1];
-    let mut next = 2;
-    // (depth-first index, entry)
-    let mut stack = vec![(0usize, 0usize)];
-    while let Some((d, entry)) = stack.pop() {
-        let n = dfs[d];
-        if n.count > 0 {
-            out[entry] = n;
-            continue;
-        }
-        let pair = next;
-        next += 2;
-        out[entry] = BvhNode {
-            offset: pair as u32,
-            ..n
-        };
-        stack.push((n.offset as usize, pair + 1));
-        stack.push((d + 1, pair));
-    }
-    debug_assert_eq!(next, out.len());
-    // offsets and node indices fit above a count in a stack entry (`bvh_link`): 2^29
-    // nodes are 16 GiB, far beyond what a device binds (gpu::plan refuses larger scenes)
-    debug_assert!(out.len() < 1 << (32 - BVH_COUNT_BITS));
-    debug_assert!(out.iter().all(|n| n.offset < 1 << (32 - BVH_COUNT_BITS)));
-    out
-}
 
 /// Axis-aligned bounding box. An empty box has `lo = +inf`, `hi = -inf`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -185,7 +153,7 @@ impl Aabb {
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
     /// Nodes in depth-first order, root first (empty for no primitives).
-    pub nodes: Vec<BvhNode>,
+    pub nodes: Vec<Node>,
     /// Permutation of `0..n`: leaf position `k` holds primitive `order[k]`.
     pub order: Vec<u32>,
     /// Depth of the deepest leaf (root = 0; 0 for an empty tree).
@@ -539,11 +507,11 @@ fn split_task(task: Task<'_>) -> Option<(Task<'_>, Task<'_>)> {
 /// Large subtrees build their left child into `nodes` and, concurrently, the
 /// right child into a fresh vector whose interior offsets are then rebased
 /// while it is appended, which keeps the global depth-first layout.
-fn build_subtree(task: Task<'_>, nodes: &mut Vec<BvhNode>) -> u32 {
+fn build_subtree(task: Task<'_>, nodes: &mut Vec<Node>) -> u32 {
     let depth = task.depth;
     let index = nodes.len();
     // Written as a leaf; turned into an interior node below if it splits.
-    nodes.push(BvhNode {
+    nodes.push(Node {
         lo: task.bounds.lo.to_array(),
         offset: task.start,
         hi: task.bounds.hi.to_array(),
@@ -576,5 +544,336 @@ fn build_subtree(task: Task<'_>, nodes: &mut Vec<BvhNode>) -> u32 {
         let left_depth = build_subtree(left, nodes);
         nodes[index].offset = nodes.len() as u32;
         left_depth.max(build_subtree(right, nodes))
+    }
+}
+
+/// Children of a node of the renderers' BVH ([`BvhNode`]).
+pub const BVH_WIDTH: usize = 8;
+
+/// Most primitives in a leaf of the renderers' BVH: a child's meta byte counts them in
+/// unary in 3 bits.
+pub const WIDE_LEAF_SIZE: u32 = 3;
+const _: () = assert!(BVH_MAX_LEAF_SIZE == WIDE_LEAF_SIZE as usize);
+
+/// Result of [`collapse`]: the tree the renderers walk.
+#[derive(Clone, Debug, Default)]
+pub struct WideBvh {
+    /// The root first; the child nodes of a node follow one another (empty for no
+    /// primitives).
+    pub nodes: Vec<BvhNode>,
+    /// Permutation of `0..n`: primitive position `k` holds primitive `order[k]`. The
+    /// primitives of a node's leaf children follow one another from its `prim`.
+    pub order: Vec<u32>,
+    /// Depth of the deepest node (root = 0), at most [`BVH_MAX_LEAF_DEPTH`]: a walk holds
+    /// at most one stack entry per ancestor of the node it visits.
+    pub depth: u32,
+}
+
+/// Turns the binary tree `tree` over `boxes` into the renderers' compressed 8-wide tree.
+///
+/// Each node takes the two children of its binary node and then, seven times at most,
+/// replaces the child of the largest surface area that holds more than
+/// [`WIDE_LEAF_SIZE`] primitives by its two children (a binary leaf of more is halved at
+/// a multiple of [`WIDE_LEAF_SIZE`]); a child of at most [`WIDE_LEAF_SIZE`] primitives
+/// becomes a leaf. Should that make the tree deeper than [`BVH_MAX_LEAF_DEPTH`] (a
+/// binary tree at its depth limit with huge leaves), it is collapsed again taking the
+/// tallest child first, which takes at least three binary levels per node.
+///
+/// A child's slot is chosen for the order of the walk: a ray whose direction has the
+/// signs of octant `o` (bit 0: x < 0, bit 1: y, bit 2: z) visits slot `o` first, then
+/// `o ^ 1`, `o ^ 2`, ... (`bvh_node_hits`), so slot `o` gets the child nearest to where
+/// such rays enter the node (the smallest dot product of its centroid with the octant's
+/// direction, assigned greedily). The child boxes are quantized outwards in exact
+/// arithmetic, so each holds its primitives' boxes.
+pub fn collapse(tree: &Bvh, boxes: &[Aabb]) -> WideBvh {
+    if tree.nodes.is_empty() {
+        return WideBvh::default();
+    }
+    // (first position, count, height) of every binary node; children follow their parent
+    let mut spans = vec![(0u32, 0u32, 0u32); tree.nodes.len()];
+    for i in (0..tree.nodes.len()).rev() {
+        let n = &tree.nodes[i];
+        spans[i] = if n.count > 0 {
+            (n.offset, n.count, run_height(n.count))
+        } else {
+            let (l, r) = (spans[i + 1], spans[n.offset as usize]);
+            (l.0, l.1 + r.1, 1 + l.2.max(r.2))
+        };
+    }
+    let mut wide = WideBvh::default();
+    for by_height in [false, true] {
+        let mut c = Collapse {
+            tree,
+            boxes,
+            spans: &spans,
+            by_height,
+            nodes: vec![BvhNode::default()],
+            order: Vec::with_capacity(tree.order.len()),
+            depth: 0,
+        };
+        c.node(0, c.part(0), 0);
+        wide = WideBvh {
+            nodes: c.nodes,
+            order: c.order,
+            depth: c.depth,
+        };
+        if wide.depth <= BVH_MAX_LEAF_DEPTH {
+            break;
+        }
+    }
+    debug_assert!(wide.depth <= BVH_MAX_LEAF_DEPTH);
+    wide
+}
+
+/// Binary levels a run of `count` primitives takes to reach leaves of at most
+/// [`WIDE_LEAF_SIZE`]: ceil(log2(ceil(count / WIDE_LEAF_SIZE))).
+fn run_height(count: u32) -> u32 {
+    let leaves = count.div_ceil(WIDE_LEAF_SIZE);
+    32 - leaves.saturating_sub(1).leading_zeros()
+}
+
+/// A binary node's subtree, or a run of a binary leaf's primitives, being collapsed.
+#[derive(Clone, Copy, Debug)]
+struct Part {
+    /// The binary node, or [`RUN`].
+    node: u32,
+    /// Its primitives: positions `start..start + count` of the binary tree's order.
+    start: u32,
+    count: u32,
+    bounds: Aabb,
+    /// Binary levels below it (for a run, [`run_height`]).
+    height: u32,
+}
+
+/// [`Part::node`] of a run of primitives.
+const RUN: u32 = u32::MAX;
+
+struct Collapse<'a> {
+    tree: &'a Bvh,
+    boxes: &'a [Aabb],
+    spans: &'a [(u32, u32, u32)],
+    by_height: bool,
+    nodes: Vec<BvhNode>,
+    order: Vec<u32>,
+    depth: u32,
+}
+
+impl Collapse<'_> {
+    fn part(&self, node: u32) -> Part {
+        let n = &self.tree.nodes[node as usize];
+        let (start, count, height) = self.spans[node as usize];
+        Part {
+            node,
+            start,
+            count,
+            bounds: Aabb::new(n.lo.into(), n.hi.into()),
+            height,
+        }
+    }
+
+    fn run(&self, start: u32, count: u32) -> Part {
+        let mut bounds = Aabb::EMPTY;
+        for k in start..start + count {
+            bounds = bounds.union(&self.boxes[self.tree.order[k as usize] as usize]);
+        }
+        Part {
+            node: RUN,
+            start,
+            count,
+            bounds,
+            height: run_height(count),
+        }
+    }
+
+    /// The two halves of a part of more than [`WIDE_LEAF_SIZE`] primitives: a binary
+    /// node's children, else its run cut at a multiple of [`WIDE_LEAF_SIZE`].
+    fn split(&self, p: &Part) -> (Part, Part) {
+        if p.node != RUN {
+            let n = &self.tree.nodes[p.node as usize];
+            if n.count == 0 {
+                return (self.part(p.node + 1), self.part(n.offset));
+            }
+        }
+        let half = p.count.div_ceil(WIDE_LEAF_SIZE) / 2 * WIDE_LEAF_SIZE;
+        (
+            self.run(p.start, half),
+            self.run(p.start + half, p.count - half),
+        )
+    }
+
+    /// Writes node `index`, over `part`, and the nodes below it.
+    fn node(&mut self, index: usize, part: Part, depth: u32) {
+        self.depth = self.depth.max(depth);
+        let mut kids = if part.count > WIDE_LEAF_SIZE {
+            let (a, b) = self.split(&part);
+            vec![a, b]
+        } else {
+            vec![part]
+        };
+        let key = |p: &Part| {
+            let area = p.bounds.surface_area();
+            if self.by_height {
+                (p.height as f32, area)
+            } else {
+                (area, 0.0)
+            }
+        };
+        while kids.len() < BVH_WIDTH {
+            let Some(j) = (0..kids.len())
+                .filter(|&j| kids[j].count > WIDE_LEAF_SIZE)
+                .max_by(|&a, &b| {
+                    key(&kids[a])
+                        .partial_cmp(&key(&kids[b]))
+                        .unwrap_or(std::cmp::Ordering::Equal)
+                })
+            else {
+                break;
+            };
+            let (a, b) = self.split(&kids[j]);
+            kids[j] = a;
+            kids.push(b);
+        }
+        let bounds = kids.iter().fold(Aabb::EMPTY, |b, k| b.union(&k.bounds));
+        let slots = assign_slots(bounds.centroid(), &kids);
+        let grid = Grid::new(&bounds);
+
+        let child = self.nodes.len() as u32;
+        let inner = kids.iter().filter(|k| k.count > WIDE_LEAF_SIZE).count();
+        self.nodes
+            .resize(self.nodes.len() + inner, BvhNode::default());
+        let prim = self.order.len() as u32;
+        let (mut imask, mut meta, mut q) = (0u32, [0u32; BVH_WIDTH], [[0u32; BVH_WIDTH]; 6]);
+        let mut below = Vec::with_capacity(inner);
+        for (s, kid) in slots.iter().enumerate() {
+            let Some(k) = kid.map(|c| kids[c]) else {
+                continue;
+            };
+            for a in 0..3 {
+                q[a][s] = grid.quantize(k.bounds.lo[a], a, false);
+                q[3 + a][s] = grid.quantize(k.bounds.hi[a], a, true);
+            }
+            if k.count > WIDE_LEAF_SIZE {
+                imask |= 1 << s;
+                meta[s] = (1 << 5) | (24 + s as u32);
+                below.push((child as usize + below.len(), k));
+            } else {
+                meta[s] = (((1 << k.count) - 1) << 5) | (self.order.len() as u32 - prim);
+                let order = &self.tree.order[k.start as usize..(k.start + k.count) as usize];
+                self.order.extend_from_slice(order);
+            }
+        }
+        // four bytes of children 4 h .. 4 h + 3 in a word, from the low byte
+        let pack =
+            |v: &[u32; BVH_WIDTH], h: usize| (0..4).fold(0, |w, i| w | v[4 * h + i] << (8 * i));
+        let both = |v: &[u32; BVH_WIDTH]| [pack(v, 0), pack(v, 1)];
+        let [x0, x1] = both(&q[0]);
+        let [y0, y1] = both(&q[1]);
+        let [z0, z1] = both(&q[2]);
+        let [hx0, hx1] = both(&q[3]);
+        let [hy0, hy1] = both(&q[4]);
+        let [hz0, hz1] = both(&q[5]);
+        self.nodes[index] = BvhNode {
+            origin: bounds.lo.to_array(),
+            scale: grid.exponents[0]
+                | grid.exponents[1] << 8
+                | grid.exponents[2] << 16
+                | imask << 24,
+            child,
+            prim,
+            meta0: pack(&meta, 0),
+            meta1: pack(&meta, 1),
+            q0: [x0, x1, y0, y1],
+            q1: [z0, z1, hx0, hx1],
+            q2: [hy0, hy1, hz0, hz1],
+        };
+        for (i, k) in below {
+            self.node(i, k, depth + 1);
+        }
+    }
+}
+
+/// The slot of each child (`slots[s]` = index into `kids`): greedily, the pairs of child
+/// and octant in increasing order of the dot product of the child's centroid (about
+/// `center`) with the octant's direction.
+fn assign_slots(center: Vec3, kids: &[Part]) -> [Option<usize>; BVH_WIDTH] {
+    let octant = |s: usize| {
+        let sign = |bit: usize| if s & bit != 0 { -1.0 } else { 1.0 };
+        Vec3::new(sign(1), sign(2), sign(4))
+    };
+    let mut pairs = Vec::with_capacity(kids.len() * BVH_WIDTH);
+    for (c, k) in kids.iter().enumerate() {
+        let d = k.bounds.centroid() - center;
+        for s in 0..BVH_WIDTH {
+            pairs.push((d.dot(octant(s)), c, s));
+        }
+    }
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut slots = [None; BVH_WIDTH];
+    let mut placed = [false; BVH_WIDTH];
+    for (_, c, s) in pairs {
+        if slots[s].is_none() && !placed[c] {
+            slots[s] = Some(c);
+            placed[c] = true;
+        }
+    }
+    slots
+}
+
+/// A node's quantization grid: per axis, the node's lower corner and a power-of-two step
+/// such that 255 steps span the node.
+struct Grid {
+    origin: DVec3,
+    step: DVec3,
+    /// The steps as biased exponents (`f32::from_bits(e << 23)`), 1 to 254.
+    exponents: [u32; 3],
+}
+
+impl Grid {
+    fn new(bounds: &Aabb) -> Self {
+        let origin = bounds.lo.as_dvec3();
+        let extent = bounds.hi.as_dvec3() - origin;
+        let mut step = DVec3::ZERO;
+        let mut exponents = [0; 3];
+        for a in 0..3 {
+            // the smallest power of two (a normal f32) with 255 of them spanning the node
+            let mut k = if extent[a] > 0.0 {
+                ((extent[a] / 255.0).log2().ceil() as i32).clamp(-126, 127)
+            } else {
+                -126
+            };
+            while k < 127 && 255.0 * 2f64.powi(k) < extent[a] {
+                k += 1;
+            }
+            while k > -126 && 255.0 * 2f64.powi(k - 1) >= extent[a] {
+                k -= 1;
+            }
+            step[a] = 2f64.powi(k);
+            exponents[a] = (k + 127) as u32;
+        }
+        Self {
+            origin,
+            step,
+            exponents,
+        }
+    }
+
+    /// Plane `v` on axis `a` in steps of the grid, rounded down (`up`: up), so that
+    /// `origin + step q` lies on its outer side in exact arithmetic (f64 holds these
+    /// sums of an f32 and a power of two times a byte exactly).
+    fn quantize(&self, v: f32, a: usize, up: bool) -> u32 {
+        let v = v as f64;
+        let x = (v - self.origin[a]) / self.step[a];
+        let mut q = if up { x.ceil() } else { x.floor() }.clamp(0.0, 255.0);
+        let plane = |q: f64| self.origin[a] + self.step[a] * q;
+        if up {
+            while q < 255.0 && plane(q) < v {
+                q += 1.0;
+            }
+        } else {
+            while q > 0.0 && plane(q) > v {
+                q -= 1.0;
+            }
+        }
+        q as u32
     }
 }

@@ -58,13 +58,13 @@ pub struct FlatScene {
     pub emitters: Vec<Emitter>,
     /// Material names, in record order.
     pub material_names: Vec<String>,
-    /// BVH over primitives `num_unbounded..` in `bvh::pair_layout` (the root at entry 0,
-    /// entry 1 unused, the children of a node side by side); empty when `use_bvh` is false.
+    /// The compressed 8-wide BVH over primitives `num_unbounded..` (`bvh::collapse`: the
+    /// root first, a node's child nodes side by side); empty when `use_bvh` is false.
     pub bvh: Vec<BvhNode>,
     /// The last `num_punctual` emitters are the lights without a surface (`[[lights]]`),
     /// chosen among themselves.
     pub num_punctual: u32,
-    /// Depth of the deepest BVH leaf (the root is 0).
+    /// Depth of the deepest BVH node (the root is 0).
     pub bvh_depth: u32,
     /// Transforms and triangle vertex attributes, indexed by `Primitive::data`.
     pub shape_data: Vec<[f32; 4]>,
@@ -111,15 +111,9 @@ pub struct Band {
 }
 
 impl FlatScene {
-    /// The nodes of the BVH (its layout leaves one entry unused).
+    /// The nodes of the BVH.
     pub fn bvh_node_count(&self) -> usize {
-        self.bvh.len().saturating_sub(1)
-    }
-
-    /// Whether a leaf holds `BVH_COUNT_MASK` or more primitives: too many for a traversal
-    /// stack entry's count (`bvh_link` then links it by its node).
-    pub fn bvh_has_large_leaves(&self) -> bool {
-        self.bvh.iter().any(|n| n.count >= records::BVH_COUNT_MASK)
+        self.bvh.len()
     }
 
     /// The uniform block for one dispatch: pass `sample_index` over `band`.

@@ -673,8 +673,8 @@ fn build_primitives(
     }
 }
 
-/// The primitives in their final order, with the BVH over the bounded ones (in
-/// `bvh::pair_layout`) and its depth: planes first, then the bounded primitives in the
+/// The primitives in their final order, with the BVH over the bounded ones
+/// (`bvh::collapse`) and its depth: planes first, then the bounded primitives in the
 /// BVH's leaf order, or, without it, grouped by type (a stable sort), with no nodes.
 fn order(
     unbounded: Vec<Primitive>,
@@ -690,14 +690,13 @@ fn order(
         primitives.extend(sorted);
         return (primitives, Vec::new(), 0);
     }
-    let mut tree = bvh::build(boxes);
+    let mut tree = bvh::collapse(&bvh::build(boxes), boxes);
     primitives.extend(tree.order.iter().map(|&i| bounded[i as usize]));
-    // leaves index the primitives after the planes (shifted in place: no second copy of
-    // the nodes before pair_layout's)
-    for n in tree.nodes.iter_mut().filter(|n| n.count > 0) {
-        n.offset += num_unbounded;
+    // leaves index the primitives after the planes
+    for n in &mut tree.nodes {
+        n.prim += num_unbounded;
     }
-    (primitives, bvh::pair_layout(&tree.nodes), tree.depth)
+    (primitives, tree.nodes, tree.depth)
 }
 
 fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {

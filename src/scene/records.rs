@@ -75,20 +75,22 @@ shared_constants! {
     /// (normal xyz, 0), (position xyz, 0), each summed over every sample.
     ACCUM_ENTRIES_AOVS: u32 = 5;
 
-    /// Size of the BVH traversal stack in `intersect.wgsl`; the builder keeps every leaf
-    /// within this depth.
+    /// Size of the BVH traversal stack in `intersect.wgsl`: an entry per ancestor of the
+    /// node visited at most, and `bvh::collapse` keeps every node within this depth.
     BVH_STACK_SIZE: u32 = 32;
     /// Invocations in a workgroup of every entry point that traces rays (`@workgroup_size`
     /// of `trace.wgsl` and `kernel.wgsl`): the traversal stacks are in workgroup memory,
     /// one column per invocation, where llvmpipe writes an entry for the lanes that push
     /// one only; a stack in private memory costs it a masked write of all 8 lanes.
     BVH_STACK_LANES: u32 = 64;
-    /// A traversal stack entry packs a node's `offset` above its `count` (`bvh_link`), in
-    /// the low `BVH_COUNT_BITS` bits. A leaf of `BVH_COUNT_MASK` or more primitives (the
-    /// builder makes them at its depth limit and of equal centroids) is linked by its
-    /// node index instead, with count `BVH_COUNT_MASK`: the walk then reads its node.
-    BVH_COUNT_BITS: u32 = 3;
-    BVH_COUNT_MASK: u32 = (1 << BVH_COUNT_BITS) - 1;
+    /// The bits of a BVH walk's hit mask (`BvhNode`'s meta bytes) that mark child nodes;
+    /// the 24 below them mark primitives.
+    BVH_NODE_BITS: u32 = 0xff00_0000;
+    /// The slab distances of a BVH node's quantized child boxes are widened by this
+    /// fraction of (|origin - ray origin| + 256 scale) / |direction| per axis: a bound on
+    /// their rounding error (8 eps, eps = 2^-24; the terms of the slab distance in the
+    /// node's grid can cancel, so a relative widening would not bound it: `bvh_node_hits`).
+    BVH_SLAB_ERROR: f32 = 4.0 * f32::EPSILON;
 
     /// Material flag: emits from both sides.
     MAT_FLAG_TWO_SIDED: u32 = 1;
@@ -215,9 +217,6 @@ shared_constants! {
     /// Cosines and alphas of the sheen's albedo table (`pbr::sheen_albedo_table`), each
     /// from 0 to 1.
     SHEEN_TABLE_SIZE: u32 = 32;
-    /// A BVH node's exit distance is widened by 1 + 2 gamma(3), gamma(n) = n eps /
-    /// (1 - n eps) with eps = 2^-24, so rounding never culls a box a ray touches.
-    BOX_WIDEN: f32 = 1.0 + 3.0 * f32::EPSILON;
     /// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
     /// (v0, v1, v2, 0).
     ATTRIBUTE_ENTRIES: u32 = 4;
@@ -485,17 +484,37 @@ pub struct Params {
     pub pad2: u32,
 }
 
-/// One node of a BVH. Interior (`count` = 0): as `bvh::build` makes them, depth-first, the
-/// first child is the next node and the second `nodes[offset]`; as the flat scene holds
-/// them (`bvh::pair_layout`), the children are `nodes[offset]` and `nodes[offset + 1]`.
-/// Leaf: primitives `offset..offset + count`. The vec3/u32 pairs pack into 16 bytes on both sides.
+/// One node of the renderers' BVH (`bvh::collapse`): up to `BVH_WIDTH` = 8 children in 80
+/// bytes (Ylitie, Karras and Laine 2017), their boxes quantized to 8 bits per plane in the
+/// node's own grid. Child `i`'s box is `origin + scale * q` for its planes' bytes `q`,
+/// rounded outwards, so it always holds the child's exact box.
+///
+/// * `origin`: the grid's origin (the node's lower corner); `scale`: the grid's steps on
+///   x, y and z as the exponent bytes of powers of two (`f32::from_bits(byte << 23)`),
+///   and in its top byte `imask`, bit `i` set when child `i` is a node.
+/// * `child`: the index of the first child node; the child nodes follow it in slot order
+///   (child `i` is `child + popcount(imask & ((1 << i) - 1))`).
+/// * `prim`: the first primitive of the leaf children, whose primitives follow it in slot
+///   order (at most `BVH_WIDTH * WIDE_LEAF_SIZE` = 24).
+/// * `meta0`, `meta1`: one byte per child (children 0-3, 4-7, from the low byte). A
+///   child node: `0b001_11iii` (`24 + i`); a leaf: its count in unary in the top 3 bits
+///   (`0b001`, `0b011`, `0b111`) above its first primitive's offset from `prim` (0-23);
+///   an empty slot: 0. A hit child thus marks `(meta >> 5) << (meta & 31)` in a 32-bit
+///   mask: its primitives in bits 0-23, a node in bits 24-31.
+/// * `q0` = (lo.x of children 0-3, lo.x 4-7, lo.y 0-3, lo.y 4-7), `q1` = (lo.z, lo.z,
+///   hi.x, hi.x), `q2` = (hi.y, hi.y, hi.z, hi.z), a byte per child from the low byte.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct BvhNode {
-    pub lo: [f32; 3],
-    pub offset: u32,
-    pub hi: [f32; 3],
-    pub count: u32,
+    pub origin: [f32; 3],
+    pub scale: u32,
+    pub child: u32,
+    pub prim: u32,
+    pub meta0: u32,
+    pub meta1: u32,
+    pub q0: [u32; 4],
+    pub q1: [u32; 4],
+    pub q2: [u32; 4],
 }
 
 /// One ray of the intersection kernel (`shaders/kernel.wgsl`); `.w` unused.
@@ -635,6 +654,7 @@ pub enum FieldValue {
     F32(f32),
     Vec3([f32; 3]),
     Vec4([f32; 4]),
+    UVec4([u32; 4]),
 }
 
 impl From<u32> for FieldValue {
@@ -655,6 +675,11 @@ impl From<[f32; 3]> for FieldValue {
 impl From<[f32; 4]> for FieldValue {
     fn from(v: [f32; 4]) -> Self {
         FieldValue::Vec4(v)
+    }
+}
+impl From<[u32; 4]> for FieldValue {
+    fn from(v: [u32; 4]) -> Self {
+        FieldValue::UVec4(v)
     }
 }
 
@@ -844,10 +869,15 @@ shared_record!(LightReply {
     punctual_le
 });
 shared_record!(BvhNode {
-    lo,
-    offset,
-    hi,
-    count
+    origin,
+    scale,
+    child,
+    prim,
+    meta0,
+    meta1,
+    q0,
+    q1,
+    q2
 });
 
 /// The layout of every record shared with WGSL.
