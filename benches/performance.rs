@@ -230,6 +230,12 @@ fn mesh_scene(dir: &Path, level: u32) -> PathBuf {
 }
 
 fn main() {
+    // `cargo bench --bench performance -- --generate`: only write the generated inputs of
+    // the suite's scenes (bench/generated/), to render them by hand
+    if std::env::args().any(|a| a == "--generate") {
+        SUITE.iter().for_each(generate);
+        return;
+    }
     let dir = scratch();
     let scene = root().join("bench/cornell.toml");
     let mut md = String::new();
@@ -300,7 +306,7 @@ struct Case {
 /// The benchmark suite: scenes that look like real work, each in both formats with the
 /// same settings (path tracing with emitter sampling and MIS, max depth 8, Russian
 /// roulette from the fourth ray, independent random samples, box pixel filter).
-const SUITE: [Case; 5] = [
+const SUITE: [Case; 6] = [
     Case {
         name: "cornell",
         toml: "bench/cornell.toml",
@@ -332,6 +338,16 @@ const SUITE: [Case; 5] = [
         what: "spot.obj twice, mirror and glass: 11,724 triangles",
     },
     Case {
+        name: "textured",
+        toml: "bench/textured.toml",
+        xml: "bench/textured.xml",
+        width: 256,
+        height: 256,
+        spp: 16,
+        ref_spp: 256,
+        what: "spot.obj twice, textured pbr (base colour, metallic-roughness): 11,724 triangles",
+    },
+    Case {
         name: "nefertiti",
         toml: "bench/nefertiti.toml",
         xml: "bench/nefertiti.xml",
@@ -352,6 +368,74 @@ const SUITE: [Case; 5] = [
         what: "999,698 triangles under the HDR sky",
     },
 ];
+
+/// Writes the generated files a scene of the suite reads, if they are missing.
+fn generate(case: &Case) {
+    match case.name {
+        "heightfield" => {
+            heightfield_obj(1_000_000);
+        }
+        "textured" => tiles_textures(),
+        _ => {}
+    }
+}
+
+/// The maps of bench/textured.toml and its twin, in bench/generated/ if they are not there
+/// yet: 8 x 8 tiles of 64 x 64 texels, mirrored about v = 0.5 (row r and 7 - r alike), a
+/// colour per tile (sRGB), a roughness (0.15 to 0.85) and a metallic (0 or 1) per tile,
+/// packed as glTF's metallic-roughness texture (green, blue) for wgtrace and as two grey
+/// images for Mitsuba.
+fn tiles_textures() {
+    let dir = root().join("bench/generated");
+    let names = [
+        "tiles-color.png",
+        "tiles-mr.png",
+        "tiles-roughness.png",
+        "tiles-metallic.png",
+    ];
+    if names.iter().all(|n| dir.join(n).exists()) {
+        return;
+    }
+    std::fs::create_dir_all(&dir).unwrap();
+    let side = 512u32;
+    let tile = |x: u32, y: u32| {
+        let (i, r) = (x / 64, y / 64);
+        (i, r.min(7 - r))
+    };
+    let color = image::RgbImage::from_fn(side, side, |x, y| {
+        let (i, j) = tile(x, y);
+        let h = (i * 5 + j * 3) % 8;
+        let palette = [
+            [200, 60, 50],
+            [230, 170, 60],
+            [90, 160, 80],
+            [60, 110, 190],
+            [180, 180, 170],
+            [120, 70, 150],
+            [210, 120, 140],
+            [70, 70, 70],
+        ];
+        image::Rgb(palette[h as usize])
+    });
+    let roughness = |x, y| {
+        let (i, j) = tile(x, y);
+        (0.15 + 0.1 * ((i + j) % 8) as f32).min(0.85)
+    };
+    let metallic = |x, y| {
+        let (i, j) = tile(x, y);
+        ((i + 2 * j) % 3 == 0) as u8
+    };
+    let byte = |v: f32| (v * 255.0).round() as u8;
+    let mr = image::RgbImage::from_fn(side, side, |x, y| {
+        image::Rgb([0, byte(roughness(x, y)), 255 * metallic(x, y)])
+    });
+    let rough = image::GrayImage::from_fn(side, side, |x, y| image::Luma([byte(roughness(x, y))]));
+    let metal = image::GrayImage::from_fn(side, side, |x, y| image::Luma([255 * metallic(x, y)]));
+    color.save(dir.join(names[0])).unwrap();
+    mr.save(dir.join(names[1])).unwrap();
+    rough.save(dir.join(names[2])).unwrap();
+    metal.save(dir.join(names[3])).unwrap();
+}
 
 /// The heightfield of `triangles` (about) written by gen_mesh into bench/generated/, if
 /// it is not there yet; its path.
@@ -485,9 +569,7 @@ fn comparison(md: &mut String, dir: &Path) {
     );
     let mut rows = Vec::new();
     for case in &SUITE {
-        if case.name == "heightfield" {
-            heightfield_obj(1_000_000);
-        }
+        generate(case);
         eprintln!("suite: {}", case.name);
         match measure(case, dir) {
             Ok(m) => rows.push((case, m)),
@@ -702,6 +784,7 @@ fn optimizations(md: &mut String, dir: &Path) {
     let mut efficiency = Vec::new();
     for case in &SUITE {
         eprintln!("optimizations: {}", case.name);
+        generate(case);
         let scene = root().join(case.toml);
         let reference = rgb(&wgtrace_reference(case, dir));
         // the first image of a configuration compiles its shader (llvmpipe compiles at
