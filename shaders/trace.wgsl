@@ -343,8 +343,17 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
 
 // 8 x 8 = BVH_STACK_LANES invocations
 @compute @workgroup_size(8, 8, 1)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn main(
+    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(local_invocation_index) lane: u32,
+#ifdef HAS_LANE_STATS
+    @builtin(subgroup_size) subgroup_size: u32,
+#endif
+) {
     stack_lane = lane;
+#ifdef HAS_LANE_STATS
+    lane_subgroup_size = subgroup_size;
+#endif
     if (gid.x >= params.band_width || gid.y >= params.band_height) {
         return;
     }
@@ -374,6 +383,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
     let end = sample + params.sample_count;
     var path = start_path(camera_ray(x, y, sample_2d(pixel, sample, DIM_PIXEL), sample_2d(pixel, sample, DIM_LENS)));
     loop {
+#ifdef HAS_LANE_STATS
+        count_lanes(0u);
+#endif
         if (params.max_depth == 0u || !extend_path(&path, pixel, sample)) {
             let c = path.radiance;
             if (all_finite(c) && all_finite(c * c)) {
@@ -398,6 +410,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
 #else
     // nothing in the scene emits, so no path can carry light: no ray is traced
     sum.w += f32(params.sample_count);
+#endif
+#ifdef HAS_LANE_STATS
+    // the lane statistics instead of light (the counts of samples stay)
+    sum = vec4<f32>(accum[at].xyz + lane_steps, sum.w);
+    sum2 = vec4<f32>(accum[at + 1u].xyz + lane_shares, sum2.w);
 #endif
     accum[at] = sum;
     accum[at + 1u] = sum2;

@@ -28,6 +28,26 @@ impl Accumulation {
         }
     }
 
+    /// What a render under `--tune lane-stats` summed instead of light
+    /// (`gpu::plan::LANE_STATS`): per kind of step (a turn of the bounce loop, a BVH node
+    /// step, a primitive test), the share of the subgroups' lanes that took part in its
+    /// steps, and the lane steps per sample.
+    pub fn lane_shares(&self) -> ([f64; 3], [f64; 3]) {
+        let entries = self.entries();
+        let (mut steps, mut shares, mut samples) = ([0f64; 3], [0f64; 3], 0f64);
+        for pixel in self.data.chunks(entries) {
+            for k in 0..3 {
+                steps[k] += pixel[0][k] as f64;
+                shares[k] += pixel[1][k] as f64;
+            }
+            samples += pixel[0][3] as f64;
+        }
+        (
+            std::array::from_fn(|k| steps[k] / shares[k].max(f64::MIN_POSITIVE)),
+            std::array::from_fn(|k| steps[k] / samples.max(1.0)),
+        )
+    }
+
     pub fn pixel_count(&self) -> usize {
         self.width as usize * self.height as usize
     }

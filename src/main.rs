@@ -573,6 +573,9 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         camera: args.camera.clone(),
     };
     let tuning = args.tune.unwrap_or_default();
+    if tuning.lane_stats && matches!(args.backend, BackendArg::Cpu) {
+        anyhow::bail!("--tune lane-stats counts the GPU's lanes: it needs --backend gpu");
+    }
     let loading = std::time::Instant::now();
     let scene = wgtrace::scene::load(&args.scene, &overrides, tuning.build())?;
     // the first signal stops after the current pass and keeps the work; a second one, for
@@ -653,6 +656,20 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         }
     }
     println!("{line}");
+    if tuning.lane_stats {
+        let (share, per_sample) = done.accumulation.lane_shares();
+        println!(
+            "live lanes (share of the subgroup's lanes in each step, and lane steps per \
+             sample): bounce loop {:.1}% ({:.2}), BVH node steps {:.1}% ({:.2}), BVH \
+             primitive tests {:.1}% ({:.2})",
+            100.0 * share[0],
+            per_sample[0],
+            100.0 * share[1],
+            per_sample[1],
+            100.0 * share[2],
+            per_sample[2]
+        );
+    }
     Ok(())
 }
 

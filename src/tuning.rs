@@ -37,6 +37,11 @@ pub struct Tuning {
     /// Most pixels per band of rows (one accumulation buffer each): fewer, smaller
     /// buffers change no image (the tests hold renders in many bands to one in one).
     pub band_pixels: u32,
+    /// A diagnostic, off unless asked for: the GPU counts with subgroup operations how
+    /// many lanes of each subgroup take part in each turn of the bounce loop, each BVH
+    /// node step and each primitive test, and sums those counts instead of light
+    /// (`gpu::plan::LANE_STATS`; the render then prints the shares).
+    pub lane_stats: bool,
 }
 
 impl Default for Tuning {
@@ -52,6 +57,7 @@ impl Default for Tuning {
             sample_groups: true,
             texture_records: true,
             band_pixels: MAX_BAND_PIXELS,
+            lane_stats: false,
         }
     }
 }
@@ -91,6 +97,11 @@ pub const KNOBS: &[(&str, &str)] = &[
         "trace every path to max_depth (or until it escapes or goes black)",
     ),
     (
+        "lane-stats",
+        "diagnostic (GPU, subgroup operations): print the share of live lanes per bounce, \
+         BVH node step and primitive test; the image then holds those counts, not light",
+    ),
+    (
         "band-pixels=N",
         "at most N pixels per band of rows on the GPU (default 262144: 8 MiB of sums)",
     ),
@@ -128,6 +139,7 @@ impl Tuning {
                 "no-sample-groups" => t.sample_groups = false,
                 "no-texture-records" => t.texture_records = false,
                 "no-russian-roulette" => t.russian_roulette = false,
+                "lane-stats" => t.lane_stats = true,
                 _ if knob.starts_with("band-pixels=") => {
                     t.band_pixels = knob["band-pixels=".len()..]
                         .parse()

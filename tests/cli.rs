@@ -293,6 +293,46 @@ fn features_lists_the_scene_and_no_specialize_renders() {
     );
 }
 
+/// `--tune lane-stats` counts the GPU's live lanes with subgroup operations: every share
+/// of a scene with a BVH is a fraction of the subgroup above 0, with steps per sample; the
+/// CPU backend refuses it.
+#[test]
+fn lane_stats_report_the_share_of_live_lanes() {
+    let scene = common::repo_path("scenes/mesh.toml").display().to_string();
+    let scene = scene.as_str();
+    let out = tmp_dir("lanes").join("l.exr");
+    let o = wgtrace(&[
+        "render",
+        scene,
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--spp",
+        "2",
+        "--tune",
+        "lane-stats",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("live lanes"))
+        .expect("no live-lane line");
+    // "bounce loop 75.3% (1.56), BVH node steps 41.4% (6.38), BVH primitive tests ..."
+    let shares: Vec<f64> = line
+        .split('%')
+        .filter_map(|s| s.rsplit(' ').next()?.parse().ok())
+        .collect();
+    assert_eq!(shares.len(), 3, "{line}");
+    assert!(shares.iter().all(|&s| s > 0.0 && s <= 100.0), "{line}");
+    let o = wgtrace(&["render", scene, "--backend", "cpu", "--tune", "lane-stats"]);
+    assert!(!o.status.success());
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--backend gpu"));
+}
+
 /// A render saves the driver's pipeline cache in `WGTRACE_CACHE_DIR` when the adapter
 /// offers one (lavapipe does), whole (no temporary file left); `off` saves nothing.
 #[test]

@@ -71,14 +71,23 @@ fn every_entry_shader_validates_and_binds_what_it_reads() {
             textured,
         ] {
             // two texel banks: texel_load's switch
-            let spec = ShaderSpec {
+            let mut spec = ShaderSpec {
                 features,
                 placements,
                 banks: 2,
                 scene_code: String::new(),
+                lane_stats: false,
             };
             for entry in ENTRY_SHADERS {
                 module(&spec, entry);
+            }
+            // --tune lane-stats's counts (subgroup operations) in the BVH walk too
+            if features.contains(Feature::Bvh) {
+                spec.lane_stats = true;
+                for entry in ENTRY_SHADERS {
+                    module(&spec, entry);
+                }
+                spec.lane_stats = false;
             }
             let named: Vec<Feature> = features.iter().collect();
             assert_eq!(spec.trace_slots(), naga_slots(&spec), "{named:?}");
@@ -670,6 +679,7 @@ fn traversal_stacks_fit_workgroup_memory_one_column_per_invocation() {
         placements: Placements::default(),
         banks: 1,
         scene_code: String::new(),
+        lane_stats: false,
     };
     for entry in ENTRY_SHADERS {
         let module = module(&spec, entry);

@@ -302,6 +302,24 @@ fn intersect_record(prim: Primitive, tag: u32, ray: Ray, t_max: f32) -> vec3<f32
 // do (nefertiti's bounce loop: 9363 JIT instructions with private stacks, 5152 with these).
 // Each entry point sets stack_lane from its local_invocation_index first.
 var<private> stack_lane: u32;
+
+#ifdef HAS_LANE_STATS
+// --tune lane-stats (gpu::plan::LANE_STATS): per kind of step (x: a turn of the bounce
+// loop, y: a BVH node step, z: a primitive test of the BVH walk), the steps this
+// invocation took part in, and its share of the steps of its subgroup, subgroup size /
+// active lanes at each; summed, their ratio is the share of live lanes. The entry point
+// sets lane_subgroup_size.
+var<private> lane_steps: vec3<f32>;
+var<private> lane_shares: vec3<f32>;
+var<private> lane_subgroup_size: u32;
+
+fn count_lanes(kind: u32) {
+    let lanes = subgroupAdd(1u);
+    let step = select(vec3<f32>(0.0), vec3<f32>(1.0), vec3<u32>(0u, 1u, 2u) == vec3<u32>(kind));
+    lane_steps += step;
+    lane_shares += step * (f32(lane_subgroup_size) / f32(lanes));
+}
+#endif
 #ifdef HAS_BVH
 var<workgroup> bvh_stack: array<vec2<u32>, BVH_STACK_SIZE * BVH_STACK_LANES>;
 #endif
@@ -505,6 +523,9 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
                 sp -= BVH_STACK_LANES;
                 group = bvh_stack[sp];
             }
+#ifdef HAS_LANE_STATS
+            count_lanes(1u);
+#endif
             let bit = firstLeadingBit(group.y);
             group.y ^= 1u << bit;
             let slot = (bit - 24u) ^ order;
@@ -524,6 +545,9 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
             if (prims.y == 0u) {
                 break;
             }
+#ifdef HAS_LANE_STATS
+            count_lanes(2u);
+#endif
             let k = prims.x + firstTrailingBit(prims.y);
             prims.y &= prims.y - 1u;
             best = closer_hit(best, k, intersect_bounded(k, ray, best.t));
@@ -592,6 +616,9 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
                 sp -= BVH_STACK_LANES;
                 group = bvh_stack[sp];
             }
+#ifdef HAS_LANE_STATS
+            count_lanes(1u);
+#endif
             let bit = firstLeadingBit(group.y);
             group.y ^= 1u << bit;
             let slot = (bit - 24u) ^ order;
@@ -611,6 +638,9 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
             if (prims.y == 0u) {
                 break;
             }
+#ifdef HAS_LANE_STATS
+            count_lanes(2u);
+#endif
             let k = prims.x + firstTrailingBit(prims.y);
             prims.y &= prims.y - 1u;
             if (intersect_bounded(k, ray, t_max).x < t_max) {

@@ -239,11 +239,14 @@ impl GpuContext {
             .zip(wgpu::util::pipeline_cache_key(&info))
             .filter(|_| adapter.features().contains(wgpu::Features::PIPELINE_CACHE))
             .map(|(dir, key)| dir.join(format!("{key}.bin")));
-        let required_features = if cache_file.is_some() {
+        let mut required_features = if cache_file.is_some() {
             wgpu::Features::PIPELINE_CACHE
         } else {
             wgpu::Features::empty()
         };
+        // subgroup operations, where the adapter has them: only `--tune lane-stats`'s
+        // shader uses them
+        required_features |= adapter.features() & wgpu::Features::SUBGROUP;
         let (device, queue) =
             pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
                 label: Some("wgtrace"),
@@ -332,7 +335,10 @@ impl GpuContext {
 
     /// What the device can hold and run, for its plans.
     pub fn fit(&self) -> DeviceFit {
-        DeviceFit::new(&self.device.limits(), &self.info.name)
+        DeviceFit {
+            subgroups: self.device.features().contains(wgpu::Features::SUBGROUP),
+            ..DeviceFit::new(&self.device.limits(), &self.info.name)
+        }
     }
 
     /// The trace pipeline for `spec`: compiled on first request, then shared by every

@@ -28,6 +28,8 @@ pub struct DeviceFit {
     pub texture_layers: u32,
     /// Texel banks a shader may bind (`max_sampled_textures_per_shader_stage`).
     pub texel_banks: u32,
+    /// The device has WGSL's subgroup operations (`--tune lane-stats` needs them).
+    pub subgroups: bool,
 }
 
 impl DeviceFit {
@@ -45,6 +47,7 @@ impl DeviceFit {
             texture_rows: limits.max_texture_dimension_2d,
             texture_layers: limits.max_texture_array_layers,
             texel_banks: limits.max_sampled_textures_per_shader_stage,
+            subgroups: false,
         }
     }
 

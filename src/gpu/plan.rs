@@ -358,6 +358,8 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
 #[derive(Clone, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct ShaderSpec {
     pub features: FeatureSet,
+    /// The lane statistics of `--tune lane-stats` ([`LANE_STATS`]).
+    pub lane_stats: bool,
     pub placements: Placements,
     /// Image texel banks the scene has (`scene::texels`): `texel_load` reads these.
     pub banks: u32,
@@ -432,6 +434,9 @@ impl ShaderSpec {
         if f(Feature::Triangle) && !other_bounded.into_iter().any(f) {
             d.insert(BOUNDED_TRIANGLES_ONLY);
         }
+        if self.lane_stats {
+            d.insert(LANE_STATS);
+        }
         d
     }
 
@@ -441,7 +446,7 @@ impl ShaderSpec {
         Feature::all()
             .map(Feature::define)
             .chain(BAKED_DEFINES.map(|(_, d)| d))
-            .chain([BOUNDED_TRIANGLES_ONLY])
+            .chain([BOUNDED_TRIANGLES_ONLY, LANE_STATS])
             .collect()
     }
 
@@ -527,6 +532,12 @@ const BAKED_DEFINES: [(Slot, &str); 3] = [
     (Slot::Emitters, "BAKED_EMITTERS"),
 ];
 
+/// The define of `--tune lane-stats` (`Tuning::lane_stats`): the trace shader enables
+/// WGSL's subgroups and sums, per pixel, the lanes that took part in each turn of the
+/// bounce loop, BVH node step and primitive test in the colour's sums, and each step's
+/// share of the subgroup (subgroup size / active lanes) in the squares' (`lane_shares`).
+pub const LANE_STATS: &str = "HAS_LANE_STATS";
+
 /// The most primitives a scene's shader holds as constants: a scene without the BVH and
 /// without transformed primitives (`codegen::baked_primitives`), which is every scene of
 /// the plain list (`tuning::LIST_MAX_PRIMITIVES`).
@@ -567,6 +578,7 @@ impl GpuPlan {
             ShaderSpec::full_for(scene_features(scene))
         };
         shader.banks = scene.texels.banks.len() as u32;
+        shader.lane_stats = tuning.lane_stats;
         // the full shader reads every array from a storage buffer
         if tuning.specialize {
             for slot in Slot::RECORDS {
@@ -602,8 +614,14 @@ impl GpuPlan {
     }
 
     /// Refuses a render the device cannot hold (a record array past one storage binding)
-    /// or would cut short (llvmpipe's loop limit).
+    /// or would cut short (llvmpipe's loop limit), and lane statistics on a device
+    /// without subgroup operations.
     pub fn check(&self, scene: &FlatScene) -> Result<(), GpuError> {
+        if self.shader.lane_stats && !self.fit.subgroups {
+            return Err(GpuError::Adapter(
+                "--tune lane-stats needs subgroup operations, which this adapter lacks".into(),
+            ));
+        }
         self.fit.check_scene(scene)?;
         self.fit.check_loops(self.path_loops)
     }

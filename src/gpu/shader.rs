@@ -193,9 +193,14 @@ fn validate_with_info(
         message,
     };
     let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| invalid(e.emit_to_string(wgsl)))?;
+    // subgroup operations only in `--tune lane-stats`'s shader (gpu::plan::LANE_STATS)
     let info = naga::valid::Validator::new(
         naga::valid::ValidationFlags::all(),
-        naga::valid::Capabilities::default(),
+        naga::valid::Capabilities::default() | naga::valid::Capabilities::SUBGROUP,
+    )
+    .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
+    .subgroup_operations(
+        naga::valid::SubgroupOperationSet::BASIC | naga::valid::SubgroupOperationSet::ARITHMETIC,
     )
     .validate(&module)
     .map_err(|e| invalid(e.emit_to_string(wgsl)))?;
