@@ -7,6 +7,7 @@
 # reports the largest loop (the longest backward jump) and its commonest instructions.
 #
 # usage: bench/jit-loop-size.sh [SCENE] [WGTRACE]   (needs gdb and binutils)
+# LOOPS=N also lists the N largest loops inside the bounce loop (the BVH walk's).
 # defaults: bench/cornell.toml, target/release/wgtrace
 set -euo pipefail
 SCENE=${1:-bench/cornell.toml}
@@ -45,4 +46,9 @@ stack = sum(1 for _, t in body if re.search(r'\(%r[sb]p\)', t))
 common = collections.Counter(t.split()[0] for _, t in body if t).most_common(8)
 print(f"bounce loop: {len(body)} instructions, {stack} of them on the stack")
 print("commonest: " + ", ".join(f"{k} {v}" for k, v in common))
+# LOOPS=N: the N largest loops inside it too (the BVH walk's node and primitive loops)
+inner = sorted({(e - s, s, e) for e, s in jumps if start <= s and e <= end and (s, e) != (start, end)}, reverse=True)
+for _, s, e in inner[:int(__import__('os').environ.get('LOOPS', '0'))]:
+    n = bisect.bisect(addrs, e) - bisect.bisect_left(addrs, s)
+    print(f"inner loop at +{s - start:#x}: {n} instructions")
 PY
