@@ -395,6 +395,22 @@ fn bvh_child_bits(bytes: u32, inner: u32, order: u32) -> vec4<u32> {
     return (m >> vec4<u32>(5u)) << (m & vec4<u32>(31u));
 }
 
+#ifdef HAS_BVH
+// The walk's next node: the highest node bit of the group (which must hold one) is taken
+// from it and the rest of the group pushed (bvh_stack at sp) if it holds more.
+fn bvh_take(group: ptr<function, vec2<u32>>, sp: ptr<function, u32>, order: u32) -> u32 {
+    let bit = firstLeadingBit((*group).y);
+    (*group).y ^= 1u << bit;
+    let slot = (bit - 24u) ^ order;
+    let index = (*group).x + countOneBits((*group).y & ((1u << slot) - 1u));
+    if (((*group).y & BVH_NODE_BITS) != 0u) {
+        bvh_stack[*sp] = *group;
+        *sp += BVH_STACK_LANES;
+    }
+    return index;
+}
+#endif
+
 // Node n's children that a ray enters before t_max, as the walk's next two groups: (first
 // child node, hit child nodes' bits | imask, first primitive, hit primitives' bits). The
 // quantized boxes' slab distances are (origin - ray origin) / d + q step / d per axis;
@@ -526,14 +542,7 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
 #ifdef HAS_LANE_STATS
             count_lanes(1u);
 #endif
-            let bit = firstLeadingBit(group.y);
-            group.y ^= 1u << bit;
-            let slot = (bit - 24u) ^ order;
-            let index = group.x + countOneBits(group.y & ((1u << slot) - 1u));
-            if ((group.y & BVH_NODE_BITS) != 0u) {
-                bvh_stack[sp] = group;
-                sp += BVH_STACK_LANES;
-            }
+            let index = bvh_take(&group, &sp, order);
             let h = bvh_node_hits(bvh_node(index), ray.origin, inv_dir, order, best.t);
             group = h.xy;
             prims = h.zw;
@@ -619,14 +628,7 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
 #ifdef HAS_LANE_STATS
             count_lanes(1u);
 #endif
-            let bit = firstLeadingBit(group.y);
-            group.y ^= 1u << bit;
-            let slot = (bit - 24u) ^ order;
-            let index = group.x + countOneBits(group.y & ((1u << slot) - 1u));
-            if ((group.y & BVH_NODE_BITS) != 0u) {
-                bvh_stack[sp] = group;
-                sp += BVH_STACK_LANES;
-            }
+            let index = bvh_take(&group, &sp, order);
             let h = bvh_node_hits(bvh_node(index), ray.origin, inv_dir, order, t_max);
             group = h.xy;
             prims = h.zw;
