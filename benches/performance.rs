@@ -873,10 +873,11 @@ const KNOBS: [(&str, &str); 7] = [
 /// scene, in geometric mean and at worst.
 fn optimizations(md: &mut String, dir: &Path) {
     // every knob wgtrace has, but no-bvh (the plain loop on scenes of any size, which
-    // llvmpipe's loop limit refuses on the meshes), is in the table
+    // llvmpipe's loop limit refuses on the meshes) and the lane-stats diagnostic, is in
+    // the table
     for (knob, _) in wgtrace::tuning::KNOBS {
         assert!(
-            *knob == "no-bvh" || KNOBS.iter().any(|(_, k)| k == knob),
+            ["no-bvh", "lane-stats"].contains(knob) || KNOBS.iter().any(|(_, k)| k == knob),
             "the bench does not measure --tune {knob}"
         );
     }
