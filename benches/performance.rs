@@ -260,6 +260,15 @@ fn main() {
             .as_deref()
             .is_none_or(|p| p.split(',').any(|q| q.trim() == name))
     };
+    if let Some(p) = &parts {
+        let icd = std::env::var("VK_ICD_FILENAMES")
+            .map(|f| format!("; the Vulkan driver is the one `VK_ICD_FILENAMES` names ({f})"))
+            .unwrap_or_default();
+        let _ = writeln!(
+            md,
+            "This report holds only the parts `{p}` (`WGTRACE_BENCH_PARTS`){icd}.\n"
+        );
+    }
     let path = root().join(&out);
     let save = |md: &String| std::fs::write(&path, md).expect("write the report");
     if part("comparison") {
