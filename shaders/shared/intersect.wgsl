@@ -515,56 +515,7 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     }
 #endif
 #ifdef HAS_BVH
-    if (params.num_primitives == params.num_unbounded) {
-        return best;
-    }
-    let inv_dir = safe_inverse(ray.dir);
-    let order = bvh_order(inv_dir);
-    // the walk's two groups (bvh_node_hits): child nodes still to visit (a stack entry)
-    // and primitives to test; sp indexes bvh_stack (the entries of this lane are
-    // BVH_STACK_LANES apart); the root is a group of one child node, in slot 0
-    var sp = stack_lane;
-    var group = vec2<u32>(0u, (1u << (24u + order)) | 1u);
-    var prims = vec2<u32>(0u, 0u);
-    var live = true;
-    loop {
-        // Nodes until the lane has primitives to test (tested after the loop, when every
-        // lane of the subgroup has some) or none is left.
-        loop {
-            if ((group.y & BVH_NODE_BITS) == 0u) {
-                if (sp == stack_lane) {
-                    live = false;
-                    break;
-                }
-                sp -= BVH_STACK_LANES;
-                group = bvh_stack[sp];
-            }
-#ifdef HAS_LANE_STATS
-            count_lanes(1u);
-#endif
-            let index = bvh_take(&group, &sp, order);
-            let h = bvh_node_hits(bvh_node(index), ray.origin, inv_dir, order, best.t);
-            group = h.xy;
-            prims = h.zw;
-            if (prims.y != 0u) {
-                break;
-            }
-        }
-        loop {
-            if (prims.y == 0u) {
-                break;
-            }
-#ifdef HAS_LANE_STATS
-            count_lanes(2u);
-#endif
-            let k = prims.x + firstTrailingBit(prims.y);
-            prims.y &= prims.y - 1u;
-            best = closer_hit(best, k, intersect_bounded(k, ray, best.t));
-        }
-        if (!live) {
-            break;
-        }
-    }
+    best = bvh_walk(ray, best, false);
 #endif
     return best;
 #endif
@@ -605,17 +556,30 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
         }
     }
 #endif
+    return bvh_walk(ray, Candidate(t_max, NO_HIT, 0.0, 0.0), true).prim != NO_HIT;
+}
+
+// The BVH walk of intersect_scene and occluded_bvh (the CPU's bvh_walk): the closest hit
+// nearer than start's, or, with any_hit (a constant at each call, which the compiler
+// folds), the first one found, the walk ending there (a shadow ray's). The walk's two
+// groups (bvh_node_hits): child nodes still to visit (a stack entry) and primitives to
+// test; sp indexes bvh_stack (the entries of this lane are BVH_STACK_LANES apart); the
+// root is a group of one child node, in slot 0. Boxes are culled against the closest hit
+// so far (an any-hit walk ends at its first, so it culls against t_max only).
+fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
+    var best = start;
     if (params.num_primitives == params.num_unbounded) {
-        return false;
+        return best;
     }
     let inv_dir = safe_inverse(ray.dir);
     let order = bvh_order(inv_dir);
-    // as in intersect_scene
     var sp = stack_lane;
     var group = vec2<u32>(0u, (1u << (24u + order)) | 1u);
     var prims = vec2<u32>(0u, 0u);
     var live = true;
     loop {
+        // Nodes until the lane has primitives to test (tested after the loop, when every
+        // lane of the subgroup has some) or none is left.
         loop {
             if ((group.y & BVH_NODE_BITS) == 0u) {
                 if (sp == stack_lane) {
@@ -629,7 +593,7 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
             count_lanes(1u);
 #endif
             let index = bvh_take(&group, &sp, order);
-            let h = bvh_node_hits(bvh_node(index), ray.origin, inv_dir, order, t_max);
+            let h = bvh_node_hits(bvh_node(index), ray.origin, inv_dir, order, best.t);
             group = h.xy;
             prims = h.zw;
             if (prims.y != 0u) {
@@ -645,15 +609,17 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
 #endif
             let k = prims.x + firstTrailingBit(prims.y);
             prims.y &= prims.y - 1u;
-            if (intersect_bounded(k, ray, t_max).x < t_max) {
-                return true;
+            best = closer_hit(best, k, intersect_bounded(k, ray, best.t));
+            if (any_hit && best.prim != NO_HIT) {
+                live = false;
+                break;
             }
         }
         if (!live) {
             break;
         }
     }
-    return false;
+    return best;
 }
 #endif
 
