@@ -19,11 +19,13 @@ const MAGIC: &str = "wgtrace checkpoint";
 /// The renderer version a checkpoint must come from.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
-/// The checkpoint format (the `format` line of the header). 2: the scene hash is 64-bit
-/// FNV-1a ([`scene_hash`]), the same on every build. Format 1 (no `format` line) hashed
-/// with Rust's `DefaultHasher`, which a new Rust release may change, so a rebuilt binary
-/// could refuse a good checkpoint or accept a wrong one; such files are refused.
-pub const FORMAT: u32 = 2;
+/// The checkpoint format (the `format` line of the header). 3: the scene hash covers every
+/// byte of every record ([`scene_hash`]). Format 2 hashed a material record only up to its
+/// first 96 bytes unless pbr had a layer, so a material keeping parameters past them would
+/// not change its hash, and `--resume` or `merge` would take samples of another scene;
+/// format 1 (no `format` line) hashed with Rust's `DefaultHasher`, which a new Rust
+/// release may change. Files of either are refused with the reason.
+pub const FORMAT: u32 = 3;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
@@ -101,45 +103,22 @@ pub fn fnv1a64(hash: u64, bytes: &[u8]) -> u64 {
 /// FNV-1a's offset basis: the hash of nothing.
 pub const FNV1A64_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
 
-/// The size of a material record before pbr's layers grew it (`scene_hash`).
-const MATERIAL_BYTES_BEFORE_LAYERS: usize = 96;
-
-/// A hash of everything that decides a render's samples: the records both backends read,
-/// the tables, the texel banks (their kinds and sizes, then their bytes) and the
-/// parameters (camera, size, seed, sampler, light sampling, depth), as their
-/// little-endian bytes, each array preceded by its length (a material's record only up to
-/// its layers' places unless it has a layer, so that a scene hashes as it did before
-/// records had them). The sample count is left out,
+/// A hash of everything that decides a render's samples: every byte of the records both
+/// backends read, the tables, the texel banks (their kinds and sizes, then their bytes)
+/// and the parameters (camera, size, seed, sampler, light sampling, depth), as their
+/// little-endian bytes, each array preceded by its length. The sample count is left out,
 /// so a resumed render may ask for more samples, except for samplers whose points depend
 /// on it (`SamplerKind::depends_on_spp`).
 pub fn scene_hash(scene: &FlatScene) -> u64 {
-    use crate::scene::materials::pbr;
     let mut params = scene.params(0, scene.full_band());
     if !scene.sampler.depends_on_spp() {
         params.spp = 0;
         params.strata_log2 = 0;
     }
-    // a material's places past its first 96 bytes (pbr's layers and the per-hit ones)
-    // where it has a layer: a scene without one hashes as it did before they existed
-    let pbr = crate::scene::materials::MaterialKind::Pbr.tag();
-    let materials: Vec<u8> = scene
-        .materials
-        .iter()
-        .flat_map(|m| {
-            let bytes = bytemuck::bytes_of(m);
-            let layered = m.tag == pbr && (pbr::has_clearcoat(m) || pbr::has_sheen(m));
-            let end = if layered {
-                bytes.len()
-            } else {
-                MATERIAL_BYTES_BEFORE_LAYERS
-            };
-            bytes[..end].to_vec()
-        })
-        .collect();
     let parts: [&[u8]; 8] = [
         bytemuck::bytes_of(&params),
         bytemuck::cast_slice(&scene.primitives),
-        &materials,
+        bytemuck::cast_slice(&scene.materials),
         bytemuck::cast_slice(&scene.emitters),
         bytemuck::cast_slice(&scene.bvh),
         bytemuck::cast_slice(&scene.shape_data),
@@ -319,9 +298,12 @@ impl Checkpoint {
                 reason: format!(
                     "is checkpoint format {format}, this wgtrace reads format {FORMAT}{}; \
                      render again",
-                    if format < FORMAT {
+                    if format == 1 {
                         " (format 1 hashed the scene with Rust's DefaultHasher, which may \
                          change between builds, so its hash cannot be trusted)"
+                    } else if format < FORMAT {
+                        " (its scene hash left out part of each material record, so it \
+                         cannot tell this scene from one that differs there)"
                     } else {
                         " (written by a newer wgtrace)"
                     }

@@ -47,7 +47,7 @@ fn the_scene_hash_is_the_same_on_every_build() {
     let scene = common::scene_from_str(SPHERE);
     assert_eq!(
         scene_hash(&scene),
-        0xd60a_043f_0ae8_0e60,
+        0x4ca2_bb9f_ac22_849c,
         "the scene hash changed: checkpoints written before are refused as another scene's"
     );
     let with =
@@ -59,8 +59,9 @@ fn the_scene_hash_is_the_same_on_every_build() {
     assert_ne!(hammersley("8"), hammersley("64"));
 }
 
-/// A checkpoint of the older format (no `format` line: its scene hash came from Rust's
-/// `DefaultHasher`) is refused, saying why; the current format round-trips.
+/// A checkpoint of an older format (1, no `format` line: its scene hash came from Rust's
+/// `DefaultHasher`; 2: its hash left out part of each material record) is refused, saying
+/// why, and so is a newer one; the current format round-trips.
 #[test]
 fn an_older_checkpoint_format_is_refused_with_the_reason() {
     let dir = common::tmp_dir("checkpoint-format");
@@ -92,6 +93,19 @@ fn an_older_checkpoint_format_is_refused_with_the_reason() {
             && err.contains("render again"),
         "{err}"
     );
+    // format 2 hashed only part of each material record
+    let two = dir.join("two.ckpt");
+    let v2 =
+        String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "format = 2\n");
+    std::fs::write(&two, v2.as_bytes()).unwrap();
+    let err = Checkpoint::read(&two).unwrap_err().to_string();
+    assert!(
+        err.contains("two.ckpt")
+            && err.contains("format 2")
+            && err.contains("material record")
+            && err.contains("render again"),
+        "{err}"
+    );
     let newer = dir.join("newer.ckpt");
     let v3 =
         String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "format = 99\n");
@@ -101,4 +115,81 @@ fn an_older_checkpoint_format_is_refused_with_the_reason() {
         err.contains("format 99") && err.contains("newer wgtrace"),
         "{err}"
     );
+}
+
+/// The scene hash sees every byte the renderers read: in a scene with every kind of record
+/// (showcase: primitives, materials, lights, BVH nodes, shape data, textures, tables and
+/// texel banks), changing one value in any 16-byte region of any record of any array
+/// changes the hash, so `--resume` and `merge` refuse samples of a scene that differs
+/// there (format 2 hashed only a material's first 96 bytes).
+#[test]
+fn the_scene_hash_sees_every_region_of_every_record() {
+    let scene = wgtrace::load_scene(
+        &common::repo_path("scenes/showcase.toml"),
+        &wgtrace::scene::load::Overrides::default(),
+    )
+    .unwrap();
+    let base = scene_hash(&scene);
+    // (array name, record bytes, a way to reach the array's bytes in a clone)
+    type Bytes = fn(&mut wgtrace::FlatScene) -> &mut [u8];
+    let arrays: [(&str, usize, Bytes); 7] = [
+        ("primitives", 64, |s| {
+            bytemuck::cast_slice_mut(&mut s.primitives)
+        }),
+        (
+            "materials",
+            std::mem::size_of::<wgtrace::scene::records::Material>(),
+            |s| bytemuck::cast_slice_mut(&mut s.materials),
+        ),
+        (
+            "emitters",
+            std::mem::size_of::<wgtrace::scene::records::Emitter>(),
+            |s| bytemuck::cast_slice_mut(&mut s.emitters),
+        ),
+        ("bvh", 80, |s| bytemuck::cast_slice_mut(&mut s.bvh)),
+        ("shape_data", 16, |s| {
+            bytemuck::cast_slice_mut(&mut s.shape_data)
+        }),
+        (
+            "textures",
+            std::mem::size_of::<wgtrace::scene::records::Texture>(),
+            |s| bytemuck::cast_slice_mut(&mut s.textures),
+        ),
+        ("tables", 16, |s| bytemuck::cast_slice_mut(&mut s.tables)),
+    ];
+    let mut pairs = 0;
+    for (name, size, bytes) in arrays {
+        let n = {
+            let mut s = scene.clone();
+            bytes(&mut s).len() / size
+        };
+        assert!(
+            n > 0,
+            "showcase has no {name}: the test would not cover them"
+        );
+        // each 16-byte region of the record, in the first and the last record
+        for record in [0, n - 1] {
+            for region in (0..size).step_by(16) {
+                let mut changed = scene.clone();
+                let at = record * size + region;
+                // the region's last byte: the high byte of its last u32 or f32
+                bytes(&mut changed)[at + 15] ^= 0x01;
+                assert_ne!(
+                    scene_hash(&changed),
+                    base,
+                    "{name}[{record}] bytes {region}..{}: a change there leaves the hash as it was",
+                    region + 16
+                );
+                pairs += 1;
+            }
+        }
+    }
+    let mut changed = scene.clone();
+    changed.texels.banks[0].data[0] ^= 1;
+    assert_ne!(
+        scene_hash(&changed),
+        base,
+        "a texel's change leaves the hash"
+    );
+    eprintln!("{pairs} record regions change the hash");
 }
