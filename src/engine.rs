@@ -9,6 +9,7 @@ use crate::gpu::context::GpuContext;
 use crate::gpu::error::GpuError;
 use crate::gpu::render::GpuRenderer;
 use crate::scene::flat::FlatScene;
+use crate::spot_check::open_checked;
 use crate::tuning::Tuning;
 
 /// Which backend renders.
@@ -32,10 +33,21 @@ impl Engine {
         Self::gpu_tuned(scene, adapter, &Tuning::default())
     }
 
-    /// Opens the GPU backend under `tuning`.
+    /// Opens the GPU backend under `tuning`, spot-checked against the CPU reference
+    /// ([`crate::spot_check::open_checked`]: it may fall back to safer record placements,
+    /// with a [`Engine::note`], or refuse the adapter).
     pub fn gpu_tuned(scene: &FlatScene, adapter: usize, tuning: &Tuning) -> Result<Self, GpuError> {
         let ctx = GpuContext::shared(adapter)?;
-        Ok(Engine::Gpu(Box::new(GpuRenderer::new(ctx, scene, tuning)?)))
+        Ok(Engine::Gpu(Box::new(open_checked(ctx, scene, tuning)?)))
+    }
+
+    /// A note for the user about how the backend was opened (a spot check that fell back
+    /// to safer record placements), if any.
+    pub fn note(&self) -> Option<&str> {
+        match self {
+            Engine::Gpu(g) => g.note(),
+            Engine::Cpu(_) => None,
+        }
     }
 
     /// Opens the CPU reference.

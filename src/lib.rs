@@ -10,6 +10,7 @@
 
 pub mod accumulation;
 pub mod aov;
+pub mod check;
 pub mod checkpoint;
 pub mod converge;
 pub mod cpu;
@@ -20,6 +21,7 @@ pub mod image_io;
 pub mod report;
 pub mod scene;
 pub mod session;
+pub mod spot_check;
 pub mod tuning;
 
 pub use accumulation::Accumulation;

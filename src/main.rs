@@ -61,6 +61,19 @@ enum Command {
     },
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
+    /// Check a GPU and its driver against the CPU reference: for each scene class (no
+    /// BVH, BVH, triangle mesh) and record placement (shader, uniform, texture, storage),
+    /// compare rays one by one and a spot check of a render. Prints a table; exits non-zero
+    /// on any mismatch. Run it on a new GPU or driver.
+    Check {
+        /// Which Vulkan adapter: an index from `wgtrace info`, or part of its name.
+        #[arg(long, value_name = "INDEX|NAME")]
+        adapter: Option<String>,
+        /// Tuning knobs under the placements (see `render --help`); `perturb=all` shows a
+        /// failing check.
+        #[arg(long, value_name = "KNOBS", value_parser = Tuning::parse)]
+        tune: Option<Tuning>,
+    },
     /// Combine checkpoints of one scene rendered over disjoint sample ranges
     /// (`render --sample-range`) into one image, and optionally one checkpoint.
     Merge {
@@ -288,12 +301,24 @@ fn positive_f64(s: &str) -> Result<f64, String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // llvmpipe compiles a scene's shader at its first use: seconds for a specialized one,
+    // minutes for the full one on a wide CPU
+    static NOTICE: std::sync::Once = std::sync::Once::new();
+    wgtrace::gpu::context::set_compile_notice(|| {
+        NOTICE.call_once(|| {
+            eprintln!(
+                "waiting for the driver to compile this scene's shader (its first use on this \
+             machine; later renders reuse it); Ctrl-C ends at once"
+            )
+        })
+    });
     let result = match cli.command {
         Command::Render(args) => render(args),
         Command::Converge(args) => converge(args),
         Command::Features { scene } => features(&scene),
         Command::Validate { scenes } => validate(&scenes),
         Command::Info => info(),
+        Command::Check { adapter, tune } => check(adapter.as_deref(), tune.unwrap_or_default()),
         Command::Merge {
             checkpoints,
             output,
@@ -413,6 +438,80 @@ fn info() -> anyhow::Result<()> {
     Ok(())
 }
 
+fn check(adapter: Option<&str>, tuning: Tuning) -> anyhow::Result<()> {
+    let selected = wgtrace::gpu::context::select_adapter(adapter)?;
+    let ctx = wgtrace::gpu::GpuContext::shared(selected.index)?;
+    println!("adapter: {}", wgtrace::gpu::context::describe(&ctx.info));
+    println!(
+        "{} rays per row against the CPU reference (at most 1 in 1000 may differ: edges), and a \
+         spot check of {} x {} pixel tiles of a render's first sample (at least {}% agree)",
+        wgtrace::check::RAYS,
+        wgtrace::spot_check::GRID * wgtrace::spot_check::GRID,
+        wgtrace::spot_check::TILE * wgtrace::spot_check::TILE,
+        wgtrace::spot_check::MIN_AGREEMENT * 100.0
+    );
+    println!(
+        "{:<6} {:<9} {:<12} {:>8} {:<22} {:>8}  records",
+        "class", "placement", "rays differ", "kernel", "spot check", "render"
+    );
+    let started = std::time::Instant::now();
+    let rows = wgtrace::check::run(ctx, &tuning, |r| {
+        println!(
+            "{:<6} {:<9} {:<12} {:>7.2}s {:<22} {:>7.2}s  {}",
+            r.class,
+            r.placement,
+            format!(
+                "{} {}",
+                r.rays_differ,
+                if r.rays_differ * 1000 <= r.rays {
+                    "ok"
+                } else {
+                    "FAIL"
+                }
+            ),
+            r.kernel_time.as_secs_f64(),
+            format!(
+                "{}/{} {}",
+                r.spot.agreeing,
+                r.spot.pixels,
+                if r.spot.passed() { "ok" } else { "FAIL" }
+            ),
+            r.spot.gpu_time.as_secs_f64(),
+            r.records
+        );
+    })?;
+    let failed: Vec<_> = rows.iter().filter(|r| !r.passed()).collect();
+    for r in &failed {
+        if let Some(d) = &r.first_ray_difference {
+            println!("{} / {}: first ray that differs: {d}", r.class, r.placement);
+        }
+        if !r.spot.passed() {
+            println!(
+                "{} / {}: spot check: {}",
+                r.class,
+                r.placement,
+                r.spot.describe()
+            );
+        }
+    }
+    let secs = started.elapsed().as_secs_f64();
+    if failed.is_empty() {
+        println!(
+            "all {} rows agree with the CPU reference ({secs:.1} s)",
+            rows.len()
+        );
+        Ok(())
+    } else {
+        anyhow::bail!(
+            "{} of {} rows differ from the CPU reference ({secs:.1} s): renders on this \
+             adapter are refused where their placement differs; render with --backend cpu, \
+             or use another driver (for lavapipe, Mesa 25 from Debian's bookworm-backports)",
+            failed.len(),
+            rows.len()
+        )
+    }
+}
+
 fn features(path: &Path) -> anyhow::Result<()> {
     use wgtrace::gpu::bindings::{Placement, Slot};
     use wgtrace::gpu::plan::ShaderSpec;
@@ -513,7 +612,14 @@ fn converge(args: ConvergeArgs) -> anyhow::Result<()> {
         1,
         "{elapsed_precise} [{bar:30}] {pos}/{len} {msg}",
     );
+    let mut notes = std::collections::HashSet::new();
     let study = converge::run(&opts, |e| match e {
+        Event::Note(note) => {
+            // every render of the study opens a backend: each note once
+            if notes.insert(note.to_string()) {
+                bar.suspend(|| eprintln!("{note}"));
+            }
+        }
         Event::Reference { spp, done } => {
             bar.set_length(spp as u64);
             bar.set_position(done as u64);
@@ -579,11 +685,14 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
     let loading = std::time::Instant::now();
     let scene = wgtrace::scene::load(&args.scene, &overrides, tuning.build())?;
     // the first signal stops after the current pass and keeps the work; a second one, for
-    // a pass that takes too long, exits at once
+    // a pass that takes too long, exits at once, and so does the first while the driver
+    // compiles the shader (no sample is in flight then, and nothing is half-written)
     let interrupt = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     let flag = interrupt.clone();
     ctrlc::set_handler(move || {
-        if flag.swap(true, std::sync::atomic::Ordering::SeqCst) {
+        if wgtrace::gpu::context::compiling()
+            || flag.swap(true, std::sync::atomic::Ordering::SeqCst)
+        {
             std::process::exit(130);
         }
     })

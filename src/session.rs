@@ -298,7 +298,8 @@ pub struct Session {
     scene: FlatScene,
     engine: Engine,
     opts: SessionOptions,
-    /// A note for the user (the CPU renders because no Vulkan adapter exists).
+    /// A note for the user (the CPU renders because no Vulkan adapter exists; the spot
+    /// check fell back to safer record placements).
     note: Option<String>,
     range: Range<u32>,
     /// The next sample index.
@@ -326,6 +327,7 @@ impl Session {
         } else {
             (Engine::with(&scene, opts.backend, &opts.tuning)?, None)
         };
+        let note = note.or_else(|| engine.note().map(str::to_string));
         let mut session = Self::start(scene, engine, opts, start)?;
         session.note = note;
         Ok(session)
@@ -340,7 +342,10 @@ impl Session {
         opts: SessionOptions,
     ) -> Result<Session, SessionError> {
         let start = Self::prepare(&mut scene, &opts, true)?;
-        Self::start(scene, engine, opts, start)
+        let note = engine.note().map(str::to_string);
+        let mut session = Self::start(scene, engine, opts, start)?;
+        session.note = note;
+        Ok(session)
     }
 
     /// What can be checked before a backend opens: the files to write, the sample range,
@@ -480,7 +485,7 @@ impl Session {
     }
 
     /// A note for the user about the backend (the CPU renders because no Vulkan adapter
-    /// exists).
+    /// exists; the spot check fell back to safer record placements).
     pub fn note(&self) -> Option<&str> {
         self.note.as_deref()
     }

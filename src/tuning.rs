@@ -42,7 +42,22 @@ pub struct Tuning {
     /// node step and each primitive test, and sums those counts instead of light
     /// (`gpu::plan::LANE_STATS`; the render then prints the shares).
     pub lane_stats: bool,
+    /// Before a GPU render accumulates, a few hundred pixels of its first sample are
+    /// rendered on both backends and compared (`crate::spot_check`); on a mismatch the
+    /// render falls back to safer record placements, and errors when none agrees.
+    pub spot_check: bool,
+    /// Fault injection for tests, off unless asked for: the GPU side's records in these
+    /// placements (bits of [`PLACEMENT_NAMES`]) are perturbed, one texel of every record,
+    /// as a driver that fetches them wrong would (`gpu::fault`); the CPU's are not.
+    pub perturb: u8,
 }
+
+/// The record placements a `perturb=` knob may name, bit i for name i (the GPU plan's
+/// `gpu::bindings::Placement`, `Placement::bit`).
+pub const PLACEMENT_NAMES: [&str; 4] = ["storage", "uniform", "shader", "texture"];
+
+/// Every placement's bit.
+pub const ALL_PLACEMENTS: u8 = (1 << PLACEMENT_NAMES.len()) - 1;
 
 impl Default for Tuning {
     fn default() -> Self {
@@ -58,6 +73,8 @@ impl Default for Tuning {
             texture_records: true,
             band_pixels: MAX_BAND_PIXELS,
             lane_stats: false,
+            spot_check: true,
+            perturb: 0,
         }
     }
 }
@@ -102,6 +119,17 @@ pub const KNOBS: &[(&str, &str)] = &[
          BVH node step and primitive test; the image then holds those counts, not light",
     ),
     (
+        "no-spot-check",
+        "skip the spot check that renders a few hundred pixels of the first sample on both \
+         backends before a GPU render and refuses a GPU that disagrees",
+    ),
+    (
+        "perturb=PLACES",
+        "fault injection for tests: perturb one texel of every GPU-side record placed in \
+         PLACES (storage, uniform, shader, texture, joined by +, or all), as a driver that \
+         fetched them wrong would",
+    ),
+    (
         "band-pixels=N",
         "at most N pixels per band of rows on the GPU (default 262144: 8 MiB of sums)",
     ),
@@ -140,6 +168,24 @@ impl Tuning {
                 "no-texture-records" => t.texture_records = false,
                 "no-russian-roulette" => t.russian_roulette = false,
                 "lane-stats" => t.lane_stats = true,
+                "no-spot-check" => t.spot_check = false,
+                _ if knob.starts_with("perturb=") => {
+                    for place in knob["perturb=".len()..].split('+') {
+                        t.perturb |= match place {
+                            "all" => ALL_PLACEMENTS,
+                            _ => PLACEMENT_NAMES
+                                .iter()
+                                .position(|&n| n == place)
+                                .map(|i| 1 << i)
+                                .ok_or_else(|| {
+                                    format!(
+                                        "\"{knob}\": perturb takes {} or all, joined by +",
+                                        PLACEMENT_NAMES.join(", ")
+                                    )
+                                })?,
+                        };
+                    }
+                }
                 _ if knob.starts_with("band-pixels=") => {
                     t.band_pixels = knob["band-pixels=".len()..]
                         .parse()

@@ -647,3 +647,53 @@ fn banded_and_whole_renders_are_identical() {
     assert!(bytes(&whole) == bytes(&banded), "banded differs");
     assert!(bytes(&whole) == bytes(&resumed), "banded resume differs");
 }
+
+/// While the driver compiles a shader no sample is in flight: the render says it is
+/// waiting, and a first Ctrl-C ends it at once (exit 130), writing nothing. The full
+/// shader, with every cache off, keeps llvmpipe compiling for minutes.
+#[test]
+fn ctrl_c_while_the_driver_compiles_ends_at_once() {
+    use std::io::{BufRead, BufReader};
+    let dir = tmp_dir("compile-interrupt");
+    let png = dir.join("c.png");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+        .args([
+            "render",
+            &cornell(),
+            "--tune",
+            "no-specialize",
+            "--spp",
+            "1",
+        ])
+        .args(["--width", "8", "--height", "8", "-o"])
+        .arg(&png)
+        .env("WGTRACE_CACHE_DIR", "off")
+        .env("MESA_SHADER_CACHE_DISABLE", "true")
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("run wgtrace");
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let mut seen = String::new();
+    loop {
+        let mut line = String::new();
+        if stderr.read_line(&mut line).unwrap() == 0 {
+            panic!("wgtrace ended without a compile notice:\n{seen}");
+        }
+        seen += &line;
+        if line.contains("waiting for the driver to compile") {
+            break;
+        }
+    }
+    assert!(seen.contains("Ctrl-C ends at once"), "{seen}");
+    let kill = Command::new("sh")
+        .args(["-c", &format!("kill -INT {}", child.id())])
+        .status()
+        .expect("run sh");
+    assert!(kill.success());
+    let sent = std::time::Instant::now();
+    let status = child.wait().expect("wait for wgtrace");
+    let took = sent.elapsed();
+    assert_eq!(status.code(), Some(130), "{seen}");
+    assert!(took.as_secs_f64() < 5.0, "it took {took:?} to end");
+    assert!(!png.exists(), "an image was written");
+}

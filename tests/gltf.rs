@@ -1411,7 +1411,7 @@ fn vertex_colours_second_uv_sets_and_sampler_modes_are_read() {
         })
         .collect();
     let kernel: Vec<_> = rays.iter().map(common::to_kernel).collect();
-    let gpu = wgtrace::gpu::kernel::intersect_rays(&ctx, &s, &kernel).unwrap();
+    let gpu = wgtrace::gpu::kernel::intersect_rays(&ctx, &s, &Default::default(), &kernel).unwrap();
     let mut hits = 0;
     for (r, g) in rays.iter().zip(&gpu) {
         let c = intersect_scene(&b, r, FAR);

@@ -173,7 +173,7 @@ material = "wall"
         .filter(|r| intersect_scene(&b, r, FAR).prim == NO_HIT)
         .count();
     let kernel: Vec<KernelRay> = rays.iter().map(common::to_kernel).collect();
-    let gpu = intersect_rays(&common::gpu_context(), &scene, &kernel).unwrap();
+    let gpu = intersect_rays(&common::gpu_context(), &scene, &Default::default(), &kernel).unwrap();
     let gpu_miss = gpu.iter().filter(|h| h.prim == NO_HIT).count();
     let mt_miss = rays
         .iter()
@@ -318,7 +318,7 @@ material = "m"
         }
     }
     let kernel: Vec<KernelRay> = rays.iter().map(common::to_kernel).collect();
-    let gpu = intersect_rays(&common::gpu_context(), &scene, &kernel).unwrap();
+    let gpu = intersect_rays(&common::gpu_context(), &scene, &Default::default(), &kernel).unwrap();
     for ((r, w), g) in rays.iter().zip(&want).zip(&gpu) {
         let h = intersect_scene(&b, r, FAR);
         assert_eq!(h.prim != NO_HIT, *w, "CPU {r:?}");

@@ -217,7 +217,7 @@ fn gpu_texture_lookups_match_the_cpu_for_every_texture_type() {
     }
     // 8-bit, half and float images: three texel banks, and the look-ups' switch over them
     assert_eq!(s.texels.banks.len(), 3);
-    let gpu = lookup_textures(&ctx, &s, &lookups).expect("texture kernel");
+    let gpu = lookup_textures(&ctx, &s, &Default::default(), &lookups).expect("texture kernel");
     let mut worst = 0.0f32;
     let b = Bindings::new(&s, s.params(0, s.full_band()));
     for (l, g) in lookups.iter().zip(&gpu) {

@@ -46,6 +46,9 @@ pub enum Event<'a> {
         cached: bool,
     },
     Measured(&'a Measurement),
+    /// A note from opening a render's backend (a spot check that fell back to safer
+    /// record placements), for the user.
+    Note(&'a str),
     /// Work units (passes) done of the total, for a bar.
     Passes {
         done: u64,

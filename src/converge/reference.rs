@@ -75,6 +75,9 @@ pub fn reference(
     };
     let scene = load(&opts.scene, &overrides)?;
     let mut session = session(scene.clone(), opts.reference_backend)?;
+    if let Some(note) = session.note() {
+        event(Event::Note(note));
+    }
     let start = Instant::now();
     let Finished {
         accumulation: acc, ..

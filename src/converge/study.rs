@@ -164,6 +164,9 @@ impl Log {
         event: &mut impl FnMut(Event),
     ) -> Result<(), ConvergeError> {
         let mut session = session(scene, backend)?;
+        if let Some(note) = session.note() {
+            event(Event::Note(note));
+        }
         study.device = session.device();
         let mut busy = Duration::ZERO;
         for &spp in render.points {

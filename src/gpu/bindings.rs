@@ -194,6 +194,27 @@ pub enum Placement {
     Texture,
 }
 
+impl Placement {
+    /// Its bit in a set of placements (`Tuning::perturb`): the index of its name in
+    /// `tuning::PLACEMENT_NAMES`.
+    pub fn bit(self) -> u8 {
+        1 << crate::tuning::PLACEMENT_NAMES
+            .iter()
+            .position(|&n| n == self.name())
+            .expect("every placement is named")
+    }
+
+    /// Its name (`tuning::PLACEMENT_NAMES`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Placement::Storage => "storage",
+            Placement::Uniform => "uniform",
+            Placement::Shader => "shader",
+            Placement::Texture => "texture",
+        }
+    }
+}
+
 /// Texels per row of a record texture (a power of two: the index splits by mask and
 /// shift).
 pub const TEXTURE_WIDTH: u32 = 2048;

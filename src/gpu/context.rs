@@ -26,6 +26,48 @@ pub struct GpuContext {
     fault: Arc<Mutex<Option<Fault>>>,
 }
 
+/// How long the first submission of a pipeline may wait before the compile notice is
+/// given ([`GpuContext::wait_first`]).
+pub const COMPILE_NOTICE_AFTER: std::time::Duration = std::time::Duration::from_millis(1500);
+
+static COMPILE_NOTICE: OnceLock<Box<dyn Fn() + Send + Sync>> = OnceLock::new();
+static COMPILING: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+
+/// Sets what is called, once per slow first dispatch of a pipeline, while the driver
+/// compiles its shader (the CLI prints a line); the first call wins.
+pub fn set_compile_notice(notice: impl Fn() + Send + Sync + 'static) {
+    let _ = COMPILE_NOTICE.set(Box::new(notice));
+}
+
+/// Whether a first dispatch is waiting (on the driver's compile, on llvmpipe), so that no
+/// sample of this process's renders is in flight that an interrupt could keep.
+pub fn compiling() -> bool {
+    COMPILING.load(std::sync::atomic::Ordering::SeqCst) > 0
+}
+
+/// Runs `f`, which may wait on the driver compiling a shader: when it takes longer than
+/// [`COMPILE_NOTICE_AFTER`], the notice set by [`set_compile_notice`] is called once, and
+/// [`compiling`] is true while it runs.
+fn watch_compile<T>(f: impl FnOnce() -> T) -> T {
+    use std::sync::atomic::Ordering;
+    COMPILING.fetch_add(1, Ordering::SeqCst);
+    let (done, waiting) = std::sync::mpsc::channel::<()>();
+    let watch = std::thread::spawn(move || {
+        if let Err(std::sync::mpsc::RecvTimeoutError::Timeout) =
+            waiting.recv_timeout(COMPILE_NOTICE_AFTER)
+        {
+            if let Some(notice) = COMPILE_NOTICE.get() {
+                notice();
+            }
+        }
+    });
+    let result = f();
+    let _ = done.send(());
+    let _ = watch.join();
+    COMPILING.fetch_sub(1, Ordering::SeqCst);
+    result
+}
+
 /// What went wrong with a device, as its callbacks report it.
 #[derive(Debug, Clone)]
 enum Fault {
@@ -366,6 +408,20 @@ impl GpuContext {
         }
     }
 
+    /// [`Self::wait`] for a submission that used `pipeline`. The first one that does may
+    /// wait on the driver compiling its shader (llvmpipe compiles at the first dispatch:
+    /// seconds for a specialized shader, minutes for the full one); when that wait passes
+    /// [`COMPILE_NOTICE_AFTER`], the notice set by [`set_compile_notice`] is called once
+    /// (the CLI prints a line), and [`compiling`] is true until it ends, so a Ctrl-C
+    /// handler can end the program at once rather than after it.
+    pub fn wait_first(&self, pipeline: &TracePipeline) -> Result<(), GpuError> {
+        use std::sync::atomic::Ordering;
+        if pipeline.dispatched.swap(true, Ordering::SeqCst) {
+            return self.wait();
+        }
+        watch_compile(|| self.wait())
+    }
+
     /// What the device can hold and run, for its plans.
     pub fn fit(&self) -> DeviceFit {
         DeviceFit {
@@ -383,7 +439,9 @@ impl GpuContext {
         }
         // compiled outside the lock: two renders that race compile twice, and keep one
         let cache = self.disk_cache.as_ref().map(|d| &d.cache);
-        let p = Arc::new(compile_trace_pipeline(&self.device, spec, cache)?);
+        let p = Arc::new(watch_compile(|| {
+            compile_trace_pipeline(&self.device, spec, cache)
+        })?);
         let p = lock().entry(spec.clone()).or_insert(p).clone();
         self.save_disk_cache();
         Ok(p)

@@ -52,6 +52,23 @@ pub enum GpuError {
         texel_mib: u64,
         detail: String,
     },
+    /// The spot check found the GPU's image of the scene's first sample unlike the CPU
+    /// reference's under every record placement it tried (`crate::spot_check`).
+    #[error(
+        "{adapter} renders this scene wrong: the first sample of {pixels} pixels, rendered \
+         on it and on the CPU reference, disagreed under every record placement tried \
+         ({tried}); render with --backend cpu, or use another driver (on Debian 12, Mesa \
+         25 from bookworm-backports renders right where Mesa 22.3.6's lavapipe on some \
+         AVX-512 CPUs does not), and `wgtrace check` tells which placements this one gets \
+         wrong"
+    )]
+    WrongResults {
+        /// The adapter and its driver.
+        adapter: String,
+        pixels: usize,
+        /// Each placement tried and what differed.
+        tried: String,
+    },
     #[error("the GPU device was lost ({0})")]
     Lost(String),
     #[error("the GPU reported an error: {0}")]

@@ -7,6 +7,7 @@ use wgpu::util::DeviceExt;
 use super::bindings::{bind_scene, layout, scene_buffers, Slot};
 use super::context::GpuContext;
 use super::error::GpuError;
+use super::fault;
 use super::plan::{Feature, GpuPlan};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{
@@ -33,12 +34,21 @@ pub const KERNEL_IO: [(&str, u32); 8] = [
     ("light_replies", 7),
 ];
 
-/// The plan the default tuning gives `scene` on the device, refused when one ray's loops
-/// would pass the device's loop limit.
-fn plan(ctx: &GpuContext, scene: &FlatScene) -> Result<GpuPlan, GpuError> {
-    let plan = GpuPlan::new(scene, &ctx.fit(), &Tuning::default());
+/// The plan `tuning` gives `scene` on the device, refused when one ray's loops would pass
+/// the device's loop limit, and the scene the device gets under it (perturbed by
+/// `--tune perturb`, `gpu::fault`, else the scene itself).
+fn plan(
+    ctx: &GpuContext,
+    scene: &FlatScene,
+    tuning: &Tuning,
+) -> Result<(GpuPlan, Option<FlatScene>), GpuError> {
+    let mut plan = GpuPlan::new(scene, &ctx.fit(), tuning);
+    let perturbed = fault::perturb(scene, &plan.shader.placements, tuning.perturb);
+    if let Some(p) = &perturbed {
+        plan = GpuPlan::new(p, &ctx.fit(), tuning);
+    }
     plan.fit.check_loops(plan.ray_loops)?;
-    Ok(plan)
+    Ok((plan, perturbed))
 }
 
 /// The group-1 bindings of kernel `k` of [`KERNEL_IO`]: its inputs and its outputs.
@@ -46,30 +56,29 @@ fn io(k: usize) -> [u32; 2] {
     [KERNEL_IO[2 * k].1, KERNEL_IO[2 * k + 1].1]
 }
 
-/// Intersects `rays` with `scene` on the GPU, under the plan the default tuning gives it;
-/// one [`KernelHit`] per ray, in order.
+/// Intersects `rays` with `scene` on the GPU, under the plan `tuning` gives it (its record
+/// placements: `Tuning::default()` for a render's); one [`KernelHit`] per ray, in order.
 pub fn intersect_rays(
     ctx: &GpuContext,
     scene: &FlatScene,
+    tuning: &Tuning,
     rays: &[KernelRay],
 ) -> Result<Vec<KernelHit>, GpuError> {
-    run_kernel(ctx, scene, &plan(ctx, scene)?, "main", io(0), rays)
+    let (plan, device_scene) = plan(ctx, scene, tuning)?;
+    let scene = device_scene.as_ref().unwrap_or(scene);
+    run_kernel(ctx, scene, &plan, "main", io(0), rays)
 }
 
 /// Looks textures up on the GPU (`texture_value`); one linear RGB colour (`.w` = 0) each.
 pub fn lookup_textures(
     ctx: &GpuContext,
     scene: &FlatScene,
+    tuning: &Tuning,
     lookups: &[TextureLookup],
 ) -> Result<Vec<[f32; 4]>, GpuError> {
-    run_kernel(
-        ctx,
-        scene,
-        &plan(ctx, scene)?,
-        "textures_main",
-        io(1),
-        lookups,
-    )
+    let (plan, device_scene) = plan(ctx, scene, tuning)?;
+    let scene = device_scene.as_ref().unwrap_or(scene);
+    run_kernel(ctx, scene, &plan, "textures_main", io(1), lookups)
 }
 
 /// Asks the GPU's materials what the integrator asks of them (`materials_main`): each
@@ -79,9 +88,11 @@ pub fn lookup_textures(
 pub fn shade_materials(
     ctx: &GpuContext,
     scene: &FlatScene,
+    tuning: &Tuning,
     queries: &[MaterialQuery],
 ) -> Result<Vec<MaterialReply>, GpuError> {
-    let mut plan = plan(ctx, scene)?;
+    let (mut plan, device_scene) = plan(ctx, scene, tuning)?;
+    let scene = device_scene.as_ref().unwrap_or(scene);
     plan.shader.features.insert(Feature::ShadingNormals);
     run_kernel(ctx, scene, &plan, "materials_main", io(2), queries)
 }
@@ -91,16 +102,12 @@ pub fn shade_materials(
 pub fn sample_lights(
     ctx: &GpuContext,
     scene: &FlatScene,
+    tuning: &Tuning,
     queries: &[LightQuery],
 ) -> Result<Vec<LightReply>, GpuError> {
-    run_kernel(
-        ctx,
-        scene,
-        &plan(ctx, scene)?,
-        "lights_main",
-        io(3),
-        queries,
-    )
+    let (plan, device_scene) = plan(ctx, scene, tuning)?;
+    let scene = device_scene.as_ref().unwrap_or(scene);
+    run_kernel(ctx, scene, &plan, "lights_main", io(3), queries)
 }
 
 /// Dispatches one invocation per input of entry point `entry` of `kernel.wgsl`, with the

@@ -12,6 +12,7 @@ pub mod bindings;
 pub mod codegen;
 pub mod context;
 pub mod error;
+pub mod fault;
 pub mod kernel;
 pub mod limits;
 pub mod pipeline;

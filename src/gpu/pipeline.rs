@@ -18,6 +18,9 @@ pub struct TracePipeline {
     pub shader_bytes: usize,
     /// Wall time to assemble and compile it.
     pub compile_time: Duration,
+    /// Whether a submission has used it (llvmpipe compiles a shader at its first
+    /// dispatch: `GpuContext::wait_first`).
+    pub dispatched: std::sync::atomic::AtomicBool,
 }
 
 /// Compiles the trace pipeline for `spec` on `device`, through the driver's pipeline
@@ -54,5 +57,6 @@ pub fn compile_trace_pipeline(
         slots,
         shader_bytes: wgsl.len(),
         compile_time: start.elapsed(),
+        dispatched: Default::default(),
     })
 }

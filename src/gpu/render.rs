@@ -5,9 +5,10 @@ use std::ops::Range;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use super::bindings::{bind_scene, scene_buffers};
+use super::bindings::{bind_scene, scene_buffers, SceneBuffers};
 use super::context::{describe, GpuContext};
 use super::error::GpuError;
+use super::fault;
 use super::pipeline::TracePipeline;
 use super::plan::GpuPlan;
 use crate::scene::flat::{Band, FlatScene};
@@ -32,14 +33,17 @@ pub struct GpuRenderer {
     scene: FlatScene,
     plan: GpuPlan,
     pipeline: Arc<TracePipeline>,
-    /// One [`Params`] per dispatch of a submission, `params_stride` bytes apart, bound
-    /// with a dynamic offset.
-    params: wgpu::Buffer,
+    /// The scene's records on the device, and the parameter buffer: one [`Params`] per
+    /// dispatch of a submission, `params_stride` bytes apart, bound with a dynamic offset.
+    buffers: SceneBuffers,
     params_stride: u64,
     bands: Vec<BandBuffers>,
     /// As large as the largest band's accumulation.
     readback: wgpu::Buffer,
     submissions: Submissions,
+    /// A note for the user about how this renderer came to be (a spot check that fell
+    /// back to safer record placements).
+    note: Option<String>,
 }
 
 /// A band of whole rows with an accumulation buffer of its own, so no buffer exceeds a
@@ -144,7 +148,14 @@ impl GpuRenderer {
     /// process).
     pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene, tuning: &Tuning) -> Result<Self, GpuError> {
         ctx.check()?;
-        let plan = GpuPlan::new(scene, &ctx.fit(), tuning);
+        let mut plan = GpuPlan::new(scene, &ctx.fit(), tuning);
+        // fault injection: the device gets perturbed records (and, for those written into
+        // the shader, their code); the placements stay those of the scene as it is
+        let perturbed = fault::perturb(scene, &plan.shader.placements, tuning.perturb);
+        if let Some(p) = &perturbed {
+            plan = GpuPlan::new(p, &ctx.fit(), tuning);
+        }
+        let device_scene = perturbed.as_ref().unwrap_or(scene);
         plan.check(scene)?;
         let pipeline = ctx.trace_pipeline(&plan.shader)?;
         let device = &ctx.device;
@@ -159,7 +170,7 @@ impl GpuRenderer {
             &ctx.queue,
             &pipeline.slots,
             &plan.shader.placements,
-            scene,
+            device_scene,
             stride * MAX_DISPATCHES_PER_SUBMISSION as u64,
         )?;
         // wgpu zero-initialises new buffers, so the sums start at 0.
@@ -193,7 +204,7 @@ impl GpuRenderer {
             ctx,
             plan,
             pipeline,
-            params: buffers.params,
+            buffers,
             params_stride: stride,
             bands,
             readback,
@@ -202,7 +213,109 @@ impl GpuRenderer {
                 budget: FIRST_SUBMISSION_WORK,
                 count: 0,
             },
+            note: None,
         })
+    }
+
+    /// The plan this renderer runs.
+    pub fn plan(&self) -> &GpuPlan {
+        &self.plan
+    }
+
+    /// A note for the user about this renderer (set by whoever opened it), if any.
+    pub fn note(&self) -> Option<&str> {
+        self.note.as_deref()
+    }
+
+    /// Sets the note [`Self::note`] returns.
+    pub fn set_note(&mut self, note: Option<String>) {
+        self.note = note;
+    }
+
+    /// Renders sample `sample` of the pixels of each of `tiles` (rectangles of the image,
+    /// at most [`MAX_DISPATCHES_PER_SUBMISSION`]) in one submission, apart from the
+    /// render's sums, and returns each pixel's first two accumulation entries (sum with
+    /// count, squares with samples dropped as not finite), tile by tile, row by row: what
+    /// the spot check (`crate::spot_check`) compares with the CPU reference.
+    pub fn render_tiles(
+        &mut self,
+        tiles: &[Band],
+        sample: u32,
+    ) -> Result<Vec<[[f32; 4]; 2]>, GpuError> {
+        assert!(tiles.len() <= MAX_DISPATCHES_PER_SUBMISSION as usize);
+        let device = &self.ctx.device;
+        let per_pixel = accum_bytes_per_pixel(self.scene.aovs);
+        let sizes: Vec<u64> = tiles
+            .iter()
+            .map(|t| t.width as u64 * t.height as u64 * per_pixel)
+            .collect();
+        let total: u64 = sizes.iter().sum();
+        let readback = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("spot check readback"),
+            size: total.max(16),
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let accums: Vec<(wgpu::Buffer, wgpu::BindGroup)> = sizes
+            .iter()
+            .map(|&size| {
+                let accum = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("spot check accumulation"),
+                    size: size.max(16),
+                    usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+                    mapped_at_creation: false,
+                });
+                let group = bind_scene(
+                    device,
+                    &self.pipeline.layout,
+                    &self.pipeline.slots,
+                    &self.buffers,
+                    &accum,
+                );
+                (accum, group)
+            })
+            .collect();
+        let stride = self.params_stride as usize;
+        let mut bytes = vec![0u8; stride * tiles.len()];
+        for (i, tile) in tiles.iter().enumerate() {
+            let mut params = self.scene.params(sample, *tile);
+            params.sample_count = 1;
+            params.accum_y = tile.y;
+            bytes[i * stride..][..std::mem::size_of::<Params>()]
+                .copy_from_slice(bytemuck::bytes_of(&params));
+        }
+        self.ctx.queue.write_buffer(&self.buffers.params, 0, &bytes);
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("spot check"),
+        });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("spot check pass"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(&self.pipeline.pipeline);
+            for (i, (tile, (_, group))) in tiles.iter().zip(&accums).enumerate() {
+                pass.set_bind_group(0, group, &[(i * stride) as u32]);
+                pass.dispatch_workgroups(
+                    tile.width.div_ceil(WORKGROUP),
+                    tile.height.div_ceil(WORKGROUP),
+                    1,
+                );
+            }
+        }
+        let mut at = 0;
+        for ((accum, _), &size) in accums.iter().zip(&sizes) {
+            encoder.copy_buffer_to_buffer(accum, 0, &readback, at, size);
+            at += size;
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.wait_first(&self.pipeline)?;
+        let data: Vec<[f32; 4]> = self.ctx.read_buffer(&readback)?;
+        let entries = self.entries();
+        let pixels = (total / per_pixel) as usize;
+        Ok((0..pixels)
+            .map(|p| [data[p * entries], data[p * entries + 1]])
+            .collect())
     }
 
     /// Image width and height.
@@ -329,7 +442,7 @@ impl GpuRenderer {
             bytes[i * stride..][..std::mem::size_of::<Params>()]
                 .copy_from_slice(bytemuck::bytes_of(&params));
         }
-        self.ctx.queue.write_buffer(&self.params, 0, &bytes);
+        self.ctx.queue.write_buffer(&self.buffers.params, 0, &bytes);
         let mut encoder = self
             .ctx
             .device
@@ -351,7 +464,7 @@ impl GpuRenderer {
         }
         let start = Instant::now();
         self.ctx.queue.submit([encoder.finish()]);
-        self.ctx.wait()?;
+        self.ctx.wait_first(&self.pipeline)?;
         let took = start.elapsed();
         let work: u64 = dispatches
             .iter()

@@ -1,0 +1,238 @@
+//! The spot check that guards every GPU render (`wgtrace::spot_check`), proved by fault
+//! injection: `--tune perturb=PLACES` changes the GPU side's copy of the records in those
+//! placements, as a driver that fetched them wrong would, and the check must catch it,
+//! fall back to a safer placement with a note, or refuse the adapter when every placement
+//! is wrong. Without a fault it passes on every scene, with no fallback; `wgtrace check`
+//! passes and fails the same way.
+
+mod common;
+
+use std::process::Command;
+
+use wgtrace::gpu::GpuError;
+use wgtrace::spot_check::{self, MIN_AGREEMENT};
+use wgtrace::{Engine, Overrides, Tuning};
+
+fn mesh_scene() -> wgtrace::FlatScene {
+    let o = Overrides {
+        width: Some(64),
+        height: Some(48),
+        spp: Some(8),
+        ..Default::default()
+    };
+    wgtrace::load_scene(&common::repo_path("scenes/mesh.toml"), &o)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn engine(scene: &wgtrace::FlatScene, knobs: &str) -> Result<Engine, GpuError> {
+    Engine::gpu_tuned(scene, 0, &Tuning::parse(knobs).unwrap())
+}
+
+/// Every scene's first sample agrees on the spot check's pixels under the default
+/// tuning, at its own size, with no fallback: the check does not refuse a right GPU.
+#[test]
+fn the_spot_check_passes_on_every_scene_without_a_fallback() {
+    let ctx = std::sync::Arc::new(common::gpu_context());
+    let mut worst = (1.0f64, String::new());
+    for path in common::scene_files() {
+        let scene =
+            wgtrace::load_scene(&path, &Overrides::default()).unwrap_or_else(|e| panic!("{e}"));
+        // open_checked falls back exactly when this check fails
+        let mut r =
+            wgtrace::gpu::GpuRenderer::new(ctx.clone(), &scene, &Tuning::default()).unwrap();
+        let v = spot_check::check(&mut r, &scene).unwrap();
+        let share = v.agreeing as f64 / v.pixels as f64;
+        eprintln!("{}: {}", path.display(), v.describe());
+        assert!(v.passed(), "{}: {}", path.display(), v.describe());
+        if share < worst.0 {
+            worst = (share, path.display().to_string());
+        }
+    }
+    eprintln!(
+        "least agreement {:.4} ({}), bound {MIN_AGREEMENT}",
+        worst.0, worst.1
+    );
+}
+
+/// Record textures read wrong (the fault of Mesa 22.3.6's lavapipe on AVX-512 CPUs) are
+/// caught: the render falls back to storage buffers, says so, and its image matches the
+/// CPU reference's.
+#[test]
+fn wrong_record_textures_are_caught_and_the_render_falls_back() {
+    let scene = mesh_scene();
+    // the mesh scene keeps its primitives in textures: the fault reaches the render
+    let e = engine(&scene, "no-spot-check").unwrap();
+    let Engine::Gpu(g) = &e else {
+        panic!("a GPU engine")
+    };
+    assert!(
+        spot_check::placements(g.plan()).contains("in textures"),
+        "{}",
+        spot_check::placements(g.plan())
+    );
+    let e = engine(&scene, "perturb=texture").expect("a fallback, not a refusal");
+    let note = e.note().expect("a note about the fallback").to_string();
+    eprintln!("{note}");
+    assert!(
+        note.contains("in textures") && note.contains("differ"),
+        "{note}"
+    );
+    let Engine::Gpu(g) = &e else {
+        panic!("a GPU engine")
+    };
+    assert!(!spot_check::placements(g.plan()).contains("in textures"));
+    let gpu = common::render(e, &scene);
+    let cpu = common::render_cpu(&scene);
+    let c = common::compare(&gpu, &cpu, 8);
+    assert!(c.failed_tiles.is_empty(), "{}", c.failed_tiles.join("\n"));
+    assert!(
+        c.agree_fraction >= 0.99,
+        "{:.4} of pixels agree",
+        c.agree_fraction
+    );
+}
+
+/// Without the spot check the perturbed render is wrong, so the check is what catches it
+/// (the fault injection reaches the image), and with every placement perturbed nothing
+/// agrees: the adapter is refused, with what differed and the ways out.
+#[test]
+fn a_gpu_wrong_in_every_placement_is_refused() {
+    let scene = mesh_scene();
+    let wrong = common::render(
+        engine(&scene, "perturb=texture,no-spot-check").unwrap(),
+        &scene,
+    );
+    let cpu = common::render_cpu(&scene);
+    let c = common::compare(&wrong, &cpu, 8);
+    assert!(
+        c.agree_fraction < 0.9,
+        "the perturbed render agrees on {:.4} of pixels: the fault does not reach it",
+        c.agree_fraction
+    );
+    for scene in [
+        mesh_scene(),
+        common::scene_from_file_str(
+            include_str!("../scenes/cornell.toml"),
+            "scenes/cornell.toml",
+        ),
+    ] {
+        match engine(&scene, "perturb=all") {
+            Err(e @ GpuError::WrongResults { .. }) => {
+                let m = e.to_string();
+                eprintln!("{m}");
+                for part in [
+                    "llvmpipe",
+                    "differ",
+                    "--backend cpu",
+                    "Mesa",
+                    "wgtrace check",
+                ] {
+                    assert!(m.contains(part), "{part:?} missing from: {m}");
+                }
+            }
+            Err(e) => panic!("another error: {e}"),
+            Ok(_) => panic!("a GPU wrong in every placement was accepted"),
+        }
+    }
+}
+
+fn wgtrace(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_wgtrace"))
+        .args(args)
+        .output()
+        .expect("running wgtrace")
+}
+
+/// `wgtrace check` passes on this adapter, and fails, naming the rows and exiting
+/// non-zero, when every placement is perturbed; `render` refuses such a GPU the same way.
+#[test]
+fn wgtrace_check_passes_here_and_fails_on_a_wrong_gpu() {
+    let o = wgtrace(&["check"]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    eprintln!("{out}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(o.status.success(), "wgtrace check failed");
+    assert!(out.contains("all 12 rows agree"), "{out}");
+    for placement in ["shader", "uniform", "texture", "storage"] {
+        assert!(out.contains(placement), "no {placement} row: {out}");
+    }
+
+    let o = wgtrace(&["check", "--tune", "perturb=all"]);
+    let (out, err) = (
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr),
+    );
+    assert!(!o.status.success(), "a wrong GPU passed the check:\n{out}");
+    assert!(err.contains("12 of 12 rows differ"), "{err}");
+    assert!(
+        out.contains("FAIL") && out.contains("first ray that differs"),
+        "{out}"
+    );
+
+    let dir = tempfile_dir("refused");
+    let png = dir.join("out.png");
+    let o = wgtrace(&[
+        "render",
+        common::repo_path("scenes/cornell.toml").to_str().unwrap(),
+        "--spp",
+        "1",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--tune",
+        "perturb=all",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success(),
+        "a render on a wrong GPU succeeded: {err}"
+    );
+    assert!(
+        err.contains("--backend cpu") && !err.contains("panicked"),
+        "{err}"
+    );
+    assert!(!png.exists(), "a refused render wrote an image");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+fn tempfile_dir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("wgtrace-spot-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// The spot check's tiles lie inside the image, never overlap, and cover 400 pixels of an
+/// image that holds them, fewer of a small one (a 1 x 1 image: its one pixel).
+#[test]
+fn the_spot_check_tiles_fit_any_image() {
+    for (w, h) in [
+        (1, 1),
+        (2, 3),
+        (3, 200),
+        (9, 9),
+        (10, 13),
+        (20, 20),
+        (21, 19),
+        (64, 48),
+        (1920, 1080),
+    ] {
+        let tiles = spot_check::tiles(w, h);
+        let mut seen = std::collections::HashSet::new();
+        for t in &tiles {
+            assert!(t.x + t.width <= w && t.y + t.height <= h, "{w}x{h}: {t:?}");
+            for y in t.y..t.y + t.height {
+                for x in t.x..t.x + t.width {
+                    assert!(seen.insert((x, y)), "{w}x{h}: pixel ({x}, {y}) twice");
+                }
+            }
+        }
+        let full = spot_check::GRID * spot_check::TILE;
+        if w >= full && h >= full {
+            assert_eq!(seen.len(), (full * full) as usize, "{w}x{h}");
+        }
+        assert!(!seen.is_empty(), "{w}x{h}: no pixels");
+        eprintln!("{w}x{h}: {} tiles, {} pixels", tiles.len(), seen.len());
+    }
+}
