@@ -60,17 +60,20 @@ pub fn tiles(width: u32, height: u32) -> Vec<Band> {
         .collect()
 }
 
+/// The pixels of `tiles`, tile by tile, row by row: the order of
+/// [`GpuRenderer::render_tiles`]'s entries and of [`cpu_tiles`]'.
+fn tile_pixels(tiles: &[Band]) -> impl Iterator<Item = (u32, u32)> + '_ {
+    tiles.iter().flat_map(|t| {
+        (t.y..t.y + t.height).flat_map(move |y| (t.x..t.x + t.width).map(move |x| (x, y)))
+    })
+}
+
 /// Each pixel of `tiles` (tile by tile, row by row) after sample `sample` on the CPU
 /// reference: its first two accumulation entries, as [`GpuRenderer::render_tiles`] gives
 /// them.
 pub fn cpu_tiles(scene: &FlatScene, tiles: &[Band], sample: u32) -> Vec<[[f32; 4]; 2]> {
     let b = Bindings::new(scene, scene.params(sample, scene.full_band()));
-    let pixels: Vec<(u32, u32)> = tiles
-        .iter()
-        .flat_map(|t| {
-            (t.y..t.y + t.height).flat_map(move |y| (t.x..t.x + t.width).map(move |x| (x, y)))
-        })
-        .collect();
+    let pixels: Vec<(u32, u32)> = tile_pixels(tiles).collect();
     pixels
         .par_iter()
         .map(|&(x, y)| {
@@ -128,9 +131,7 @@ pub fn compare(
     gpu: &[[[f32; 4]; 2]],
     cpu: &[[[f32; 4]; 2]],
 ) -> (usize, Option<String>) {
-    let coords = tiles.iter().flat_map(|t| {
-        (t.y..t.y + t.height).flat_map(move |y| (t.x..t.x + t.width).map(move |x| (x, y)))
-    });
+    let coords = tile_pixels(tiles);
     let mut agreeing = 0;
     let mut first = None;
     for ((x, y), (g, c)) in coords.zip(gpu.iter().zip(cpu)) {

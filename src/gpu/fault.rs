@@ -6,7 +6,26 @@
 //! to a safer placement, and refuses the GPU when every placement is wrong.
 
 use super::bindings::{Placements, Slot};
+use super::limits::DeviceFit;
+use super::plan::GpuPlan;
 use crate::scene::flat::FlatScene;
+use crate::tuning::Tuning;
+
+/// The plan `tuning` gives `scene` on a device with `fit`, and the scene the device gets:
+/// under `tuning.perturb`, a perturbed copy ([`perturb`] of the arrays in the placements
+/// the scene's plan gives them), whose plan writes its perturbed records into the shader
+/// where the scene's would; else none, and the scene's own plan.
+pub fn device_plan(
+    scene: &FlatScene,
+    fit: &DeviceFit,
+    tuning: &Tuning,
+) -> (GpuPlan, Option<FlatScene>) {
+    let plan = GpuPlan::new(scene, fit, tuning);
+    match perturb(scene, &plan.shader.placements, tuning.perturb) {
+        Some(p) => (GpuPlan::new(&p, fit, tuning), Some(p)),
+        None => (plan, None),
+    }
+}
 
 /// The arrays a perturbation changes: those that decide what a ray hits and how the
 /// surface looks (the two that may be textures, and the materials, which may be in the

@@ -42,11 +42,7 @@ fn plan(
     scene: &FlatScene,
     tuning: &Tuning,
 ) -> Result<(GpuPlan, Option<FlatScene>), GpuError> {
-    let mut plan = GpuPlan::new(scene, &ctx.fit(), tuning);
-    let perturbed = fault::perturb(scene, &plan.shader.placements, tuning.perturb);
-    if let Some(p) = &perturbed {
-        plan = GpuPlan::new(p, &ctx.fit(), tuning);
-    }
+    let (plan, perturbed) = fault::device_plan(scene, &ctx.fit(), tuning);
     plan.fit.check_loops(plan.ray_loops)?;
     Ok((plan, perturbed))
 }

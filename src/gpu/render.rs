@@ -148,13 +148,7 @@ impl GpuRenderer {
     /// process).
     pub fn new(ctx: Arc<GpuContext>, scene: &FlatScene, tuning: &Tuning) -> Result<Self, GpuError> {
         ctx.check()?;
-        let mut plan = GpuPlan::new(scene, &ctx.fit(), tuning);
-        // fault injection: the device gets perturbed records (and, for those written into
-        // the shader, their code); the placements stay those of the scene as it is
-        let perturbed = fault::perturb(scene, &plan.shader.placements, tuning.perturb);
-        if let Some(p) = &perturbed {
-            plan = GpuPlan::new(p, &ctx.fit(), tuning);
-        }
+        let (plan, perturbed) = fault::device_plan(scene, &ctx.fit(), tuning);
         let device_scene = perturbed.as_ref().unwrap_or(scene);
         plan.check(scene)?;
         let pipeline = ctx.trace_pipeline(&plan.shader)?;
@@ -276,15 +270,12 @@ impl GpuRenderer {
             })
             .collect();
         let stride = self.params_stride as usize;
-        let mut bytes = vec![0u8; stride * tiles.len()];
-        for (i, tile) in tiles.iter().enumerate() {
+        self.write_params(tiles.iter().map(|tile| {
             let mut params = self.scene.params(sample, *tile);
             params.sample_count = 1;
             params.accum_y = tile.y;
-            bytes[i * stride..][..std::mem::size_of::<Params>()]
-                .copy_from_slice(bytemuck::bytes_of(&params));
-        }
-        self.ctx.queue.write_buffer(&self.buffers.params, 0, &bytes);
+            params
+        }));
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("spot check"),
         });
@@ -434,15 +425,12 @@ impl GpuRenderer {
     fn submit(&mut self, b: usize, dispatches: &[(Range<u32>, Band)]) -> Result<(), GpuError> {
         let band = &self.bands[b];
         let stride = self.params_stride as usize;
-        let mut bytes = vec![0u8; stride * dispatches.len()];
-        for (i, (samples, rows)) in dispatches.iter().enumerate() {
+        self.write_params(dispatches.iter().map(|(samples, rows)| {
             let mut params = self.scene.params(samples.start, *rows);
             params.sample_count = samples.len() as u32;
             params.accum_y = band.band.y;
-            bytes[i * stride..][..std::mem::size_of::<Params>()]
-                .copy_from_slice(bytemuck::bytes_of(&params));
-        }
-        self.ctx.queue.write_buffer(&self.buffers.params, 0, &bytes);
+            params
+        }));
         let mut encoder = self
             .ctx
             .device
@@ -483,6 +471,18 @@ impl GpuRenderer {
         );
         sub.count += 1;
         Ok(())
+    }
+
+    /// Writes one [`Params`] per dispatch of a submission into the parameter buffer,
+    /// `params_stride` bytes apart (dispatch i binds offset i x stride).
+    fn write_params(&self, params: impl ExactSizeIterator<Item = Params>) {
+        let stride = self.params_stride as usize;
+        let mut bytes = vec![0u8; stride * params.len()];
+        for (i, p) in params.enumerate() {
+            bytes[i * stride..][..std::mem::size_of::<Params>()]
+                .copy_from_slice(bytemuck::bytes_of(&p));
+        }
+        self.ctx.queue.write_buffer(&self.buffers.params, 0, &bytes);
     }
 
     /// `[f32; 4]` entries per pixel of the sums.
