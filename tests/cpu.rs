@@ -422,6 +422,90 @@ material = "m"
     }
 }
 
+/// The conductor's and the thin dielectric's bad values: each one error naming the file,
+/// line and key; an unknown metal lists the known ones.
+#[test]
+fn conductor_and_window_keys_are_checked_with_file_line_and_key() {
+    let base = r#"[camera]
+look_from = [0, 0, 5]
+look_at = [0, 0, 0]
+[render]
+width = 8
+height = 8
+[materials]
+m = { type = "conductor", material = "Au", roughness = 0.3 }
+w = { type = "thin_dielectric", ior = 1.5 }
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "m"
+"#;
+    assert!(wgtrace::load_scene_str(base, Path::new("bad.toml"), &Overrides::default()).is_ok());
+    let table: &[(&str, &str, &[&str])] = &[
+        (
+            "material = \"Au\"",
+            "material = \"Gold\"",
+            &[
+                "bad.toml:8:5: materials.m.material: unknown conductor \"Gold\" (known: Ag, Al,",
+                "Au,",
+                "Cu,",
+                "none)",
+            ],
+        ),
+        (
+            "roughness = 0.3",
+            "roughness = 1.2",
+            &["bad.toml:8:5: materials.m.roughness: must be in [0, 1], got 1.2"],
+        ),
+        (
+            "roughness = 0.3",
+            "roughness_u = -0.1",
+            &["bad.toml:8:5: materials.m.roughness_u: must be in [0, 1], got -0.1"],
+        ),
+        (
+            "material = \"Au\"",
+            "material = \"Au\", eta = [1, 1, 1], k = [2, 2, 2]",
+            &["bad.toml:8:5: materials.m.material: give material, or eta and k, not both"],
+        ),
+        (
+            "material = \"Au\"",
+            "eta = [1, 1, 1]",
+            &["bad.toml:8:5: materials.m.eta: needs k beside it"],
+        ),
+        (
+            "material = \"Au\"",
+            "eta = [1, -1, 1], k = [2, 2, 2]",
+            &["bad.toml:8:5: materials.m.eta: must be >= 0"],
+        ),
+        (
+            "roughness = 0.3 }",
+            "roughness = 0.3, distribution = \"phong\" }",
+            &[
+                "bad.toml:8:",
+                "unknown variant `phong`, expected `ggx` or `beckmann`",
+            ],
+        ),
+        (
+            "ior = 1.5",
+            "ior = 0",
+            &["bad.toml:9:5: materials.w.ior: must be > 0, got 0"],
+        ),
+        (
+            "ior = 1.5",
+            "ior = 1.5, tint = [1.2, 1, 1]",
+            &["bad.toml:9:5: materials.w.tint: components must be <= 1"],
+        ),
+    ];
+    for (from, to, expected) in table {
+        assert!(base.contains(from), "{to}: the edit does not apply");
+        let e = load_err(&base.replacen(from, to, 1));
+        for x in expected.iter() {
+            assert!(e.contains(x), "{to}: {x} not in {e}");
+        }
+    }
+}
+
 #[test]
 fn overrides_replace_render_settings_and_are_validated() {
     let o = Overrides {

@@ -541,19 +541,25 @@ fn specialized_and_full_shaders_render_the_same_image() {
     use wgtrace::scene::format::{LightSampling as L, SamplerKind as S};
     // sampler, light sampling, no BVH
     type Variant = Option<(S, L, bool)>;
-    // A scene whose full shader holds shading normals, rough glass or pbr's layers is a
-    // variant of its own, and each is a cold compile of several minutes on llvmpipe,
-    // which CI's budget does not hold: those scenes (scenes/coated.toml and the
-    // smooth-shaded meshes) are left out here. Their code is the same under both shaders
-    // (the same #ifdef blocks), and gpu_matches_cpu_on_every_scene renders them against
-    // the CPU.
+    // A scene whose full shader holds shading normals, rough glass, pbr's layers or a
+    // material added after pbr (ShaderSpec::OPTIONAL_IN_FULL) is a variant of its own,
+    // and each is a cold compile of several minutes on llvmpipe, which CI's budget does
+    // not hold: those scenes (scenes/coated.toml, the smooth-shaded meshes,
+    // scenes/conductors.toml and scenes/plastics.toml) are left out here. Their code is
+    // the same under both shaders (the same #ifdef blocks), and
+    // gpu_matches_cpu_on_every_scene renders them against the CPU.
     use wgtrace::gpu::plan::{scene_features, Feature};
+    use wgtrace::scene::materials::MaterialKind;
     let heavy = [
         Feature::ShadingNormals,
         Feature::RoughDielectric,
         Feature::Clearcoat,
         Feature::Sheen,
         Feature::PbrLayers,
+        Feature::Material(MaterialKind::Conductor),
+        Feature::Material(MaterialKind::ThinDielectric),
+        Feature::Material(MaterialKind::Plastic),
+        Feature::Beckmann,
     ];
     let mut cases: Vec<(std::path::PathBuf, Variant)> = common::scene_files()
         .into_iter()

@@ -6,14 +6,15 @@
 //! `pdf`, reciprocity, and no density for a delta. A new material adds rows there. Then
 //! the closed forms of each type: mirror, Snell, Fresnel's and Schlick's Fresnel, total
 //! internal reflection, Beer-Lambert, the microfacet's mirror limit and sphere integral,
-//! pbr's Lambertian limit. (tests/kernel.rs runs the same table on the GPU against these
+//! pbr's Lambertian limit, the conductor's Fresnel, the thin dielectric's summed
+//! reflections, the plastic's white base and its tables' smooth limit. (tests/kernel.rs runs the same table on the GPU against these
 //! functions; tests/gpu.rs renders white furnaces of every material on both backends.)
 
 mod common;
 
 use common::{material, TestMaterial, MATERIALS};
 use glam::Vec3;
-use wgtrace::cpu::bsdf::{fresnel_dielectric, ggx_d, schlick, smith_lambda};
+use wgtrace::cpu::bsdf::{fresnel_conductor, fresnel_dielectric, ggx_d, schlick, smith_lambda};
 use wgtrace::cpu::materials::dielectric::rough_lobes;
 use wgtrace::cpu::materials::{
     bent_normal, bsdf_eval, bsdf_pdf, material_eval, scatter, scatter_pdf,
@@ -502,6 +503,118 @@ fn fresnel_matches_its_closed_forms() {
     let r_s = (cb / 1.5 - ct) / (cb / 1.5 + ct);
     assert!((fresnel_dielectric(cb, ct, 1.0 / 1.5) - 0.5 * r_s * r_s).abs() < 1e-6);
     assert!((fresnel_dielectric(1e-7, cos_t(1e-7, 1.0 / 1.5), 1.0 / 1.5) - 1.0).abs() < 1e-5);
+}
+
+/// The conductor's Fresnel: head-on ((eta - 1)^2 + k^2) / ((eta + 1)^2 + k^2), 1 at grazing
+/// incidence, the dielectric's where k = 0, 1 for eta = 0, k = 1 (a perfect mirror) and
+/// for eta = k = 0 head-on (a measured table's clamped channel: 0 / 0 there, no NaN); a
+/// smooth conductor's sample weighs exactly that, and a named metal reads its table's
+/// index.
+#[test]
+fn conductor_fresnel_matches_its_closed_forms() {
+    let eta = Vec3::new(0.2, 0.9, 1.4);
+    let k = Vec3::new(3.9, 2.4, 1.6);
+    let head_on = ((eta - 1.0) * (eta - 1.0) + k * k) / ((eta + 1.0) * (eta + 1.0) + k * k);
+    assert!(
+        (fresnel_conductor(1.0, eta, k) - head_on)
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    assert!(
+        (fresnel_conductor(0.0, eta, k) - Vec3::ONE)
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    for deg in [0.0f32, 30.0, 60.0, 85.0] {
+        let c = deg.to_radians().cos();
+        let ct = (1.0 - (1.0 - c * c) / (1.5 * 1.5)).sqrt();
+        let f = fresnel_conductor(c, Vec3::splat(1.5), Vec3::ZERO);
+        assert!(
+            (f - Vec3::splat(fresnel_dielectric(c, ct, 1.0 / 1.5)))
+                .abs()
+                .max_element()
+                < 1e-5,
+            "{deg}"
+        );
+        let mirror = fresnel_conductor(c, Vec3::ZERO, Vec3::ONE);
+        assert!(
+            (mirror - Vec3::ONE).abs().max_element() < 1e-6,
+            "{deg}: {mirror}"
+        );
+    }
+    let zero = fresnel_conductor(1.0, Vec3::ZERO, Vec3::ZERO);
+    assert!(
+        zero.is_finite() && (zero - Vec3::ONE).abs().max_element() < 1e-6,
+        "{zero}"
+    );
+    let gold = material("type = \"conductor\"\nmaterial = \"Au\"");
+    let (eta_au, k_au) = wgtrace::scene::metals::metal("Au").unwrap();
+    let (_, ray, hit) = view(0.0);
+    let s = scatter(&gold, &ray, &hit, [0.5, 0.5]);
+    let expected = fresnel_conductor(1.0, Vec3::from(eta_au), Vec3::from(k_au));
+    assert!(
+        s.ok && s.delta && (s.weight - expected).abs().max_element() < 1e-5,
+        "{s:?}"
+    );
+    // gold reflects red more than blue
+    assert!(expected.x > 0.9 && expected.z < 0.5, "{expected}");
+}
+
+/// The thin dielectric's reflectance sums its inner reflections: R + T^2 R / (1 - R^2) =
+/// 2 R / (1 + R) for the single face's Fresnel R; what it does not reflect goes straight
+/// through, untinted by default.
+#[test]
+fn thin_dielectric_sums_the_reflections_between_its_faces() {
+    for deg in [0.0f32, 40.0, 70.0, 88.0] {
+        let c = deg.to_radians().cos();
+        let ct = (1.0 - (1.0 - c * c) / (1.5 * 1.5)).sqrt();
+        let r = fresnel_dielectric(c, ct, 1.0 / 1.5);
+        let r2 = wgtrace::cpu::materials::thin_dielectric::reflectance(c, 1.5);
+        assert!((r2 - 2.0 * r / (1.0 + r)).abs() < 1e-6, "{deg}: {r2}");
+    }
+    let window = material("type = \"thin_dielectric\"");
+    let (_, ray, hit) = view(30.0);
+    let through = scatter(&window, &ray, &hit, [0.99, 0.5]);
+    assert!(through.ok && through.delta && through.dir == ray.dir && through.weight == Vec3::ONE);
+    let reflected = scatter(&window, &ray, &hit, [0.0, 0.5]);
+    assert!(reflected.ok && reflected.dir.z > 0.0);
+}
+
+/// A smooth plastic's coating over a white base reflects everything it receives (to the
+/// furnace's noise); a rough coating's transmittance table tends to the smooth boundary's
+/// 1 - F as its roughness goes to 0, and its internal reflectance to the smooth one's.
+#[test]
+fn plastic_keeps_a_white_base_and_its_rough_tables_tend_to_the_smooth_ones() {
+    let white = material("type = \"plastic\"\nalbedo = [1, 1, 1]");
+    for theta in VIEWS {
+        let (mean, sigma) = directional_albedo(&white, theta, 29);
+        assert!(
+            (mean - 1.0).abs() < 4.0 * sigma + 1e-3,
+            "{theta}: {mean} +- {sigma}"
+        );
+    }
+    use wgtrace::scene::materials::plastic::{internal_reflectance, transmittance_table};
+    for beckmann in [false, true] {
+        let table = transmittance_table(0.002, 1.49, beckmann);
+        for (i, t) in table.iter().enumerate().skip(8) {
+            let c = i as f32 / (table.len() - 1) as f32;
+            let f = wgtrace::cpu::materials::plastic::fresnel(c, 1.49);
+            assert!(
+                (t - (1.0 - f)).abs() < 2e-3,
+                "{beckmann} {c}: {t} against {}",
+                1.0 - f
+            );
+        }
+        let rough = internal_reflectance(0.002, 1.49, beckmann);
+        let smooth = internal_reflectance(0.0, 1.49, beckmann);
+        // Mitsuba's 64-point mean of the rough one reads about 1.6% under the integral
+        assert!(
+            (rough / smooth - 0.984).abs() < 0.01,
+            "{beckmann}: {rough} against {smooth}"
+        );
+    }
 }
 
 const GLASS: &str = "type = \"dielectric\"\nior = 1.5";

@@ -118,6 +118,16 @@ pub const ENTRIES: &[Entry] = &[
         "Microfacet (GGX): roughness 0, 0.05, 0.15, 0.3, 0.5, 1",
     ),
     entry(
+        "conductors",
+        "scenes/conductors.toml",
+        "Conductors by measured index: Au, Cu, Ag, Al, Cr; smooth, GGX 0.3, Beckmann 0.6",
+    ),
+    entry(
+        "plastics",
+        "scenes/plastics.toml",
+        "Plastics: smooth, GGX, Beckmann; linear and nonlinear; a thin-glass window",
+    ),
+    entry(
         "materials",
         "scenes/materials.toml",
         "Every material side by side",

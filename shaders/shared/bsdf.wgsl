@@ -167,3 +167,224 @@ fn sample_ggx_lobes(p_s: f32, alpha: f32, n: vec3<f32>, wo: vec3<f32>, u: vec2<f
     }
     return sample_cosine_hemisphere(n, vec2<f32>((u.x - p_s) / (1.0 - p_s), u.y));
 }
+
+// The exact Fresnel reflectance of unpolarised light off a conductor of complex relative
+// index eta + i k (per channel) at cosine c in [0, 1]: the average of the s and p
+// reflectances, written with a^2 + b^2 = |(eta + i k)^2 - sin^2| and a its real root's
+// real part (Born and Wolf). eta = 0, k = 1 reflects everything; where a ratio is 0 / 0
+// (eta = k = 0, a channel a measured table clamps, seen head-on) its limit, 1.
+fn fresnel_conductor(c: f32, eta: vec3<f32>, k: vec3<f32>) -> vec3<f32> {
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let t1 = eta * eta - k * k - vec3<f32>(s2);
+    let a2b2 = sqrt(max(t1 * t1 + 4.0 * eta * eta * k * k, vec3<f32>(0.0)));
+    let a = sqrt(max(0.5 * (a2b2 + t1), vec3<f32>(0.0)));
+    let t2 = a2b2 + vec3<f32>(c2);
+    let t3 = 2.0 * c * a;
+    let d_s = t2 + t3;
+    let r_s = select(vec3<f32>(1.0), (t2 - t3) / max(d_s, vec3<f32>(1e-30)), d_s > vec3<f32>(0.0));
+    let t4 = a2b2 * c2 + vec3<f32>(s2 * s2);
+    let t5 = t3 * s2;
+    let d_p = t4 + t5;
+    let r_p = r_s * select(vec3<f32>(1.0), (t4 - t5) / max(d_p, vec3<f32>(1e-30)), d_p > vec3<f32>(0.0));
+    return 0.5 * (r_s + r_p);
+}
+
+// A microfacet distribution as Mitsuba 3 and pbrt define them: GGX or Beckmann
+// (beckmann), roughness alpha_u along the frame's tangent (x) and alpha_v along its
+// bitangent (y). Its functions take directions in that local frame, z the normal.
+struct Microfacet {
+    alpha_u: f32,
+    alpha_v: f32,
+    beckmann: bool,
+}
+
+// Its density of normals D(h) (projected: integrates to 1 against h.z).
+fn mf_d(m: Microfacet, h: vec3<f32>) -> f32 {
+    // kept off 0: a normal in the horizon has no density, and no 0 / 0 computes it
+    let c2 = max(h.z * h.z, 1e-12);
+    let e = (h.x * h.x) / (m.alpha_u * m.alpha_u) + (h.y * h.y) / (m.alpha_v * m.alpha_v);
+    let norm = PI * m.alpha_u * m.alpha_v;
+    let k = e + c2;
+    var d = 1.0 / (norm * k * k);
+#ifdef HAS_BECKMANN
+    if (m.beckmann) {
+        d = exp(-e / c2) / (norm * c2 * c2);
+    }
+#endif
+    return select(0.0, d, h.z > 0.0 && d * h.z > 1e-20);
+}
+
+// Smith's masking of direction v by normals about h, G1(v, h) = 1 / (1 + Lambda(v)),
+// exact for both: Beckmann's Lambda = (erf(a) - 1) / 2 + e^(-a^2) / (2 a sqrt(pi)),
+// a = 1 / (alpha tan), which the visible-normal sampler's CDF assumes (Walter et al.'s
+// rational fit, which Mitsuba 3 uses, is up to ~1% off at grazing angles and leaves the
+// sampler's pdf short of 1); 0 where v sees h's back.
+fn mf_g1(m: Microfacet, v: vec3<f32>, h: vec3<f32>) -> f32 {
+    let xy = (m.alpha_u * v.x) * (m.alpha_u * v.x) + (m.alpha_v * v.y) * (m.alpha_v * v.y);
+    let tan2 = xy / (v.z * v.z);
+    var g = 2.0 / (1.0 + sqrt(1.0 + tan2));
+#ifdef HAS_BECKMANN
+    if (m.beckmann) {
+        let a = inverseSqrt(tan2);
+        let lambda = 0.5 * (erf_approx(a) - 1.0) + 0.2820947918 * exp(-a * a) / a;
+        g = 1.0 / (1.0 + max(lambda, 0.0));
+    }
+#endif
+    g = select(g, 1.0, xy == 0.0);
+    return select(0.0, g, dot(v, h) * v.z > 0.0);
+}
+
+#ifdef HAS_BECKMANN
+// Beckmann's pieces, compiled for scenes that have it (HAS_BECKMANN): llvmpipe runs an
+// untaken branch under a mask, and a GGX-only scene would pay for the search.
+
+// The error function, by Abramowitz and Stegun's 7.1.26 (absolute error under 1.5e-7).
+fn erf_approx(x: f32) -> f32 {
+    let a = abs(x);
+    let t = 1.0 / (1.0 + 0.3275911 * a);
+    let poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    let v = 1.0 - poly * exp(-a * a);
+    return select(-v, v, x >= 0.0);
+}
+
+// The inverse error function on (-1, 1), by Giles's single-precision approximation (2010).
+fn erfinv_approx(x: f32) -> f32 {
+    let w = -log(max((1.0 - x) * (1.0 + x), 1e-30));
+    let w1 = w - 2.5;
+    var p1 = 2.81022636e-08;
+    p1 = 3.43273939e-07 + p1 * w1;
+    p1 = -3.5233877e-06 + p1 * w1;
+    p1 = -4.39150654e-06 + p1 * w1;
+    p1 = 0.00021858087 + p1 * w1;
+    p1 = -0.00125372503 + p1 * w1;
+    p1 = -0.00417768164 + p1 * w1;
+    p1 = 0.246640727 + p1 * w1;
+    p1 = 1.50140941 + p1 * w1;
+    let w2 = sqrt(w) - 3.0;
+    var p2 = -0.000200214257;
+    p2 = 0.000100950558 + p2 * w2;
+    p2 = 0.00134934322 + p2 * w2;
+    p2 = -0.00367342844 + p2 * w2;
+    p2 = 0.00573950773 + p2 * w2;
+    p2 = -0.0076224613 + p2 * w2;
+    p2 = 0.00943887047 + p2 * w2;
+    p2 = 1.00167406 + p2 * w2;
+    p2 = 2.83297682 + p2 * w2;
+    return select(p2, p1, w < 5.0) * x;
+}
+
+// The state of the Newton-bisection search of beckmann_slope_x: the guess b (in erf's
+// domain) and the bracket [lo, hi] the root is in.
+struct BeckmannSearch {
+    b: f32,
+    lo: f32,
+    hi: f32,
+}
+
+// One step of the search for the erf-domain b whose CDF of visible slopes,
+// norm (1 + b + tan e^(-erfinv(b)^2) / sqrt(pi)), equals x: a Newton step kept in the
+// bracket by bisection.
+fn beckmann_step(s: BeckmannSearch, x: f32, tan_i: f32, norm: f32) -> BeckmannSearch {
+    var r = s;
+    if (!(r.b >= r.lo && r.b <= r.hi)) {
+        r.b = 0.5 * (r.lo + r.hi);
+    }
+    let e = erfinv_approx(r.b);
+    let value = norm * (1.0 + r.b + 0.5641895835 * tan_i * exp(-e * e)) - x;
+    let derivative = norm * (1.0 - e * tan_i);
+    if (value > 0.0) {
+        r.hi = r.b;
+    } else {
+        r.lo = r.b;
+    }
+    // the Newton step where it stays in the bracket, else the bracket's middle (no
+    // division by a zero derivative)
+    let ok = derivative != 0.0;
+    let next = r.b - value / select(1.0, derivative, ok);
+    r.b = select(0.5 * (r.lo + r.hi), next, ok && next >= r.lo && next <= r.hi);
+    return r;
+}
+
+// A slope of Beckmann's unit-roughness visible normals seen at cos_i (Jakob's
+// inversion, 2014, of the CDF of Heitz and d'Eon's sampler): x by a fitted first guess
+// and six Newton-bisection steps (written out: no loop), y by the inverse error function.
+fn beckmann_slope(cos_i: f32, u: vec2<f32>) -> vec2<f32> {
+    let sin_i = sqrt(max(0.0, 1.0 - cos_i * cos_i));
+    let tan_i = sin_i / cos_i;
+    let cot_i = cos_i / max(sin_i, 1e-7);
+    let x = max(u.x, 1e-6);
+    let hi = erf_approx(cot_i);
+    let theta = acos(clamp(cos_i, -1.0, 1.0));
+    let fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta));
+    let norm = 1.0 / (1.0 + hi + 0.5641895835 * tan_i * exp(-cot_i * cot_i));
+    var s = BeckmannSearch(hi - (1.0 + hi) * pow(1.0 - x, fit), -1.0, hi);
+    s = beckmann_step(s, x, tan_i, norm);
+    s = beckmann_step(s, x, tan_i, norm);
+    s = beckmann_step(s, x, tan_i, norm);
+    s = beckmann_step(s, x, tan_i, norm);
+    s = beckmann_step(s, x, tan_i, norm);
+    s = beckmann_step(s, x, tan_i, norm);
+    let b = select(0.5 * (s.lo + s.hi), s.b, s.b >= s.lo && s.b <= s.hi);
+    let slope = vec2<f32>(erfinv_approx(clamp(b, -0.9999999, 0.9999999)), erfinv_approx(2.0 * max(u.y, 1e-6) - 1.0));
+    // at normal incidence, the distribution of all slopes
+    let r = sqrt(-log(max(1.0 - u.x, 1e-30)));
+    let phi = 2.0 * PI * u.y;
+    return select(slope, r * vec2<f32>(cos(phi), sin(phi)), cos_i > 0.99999);
+}
+#endif
+
+// A visible normal of the distribution seen from wo (local, wo.z > 0): GGX's by Heitz's
+// sampler (JCGT 2018) in the stretched configuration; Beckmann's by a slope of the
+// unit-roughness distribution (beckmann_slope) rotated to wo's azimuth and stretched.
+fn mf_sample_visible(m: Microfacet, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let vh = normalize(vec3<f32>(m.alpha_u * wo.x, m.alpha_v * wo.y, wo.z));
+#ifdef HAS_BECKMANN
+    if (m.beckmann) {
+        let len = length(vh.xy);
+        let cs = select(vec2<f32>(1.0, 0.0), vh.xy / len, len > 0.0);
+        let s = beckmann_slope(vh.z, u);
+        let slope = vec2<f32>(cs.x * s.x - cs.y * s.y, cs.y * s.x + cs.x * s.y) * vec2<f32>(m.alpha_u, m.alpha_v);
+        return normalize(vec3<f32>(-slope.x, -slope.y, 1.0));
+    }
+#endif
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    var t1 = vec3<f32>(1.0, 0.0, 0.0);
+    if (len2 > 0.0) {
+        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(len2);
+    }
+    let t2 = cross(vh, t1);
+    let r = sqrt(u.x);
+    let phi = 2.0 * PI * u.y;
+    let p1 = r * cos(phi);
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
+    let nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
+    return normalize(vec3<f32>(m.alpha_u * nh.x, m.alpha_v * nh.y, max(0.0, nh.z)));
+}
+
+// The density of mf_sample_visible's normals: G1(wo, h) max(0, wo . h) D(h) / wo.z.
+fn mf_pdf_visible(m: Microfacet, wo: vec3<f32>, h: vec3<f32>) -> f32 {
+    return mf_g1(m, wo, h) * max(0.0, dot(wo, h)) * mf_d(m, h) / wo.z;
+}
+
+// A frame about the unit normal n whose first axis follows `tangent` (made orthogonal
+// to n): (t, b), b = n x t. Where the tangent is zero or along n (a hit without
+// tangents), the first axis is +y x n, around the world's up axis (a sphere's lines of
+// latitude: continuous but at the poles, where onb_tangents(n) serves), not
+// onb_tangents's, which turns over where n.z changes sign.
+fn tangent_frame(n: vec3<f32>, tangent: vec3<f32>) -> array<vec3<f32>, 2> {
+    let t = tangent - n * dot(n, tangent);
+    let len = length(t);
+    if (len > 1e-6) {
+        let tu = t / len;
+        return array<vec3<f32>, 2>(tu, cross(n, tu));
+    }
+    let around = vec3<f32>(n.z, 0.0, -n.x);
+    let l = length(around);
+    if (l > 1e-3) {
+        let tu = around / l;
+        return array<vec3<f32>, 2>(tu, cross(n, tu));
+    }
+    return onb_tangents(n);
+}

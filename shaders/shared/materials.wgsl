@@ -32,6 +32,12 @@ fn material_at(m: Material, hit: Hit) -> Material {
     var mat = m;
     // which side the hit is on, for a material whose eval needs it (rough glass's eta)
     mat.normal2.w = select(0.0, 1.0, !hit.front_face);
+#ifdef HAS_NORMAL_MAP
+    // an anisotropic roughness's frame follows the hit's tangent
+    if ((mat.flags & MAT_FLAG_ANISOTROPIC) != 0u) {
+        mat.normal2 = vec4<f32>(hit.tangent.xyz, mat.normal2.w);
+    }
+#endif
 #ifdef HAS_TEXTURES
     // the .w of each colour is a scalar of its own
     if (mat.tex_color != NO_TEXTURE) {

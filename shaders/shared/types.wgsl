@@ -45,8 +45,9 @@ struct BvhNode {
 // scene::materials), what every material has in SurfaceParams. The record's own rules: a
 // texture in tex_color replaces color.rgb (clamped to 1), in tex_color2 color2.rgb, in
 // tex_emission emission.rgb; tex_data0 to tex_data5 and tex_normal2 are the material's
-// own (its texture hook may write normal2, a second shading normal at the hit); table is
-// the first tables entry of a table the material reads.
+// own (its texture hook may write normal2, a second shading normal at the hit; with
+// MAT_FLAG_ANISOTROPIC material_at writes the hit's tangent there instead); table is the
+// first tables entry of a table the material reads.
 struct Material {
     tag: u32,
     flags: u32,

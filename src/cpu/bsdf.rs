@@ -200,3 +200,245 @@ pub fn density_sample(wi: Vec3, f: Vec3, pdf: f32, side: f32, hit: &Hit) -> Scat
         delta: false,
     }
 }
+
+/// The exact Fresnel reflectance off a conductor of complex relative index eta + i k per
+/// channel at cosine c (bsdf.wgsl's `fresnel_conductor`).
+pub fn fresnel_conductor(c: f32, eta: Vec3, k: Vec3) -> Vec3 {
+    let c2 = c * c;
+    let s2 = 1.0 - c2;
+    let t1 = eta * eta - k * k - Vec3::splat(s2);
+    let sqrt = |v: Vec3| {
+        let v = v.max(Vec3::ZERO);
+        Vec3::new(v.x.sqrt(), v.y.sqrt(), v.z.sqrt())
+    };
+    let a2b2 = sqrt(t1 * t1 + 4.0 * eta * eta * k * k);
+    let a = sqrt(0.5 * (a2b2 + t1));
+    let t2 = a2b2 + Vec3::splat(c2);
+    let t3 = 2.0 * c * a;
+    // a ratio 0 / 0 (eta = k = 0 seen head-on) is its limit, 1
+    let ratio = |n: Vec3, d: Vec3| {
+        let q = n / d.max(Vec3::splat(1e-30));
+        Vec3::select(d.cmpgt(Vec3::ZERO), q, Vec3::ONE)
+    };
+    let r_s = ratio(t2 - t3, t2 + t3);
+    let t4 = a2b2 * c2 + Vec3::splat(s2 * s2);
+    let t5 = t3 * s2;
+    let r_p = r_s * ratio(t4 - t5, t4 + t5);
+    0.5 * (r_s + r_p)
+}
+
+/// A microfacet distribution (bsdf.wgsl's `Microfacet`): GGX or Beckmann, roughness
+/// alpha_u along the frame's tangent and alpha_v along its bitangent; its functions take
+/// local directions, z the normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Microfacet {
+    pub alpha_u: f32,
+    pub alpha_v: f32,
+    pub beckmann: bool,
+}
+
+/// Its density of normals D(h).
+pub fn mf_d(m: &Microfacet, h: Vec3) -> f32 {
+    let c2 = (h.z * h.z).max(1e-12);
+    let e = (h.x * h.x) / (m.alpha_u * m.alpha_u) + (h.y * h.y) / (m.alpha_v * m.alpha_v);
+    let norm = PI * m.alpha_u * m.alpha_v;
+    let d = if m.beckmann {
+        (-e / c2).exp() / (norm * c2 * c2)
+    } else {
+        let k = e + c2;
+        1.0 / (norm * k * k)
+    };
+    if h.z > 0.0 && d * h.z > 1e-20 {
+        d
+    } else {
+        0.0
+    }
+}
+
+/// Smith's masking G1(v, h) = 1 / (1 + Lambda(v)), exact for both distributions; 0
+/// where v sees h's back.
+pub fn mf_g1(m: &Microfacet, v: Vec3, h: Vec3) -> f32 {
+    let xy = (m.alpha_u * v.x) * (m.alpha_u * v.x) + (m.alpha_v * v.y) * (m.alpha_v * v.y);
+    let tan2 = xy / (v.z * v.z);
+    let mut g = if m.beckmann {
+        let a = 1.0 / tan2.sqrt();
+        let lambda = 0.5 * (erf_approx(a) - 1.0) + 0.282_094_8 * (-a * a).exp() / a;
+        1.0 / (1.0 + lambda.max(0.0))
+    } else {
+        2.0 / (1.0 + (1.0 + tan2).sqrt())
+    };
+    if xy == 0.0 {
+        g = 1.0;
+    }
+    if v.dot(h) * v.z > 0.0 {
+        g
+    } else {
+        0.0
+    }
+}
+
+/// The error function (Abramowitz and Stegun 7.1.26).
+#[allow(clippy::excessive_precision)]
+pub fn erf_approx(x: f32) -> f32 {
+    let a = x.abs();
+    let t = 1.0 / (1.0 + 0.3275911 * a);
+    let poly = t
+        * (0.254829592
+            + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    let v = 1.0 - poly * (-a * a).exp();
+    if x >= 0.0 {
+        v
+    } else {
+        -v
+    }
+}
+
+/// The inverse error function on (-1, 1) (Giles 2010, single precision).
+#[allow(clippy::excessive_precision)]
+pub fn erfinv_approx(x: f32) -> f32 {
+    let w = -((1.0 - x) * (1.0 + x)).max(1e-30).ln();
+    let w1 = w - 2.5;
+    let mut p1 = 2.81022636e-08;
+    p1 = 3.43273939e-07 + p1 * w1;
+    p1 = -3.5233877e-06 + p1 * w1;
+    p1 = -4.39150654e-06 + p1 * w1;
+    p1 = 0.00021858087 + p1 * w1;
+    p1 = -0.00125372503 + p1 * w1;
+    p1 = -0.00417768164 + p1 * w1;
+    p1 = 0.246640727 + p1 * w1;
+    p1 = 1.50140941 + p1 * w1;
+    let w2 = w.sqrt() - 3.0;
+    let mut p2 = -0.000200214257;
+    p2 = 0.000100950558 + p2 * w2;
+    p2 = 0.00134934322 + p2 * w2;
+    p2 = -0.00367342844 + p2 * w2;
+    p2 = 0.00573950773 + p2 * w2;
+    p2 = -0.0076224613 + p2 * w2;
+    p2 = 0.00943887047 + p2 * w2;
+    p2 = 1.00167406 + p2 * w2;
+    p2 = 2.83297682 + p2 * w2;
+    (if w < 5.0 { p1 } else { p2 }) * x
+}
+
+/// The state of beckmann_slope's search (bsdf.wgsl's `BeckmannSearch`).
+#[derive(Clone, Copy, Debug)]
+pub struct BeckmannSearch {
+    pub b: f32,
+    pub lo: f32,
+    pub hi: f32,
+}
+
+/// One Newton-bisection step of beckmann_slope's search.
+#[allow(clippy::excessive_precision)]
+pub fn beckmann_step(s: BeckmannSearch, x: f32, tan_i: f32, norm: f32) -> BeckmannSearch {
+    let mut r = s;
+    if !(r.b >= r.lo && r.b <= r.hi) {
+        r.b = 0.5 * (r.lo + r.hi);
+    }
+    let e = erfinv_approx(r.b);
+    let value = norm * (1.0 + r.b + 0.5641895835 * tan_i * (-e * e).exp()) - x;
+    let derivative = norm * (1.0 - e * tan_i);
+    if value > 0.0 {
+        r.hi = r.b;
+    } else {
+        r.lo = r.b;
+    }
+    let ok = derivative != 0.0;
+    let next = r.b - value / if ok { derivative } else { 1.0 };
+    r.b = if ok && next >= r.lo && next <= r.hi {
+        next
+    } else {
+        0.5 * (r.lo + r.hi)
+    };
+    r
+}
+
+/// A slope of Beckmann's unit-roughness visible normals seen at cos_i (bsdf.wgsl's
+/// `beckmann_slope`).
+#[allow(clippy::excessive_precision)]
+pub fn beckmann_slope(cos_i: f32, u: [f32; 2]) -> [f32; 2] {
+    let sin_i = (1.0 - cos_i * cos_i).max(0.0).sqrt();
+    let tan_i = sin_i / cos_i;
+    let cot_i = cos_i / sin_i.max(1e-7);
+    let x = u[0].max(1e-6);
+    let hi = erf_approx(cot_i);
+    let theta = cos_i.clamp(-1.0, 1.0).acos();
+    let fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta));
+    let norm = 1.0 / (1.0 + hi + 0.5641895835 * tan_i * (-cot_i * cot_i).exp());
+    let mut s = BeckmannSearch {
+        b: hi - (1.0 + hi) * (1.0 - x).powf(fit),
+        lo: -1.0,
+        hi,
+    };
+    for _ in 0..6 {
+        s = beckmann_step(s, x, tan_i, norm);
+    }
+    let b = if s.b >= s.lo && s.b <= s.hi {
+        s.b
+    } else {
+        0.5 * (s.lo + s.hi)
+    };
+    if cos_i > 0.99999 {
+        let r = (-(1.0 - u[0]).max(1e-30).ln()).sqrt();
+        let phi = 2.0 * PI * u[1];
+        return [r * phi.cos(), r * phi.sin()];
+    }
+    [
+        erfinv_approx(b.clamp(-0.9999999, 0.9999999)),
+        erfinv_approx(2.0 * u[1].max(1e-6) - 1.0),
+    ]
+}
+
+/// A visible normal of the distribution seen from wo (bsdf.wgsl's `mf_sample_visible`).
+pub fn mf_sample_visible(m: &Microfacet, wo: Vec3, u: [f32; 2]) -> Vec3 {
+    let vh = Vec3::new(m.alpha_u * wo.x, m.alpha_v * wo.y, wo.z).normalize();
+    if m.beckmann {
+        let len = vh.truncate().length();
+        let cs = if len > 0.0 {
+            vh.truncate() / len
+        } else {
+            glam::Vec2::X
+        };
+        let s = beckmann_slope(vh.z, u);
+        let slope = glam::Vec2::new(cs.x * s[0] - cs.y * s[1], cs.y * s[0] + cs.x * s[1])
+            * glam::Vec2::new(m.alpha_u, m.alpha_v);
+        return Vec3::new(-slope.x, -slope.y, 1.0).normalize();
+    }
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    let mut t1 = Vec3::X;
+    if len2 > 0.0 {
+        t1 = Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt();
+    }
+    let t2 = vh.cross(t1);
+    let r = u[0].sqrt();
+    let phi = 2.0 * PI * u[1];
+    let p1 = r * phi.cos();
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+    let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
+    Vec3::new(m.alpha_u * nh.x, m.alpha_v * nh.y, nh.z.max(0.0)).normalize()
+}
+
+/// The density of mf_sample_visible's normals: G1(wo, h) max(0, wo . h) D(h) / wo.z.
+pub fn mf_pdf_visible(m: &Microfacet, wo: Vec3, h: Vec3) -> f32 {
+    mf_g1(m, wo, h) * wo.dot(h).max(0.0) * mf_d(m, h) / wo.z
+}
+
+/// A frame about the unit normal n whose first axis follows `tangent` (bsdf.wgsl's
+/// `tangent_frame`); where it is zero or along n, +y x n (onb_tangents(n)'s at the
+/// poles).
+pub fn tangent_frame(n: Vec3, tangent: Vec3) -> [Vec3; 2] {
+    let t = tangent - n * n.dot(tangent);
+    let len = t.length();
+    if len > 1e-6 {
+        let tu = t / len;
+        return [tu, n.cross(tu)];
+    }
+    let around = Vec3::new(n.z, 0.0, -n.x);
+    let l = around.length();
+    if l > 1e-3 {
+        let tu = around / l;
+        return [tu, n.cross(tu)];
+    }
+    onb_tangents(n)
+}

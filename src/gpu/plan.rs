@@ -19,7 +19,7 @@ use crate::scene::flat::FlatScene;
 use crate::scene::format::{LightSampling, SamplerKind};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::MaterialKind;
-use crate::scene::materials::{dielectric, pbr};
+use crate::scene::materials::{conductor, dielectric, pbr, plastic};
 use crate::scene::records as r;
 use crate::tuning::Tuning;
 
@@ -46,7 +46,8 @@ pub enum Feature {
     Material(MaterialKind),
     /// Textured material colours at all.
     Textures,
-    /// Tangent-space normal maps (pbr's `normal_map`), with the vertex tangents they need.
+    /// Tangent-space normal maps (pbr's `normal_map`), with the vertex tangents they need;
+    /// anisotropic roughness (its frame follows the tangents).
     NormalMap,
     /// Shading normals that differ from the geometric one (interpolated vertex normals,
     /// normal maps): bent toward the viewer where it is under them, and directions under
@@ -58,6 +59,9 @@ pub enum Feature {
     VertexColors,
     /// Rough glass (`dielectric` with a roughness): its microfacet lobes.
     RoughDielectric,
+    /// Beckmann microfacets (a conductor's or a plastic's `distribution`): their
+    /// masking's error function and the visible-slope sampler's search.
+    Beckmann,
     /// pbr's clearcoat (KHR_materials_clearcoat): its lobe and what it lets through.
     Clearcoat,
     /// pbr's sheen (KHR_materials_sheen): the Charlie lobe and its albedo table.
@@ -104,13 +108,14 @@ const GEOMETRY: [Feature; 9] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 23] = [
+const SHADING: [Feature; 24] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
     Feature::SecondUv,
     Feature::VertexColors,
     Feature::RoughDielectric,
+    Feature::Beckmann,
     Feature::Clearcoat,
     Feature::Sheen,
     Feature::PbrLayers,
@@ -158,6 +163,7 @@ impl Feature {
             Feature::SecondUv => "HAS_UV1",
             Feature::VertexColors => "HAS_VERTEX_COLORS",
             Feature::RoughDielectric => "HAS_ROUGH_DIELECTRIC",
+            Feature::Beckmann => "HAS_BECKMANN",
             Feature::Clearcoat => "HAS_CLEARCOAT",
             Feature::Sheen => "HAS_SHEEN",
             Feature::PbrLayers => "HAS_PBR_LAYERS",
@@ -287,6 +293,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
             scene.materials.iter().any(|m| {
                 Surface::read(m).normal_texture != r::NO_TEXTURE
                     || (is_pbr(m) && pbr::has_coat_normal_map(m))
+                    || m.flags & r::MAT_FLAG_ANISOTROPIC != 0
             }),
         )
         .with(
@@ -317,6 +324,13 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .materials
                 .iter()
                 .any(|m| m.tag == MaterialKind::Dielectric.tag() && dielectric::is_rough(m)),
+        )
+        .with(
+            Feature::Beckmann,
+            scene.materials.iter().any(|m| {
+                (m.tag == MaterialKind::Conductor.tag() && conductor::is_beckmann(m))
+                    || (m.tag == MaterialKind::Plastic.tag() && plastic::is_beckmann(m))
+            }),
         )
         .with(Feature::Clearcoat, clearcoat)
         .with(Feature::Sheen, sheen)
@@ -389,8 +403,10 @@ impl ShaderSpec {
     /// and vertex colours add reads to every triangle hit; rough glass a branch to
     /// every glass hit; shading normals a second eval and pdf to every light sample;
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
-    /// compile of the full shader took minutes longer).
-    pub const OPTIONAL_IN_FULL: [Feature; 10] = [
+    /// compile of the full shader took minutes longer). The materials added after pbr
+    /// (conductor, thin_dielectric, plastic) too: the full shader of every other scene
+    /// stays as it was.
+    pub const OPTIONAL_IN_FULL: [Feature; 14] = [
         Feature::Aovs,
         Feature::Alpha,
         Feature::NormalMap,
@@ -401,6 +417,10 @@ impl ShaderSpec {
         Feature::Clearcoat,
         Feature::Sheen,
         Feature::PbrLayers,
+        Feature::Material(MaterialKind::Conductor),
+        Feature::Material(MaterialKind::ThinDielectric),
+        Feature::Material(MaterialKind::Plastic),
+        Feature::Beckmann,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):
@@ -509,12 +529,14 @@ impl ShaderSpec {
                         && f(Feature::ImageTexture)
                 }
                 // the tables by noise look-ups, by the background's distribution when
-                // lights are sampled, and by pbr's sheen (its albedo table)
+                // lights are sampled, by pbr's sheen (its albedo table) and by plastics
+                // (a rough coating's transmittance)
                 Slot::Tables => {
                     let env = f(Feature::EnvMap);
                     (f(Feature::Textures) || env) && f(Feature::NoiseTexture)
                         || env && (f(Feature::Mis) || f(Feature::Mixture))
                         || f(Feature::Sheen) && f(Feature::Material(MaterialKind::Pbr))
+                        || f(Feature::Material(MaterialKind::Plastic))
                 }
             })
             .collect()

@@ -10,7 +10,7 @@ use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
 use super::format::{LightDesc, ObjectDesc, Projection, SceneFile, TextureDesc, TransformDesc};
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
-use super::materials::{pbr, MaterialDesc, MaterialKind};
+use super::materials::{pbr, plastic, MaterialDesc, MaterialKind};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
@@ -545,6 +545,16 @@ pub fn flatten(
         for m in materials.iter_mut().filter(|m| is_pbr(m)) {
             pbr::point_at_sheen_table(m, offset);
         }
+    }
+    // each rough plastic's transmittance table
+    for m in materials
+        .iter_mut()
+        .filter(|m| m.tag == MaterialKind::Plastic.tag() && plastic::is_rough(m))
+    {
+        let offset = tables.len() as u32;
+        let table = plastic::table_of(m);
+        tables.extend(table.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
+        plastic::point_at_table(m, offset);
     }
     let Builder {
         unbounded,

@@ -354,11 +354,12 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 format!("objects[{i}].path"),
                 |p| {
                     let mut m = mesh::load_mesh(p)?;
-                    // a normal map needs tangents: MikkTSpace's, over the mesh's uvs
+                    // a normal map or anisotropic roughness needs tangents:
+                    // MikkTSpace's, over the mesh's uvs
                     let mapped = file
                         .materials
                         .get(material)
-                        .is_some_and(|d| d.get_ref().normal_map().is_some());
+                        .is_some_and(|d| d.get_ref().needs_tangents());
                     if mapped {
                         mesh::generate_tangents(&mut m);
                     }

@@ -16,6 +16,7 @@ pub mod lights;
 pub mod load;
 pub mod materials;
 pub mod mesh;
+pub mod metals;
 pub mod mtl;
 pub mod records;
 pub mod shapes;

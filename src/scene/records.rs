@@ -113,6 +113,9 @@ shared_constants! {
     /// Material flag: its lobe with a density transmits (rough glass): `bsdf_eval` weighs
     /// directions under the surface, and shading normals send nothing over it.
     MAT_FLAG_TRANSMITS: u32 = 64;
+    /// Material flag: its roughness differs along the tangent and the bitangent
+    /// (`roughness_u`, `roughness_v`): `material_at` gives it the hit's tangent.
+    MAT_FLAG_ANISOTROPIC: u32 = 128;
 
     /// Texture tags: the cases of the `switch` in `textures.wgsl`.
     TEX_CONSTANT: u32 = 0;
@@ -217,6 +220,9 @@ shared_constants! {
     /// Cosines and alphas of the sheen's albedo table (`pbr::sheen_albedo_table`), each
     /// from 0 to 1.
     SHEEN_TABLE_SIZE: u32 = 32;
+    /// Cosines of a rough plastic's transmittance table (`plastic::transmittance_table`),
+    /// from 0 to 1.
+    PLASTIC_TABLE_SIZE: u32 = 64;
     /// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
     /// (v0, v1, v2, 0).
     ATTRIBUTE_ENTRIES: u32 = 4;
@@ -279,7 +285,9 @@ pub struct Primitive {
 /// `tex_emission` replaces `emission.rgb`; `normal2.w` is 1 at a back-face hit, else 0;
 /// `tex_data0` to `tex_data5` and `tex_normal2` are read by the material's own texture
 /// hook only, which may also write `normal2.xyz` (a second shading normal at the hit:
-/// pbr's clearcoat's); `table` is the first `tables` entry of a table the material reads.
+/// pbr's clearcoat's); with `MAT_FLAG_ANISOTROPIC` `normal2.xyz` is the hit's tangent
+/// instead (written before the hook: a material has one or the other, never both);
+/// `table` is the first `tables` entry of a table the material reads.
 /// Flags: `MAT_FLAG_*`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]

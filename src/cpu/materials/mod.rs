@@ -4,12 +4,15 @@
 //! file per material beside this one mirrors `shaders/materials/NAME.wgsl`; the dispatch
 //! below is written from the type list (`scene::materials::for_each_material!`).
 
+pub mod conductor;
 pub mod dielectric;
 pub mod emissive;
 pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
 pub mod pbr;
+pub mod plastic;
+pub mod thin_dielectric;
 
 use glam::Vec3;
 
@@ -20,8 +23,9 @@ use super::types::{Hit, Ray};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::{for_each_material, MaterialKind};
 use crate::scene::records::{
-    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA,
-    MAT_FLAG_NEE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
+    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_ANISOTROPIC,
+    MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
+    NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -93,6 +97,10 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     let mut mat = *m;
     // which side the hit is on, for a material whose eval needs it (rough glass's eta)
     mat.normal2[3] = if hit.front_face { 0.0 } else { 1.0 };
+    // an anisotropic roughness's frame follows the hit's tangent
+    if mat.flags & MAT_FLAG_ANISOTROPIC != 0 {
+        mat.normal2 = hit.tangent.truncate().extend(mat.normal2[3]).to_array();
+    }
     // the .w of each colour is a scalar of its own
     if mat.tex_color != NO_TEXTURE {
         mat.color = texture_value(b, mat.tex_color, hit.uv, hit.p)

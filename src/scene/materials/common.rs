@@ -248,6 +248,89 @@ pub trait Model {
     fn normal_map(&self) -> Option<&str> {
         None
     }
+    /// Whether its roughness is anisotropic (its mesh then needs tangents too).
+    fn anisotropic(&self) -> bool {
+        false
+    }
+}
+
+/// A microfacet distribution's name in the format: `ggx` (the default) or `beckmann`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Distribution {
+    #[default]
+    Ggx,
+    Beckmann,
+}
+
+impl Distribution {
+    /// As the record holds it: 1 for Beckmann, 0 for GGX.
+    pub fn code(self) -> f32 {
+        match self {
+            Distribution::Ggx => 0.0,
+            Distribution::Beckmann => 1.0,
+        }
+    }
+}
+
+/// Isotropic `roughness` or anisotropic `roughness_u` and `roughness_v` (the other
+/// axis defaulting to `roughness`, else 0), checked: each in [0, 1]. Perceptual, as
+/// dielectric's and glTF's: the distribution's alpha is its square. (The format's
+/// entries list the three keys themselves: serde's flatten cannot refuse unknown keys.)
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Roughness {
+    pub roughness: Option<f32>,
+    pub roughness_u: Option<f32>,
+    pub roughness_v: Option<f32>,
+}
+
+impl Roughness {
+    /// (alpha along the tangent, alpha along the bitangent): the squares.
+    pub fn alphas(&self) -> (f32, f32) {
+        let r = self.roughness.unwrap_or(0.0);
+        let (u, v) = (self.roughness_u.unwrap_or(r), self.roughness_v.unwrap_or(r));
+        (u * u, v * v)
+    }
+
+    /// Below `ALPHA_SMOOTH` on both axes: a mirror (a delta).
+    pub fn smooth(&self) -> bool {
+        let (u, v) = self.alphas();
+        u.max(v) < crate::scene::records::ALPHA_SMOOTH
+    }
+
+    pub fn anisotropic(&self) -> bool {
+        let (u, v) = self.alphas();
+        u != v
+    }
+
+    /// The alphas the record holds: as given when smooth, else at least 1e-4 on each
+    /// axis (a rough lobe divides by both).
+    pub fn packed(&self) -> (f32, f32) {
+        let (u, v) = self.alphas();
+        if self.smooth() {
+            (u, v)
+        } else {
+            (u.max(1e-4), v.max(1e-4))
+        }
+    }
+
+    pub fn check(&self, c: &mut Check) {
+        for (key, x) in [
+            ("roughness", self.roughness),
+            ("roughness_u", self.roughness_u),
+            ("roughness_v", self.roughness_v),
+        ] {
+            if let Some(x) = x {
+                c.unit(key, x);
+            }
+        }
+        if self.roughness.is_some() && self.roughness_u.is_some() && self.roughness_v.is_some() {
+            c.push(
+                "roughness",
+                "give roughness, or roughness_u and roughness_v, not all three".into(),
+            );
+        }
+    }
 }
 
 /// The type of a field of a view: a colour (the `.xyz` of a vec4 place), one scalar lane

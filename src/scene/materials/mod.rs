@@ -12,12 +12,15 @@
 //! The material modules import `common` and never this file: it imports them.
 
 pub mod common;
+pub mod conductor;
 pub mod dielectric;
 pub mod emissive;
 pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
 pub mod pbr;
+pub mod plastic;
+pub mod thin_dielectric;
 
 use serde::Deserialize;
 
@@ -45,6 +48,12 @@ macro_rules! for_each_material {
             Microfacet = 4, microfacet, "HAS_MICROFACET";
             /// glTF's metallic-roughness material.
             Pbr = 5, pbr, "HAS_PBR";
+            /// A metal by its complex index of refraction, smooth or rough.
+            Conductor = 6, conductor, "HAS_CONDUCTOR";
+            /// A window of zero thickness.
+            ThinDielectric = 7, thin_dielectric, "HAS_THIN_DIELECTRIC";
+            /// A dielectric coating over a Lambertian base.
+            Plastic = 8, plastic, "HAS_PLASTIC";
         }
     };
 }
@@ -112,7 +121,7 @@ macro_rules! material_types {
         // few and read once, so they are not boxed
         #[allow(clippy::large_enum_variant)]
         #[derive(Debug, Clone, Deserialize)]
-        #[serde(tag = "type", rename_all = "lowercase")]
+        #[serde(tag = "type", rename_all = "snake_case")]
         pub enum MaterialDesc {
             $( $(#[$doc])* $kind($module::Desc), )*
         }
@@ -164,6 +173,11 @@ impl MaterialDesc {
     /// The normal map it reads (its mesh then needs tangents).
     pub fn normal_map(&self) -> Option<&str> {
         self.model().normal_map()
+    }
+
+    /// Whether its mesh needs tangents: for a normal map, or anisotropic roughness.
+    pub fn needs_tangents(&self) -> bool {
+        self.normal_map().is_some() || self.model().anisotropic()
     }
 
     /// Its record, with `textures` in record order: the tag, the emission and the flags
