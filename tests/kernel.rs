@@ -475,6 +475,7 @@ fn gpu_lights_match_cpu_query_by_query() {
             "[background]\ntop = [0.4, 0.6, 1]\nbottom = [1, 1, 1]\n\
              [[lights]]\ntype = \"point\"\nposition = [0, 2, 0]\nintensity = [5, 5, 5]\n\
              [[lights]]\ntype = \"spot\"\nposition = [1, 2, 1]\nlook_at = [0, -3, 0]\nintensity = [20, 15, 10]\ninner_angle = 15\nouter_angle = 35\n\
+             [[lights]]\ntype = \"spot\"\nposition = [-1, 2, 0.5]\nlook_at = [0, -3, 0]\nintensity = [8, 12, 10]\ninner_angle = 10\nouter_angle = 40\nfalloff = \"mitsuba\"\n\
              [[lights]]\ntype = \"directional\"\ndirection = [0.3, 1, 0.2]\nirradiance = [1, 1, 0.8]\n\
              [[objects]]\ntype = \"triangle\"\nvertices = [[-1, 2.5, -1], [1, 2.5, -1], [0, 2.5, 1]]\nmaterial = \"both\"\n",
         ),

@@ -152,7 +152,8 @@ fn area_lights_give_their_closed_form_irradiance_under_every_strategy() {
 
 /// Lights without a surface over the patch, under every strategy, on both backends: a
 /// point light gives E = I cos(theta) / d^2 (inverse square and cosine law, per channel);
-/// a spot aimed straight down gives that times glTF's falloff, halfway up its ramp; a
+/// a spot aimed straight down gives that times glTF's falloff, halfway up its ramp (and
+/// times Mitsuba's, linear in the angle, with `falloff = "mitsuba"`); a
 /// directional light gives E cos(theta); a sphere between a point light and the patch
 /// casts its shadow; and a point light and a directional light together add up. The
 /// patch shows albedo / pi x E.
@@ -171,6 +172,12 @@ fn point_spot_and_directional_lights_give_their_closed_form_irradiance_under_eve
         ramp > 0.2 && ramp < 0.8,
         "the patch should lie on the ramp: {ramp}"
     );
+    let linear = (outer - cos.acos().to_degrees()) / (outer - inner);
+    assert!(
+        linear > 0.2 && linear < 0.8 && (linear - ramp * ramp).abs() > 0.03,
+        "the two ramps should differ at the patch: {linear} against {}",
+        ramp * ramp
+    );
     let irradiance = [1.0, 0.5, 0.25];
     // travelling along (0.6, -0.8, 0): cos(theta) = 0.8 at the patch
     let directional = irradiance.map(|c| c * 0.8);
@@ -187,6 +194,15 @@ fn point_spot_and_directional_lights_give_their_closed_form_irradiance_under_eve
                  intensity = [2, 3, 4]\ninner_angle = {inner}\nouter_angle = {outer}\n"
             ),
             point(intensity).map(|e| e * ramp * ramp),
+        ),
+        (
+            "spot with Mitsuba's falloff",
+            format!(
+                "[[lights]]\ntype = \"spot\"\nposition = [0.3, 2, 0.4]\ndirection = [0, -1, 0]\n\
+                 intensity = [2, 3, 4]\ninner_angle = {inner}\nouter_angle = {outer}\n\
+                 falloff = \"mitsuba\"\n"
+            ),
+            point(intensity).map(|e| e * linear),
         ),
         ("directional", directional_light.to_string(), directional),
         (

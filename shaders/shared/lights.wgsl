@@ -164,11 +164,19 @@ fn choose_punctual(u: f32) -> u32 {
     return search_cdf(params.num_emitters, params.num_emitters + params.num_punctual - 1u, u);
 }
 
-// A spot's falloff at cos_theta from its axis (KHR_lights_punctual): 1 within the inner
-// cone, 0 beyond the outer, the square of a linear ramp in the cosine between.
-fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32) -> f32 {
+// A spot's falloff at cos_theta from its axis: 1 within the inner cone, 0 beyond the
+// outer, and between them KHR_lights_punctual's ramp, the square of a linear ramp in the
+// cosine, or where `mode` (the record's c.w) is 1 + the cones' difference in radians,
+// Mitsuba 3's, linear in the angle: (outer - theta) / (outer - inner), the numerator as
+// asin(sin(outer - theta)), which keeps its relative precision at the cone's edge (an
+// acos of cos_theta would not).
+fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32, mode: f32) -> f32 {
     let ramp = clamp((cos_theta - cos_outer) / max(0.001, cos_inner - cos_outer), 0.0, 1.0);
-    return ramp * ramp;
+    let sin_outer = sqrt(max(0.0, 1.0 - cos_outer * cos_outer));
+    let sin_theta = sqrt(max(0.0, 1.0 - cos_theta * cos_theta));
+    let to_edge = asin(clamp(sin_outer * cos_theta - cos_outer * sin_theta, -1.0, 1.0));
+    let linear = select(clamp(to_edge / max(1e-6, mode - 1.0), 0.0, 1.0), 1.0, cos_theta >= cos_inner);
+    return select(ramp * ramp, select(0.0, linear, cos_theta > cos_outer), mode >= 1.0);
 }
 
 // A light without a surface, seen from a point.
@@ -203,7 +211,7 @@ fn sample_punctual(p: vec3<f32>, u: f32) -> PunctualSample {
         dir = v / sqrt(d2);
         var falloff = 1.0;
         if (e.kind == LIGHT_SPOT) {
-            falloff = spot_falloff(-dot(dir, e.c.xyz), e.a.w, e.b.w);
+            falloff = spot_falloff(-dot(dir, e.c.xyz), e.a.w, e.b.w, e.c.w);
         }
         le *= falloff / d2;
     }

@@ -167,11 +167,30 @@ pub fn choose_punctual(b: &Bindings, u: f32) -> u32 {
     search_cdf(b, p.num_emitters, p.num_emitters + p.num_punctual - 1, u)
 }
 
-/// A spot's falloff at cos_theta from its axis (KHR_lights_punctual): 1 within the inner
-/// cone, 0 beyond the outer, the square of a linear ramp in the cosine between.
-pub fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32) -> f32 {
+/// A spot's falloff at cos_theta from its axis: 1 within the inner cone, 0 beyond the
+/// outer, and between them KHR_lights_punctual's ramp (the square of a linear ramp in the
+/// cosine) or, where `mode` is 1 + the cones' difference in radians, Mitsuba 3's (linear
+/// in the angle; lights.wgsl's `spot_falloff` says how).
+pub fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32, mode: f32) -> f32 {
     let ramp = ((cos_theta - cos_outer) / (cos_inner - cos_outer).max(0.001)).clamp(0.0, 1.0);
-    ramp * ramp
+    if mode < 1.0 {
+        return ramp * ramp;
+    }
+    let sin_outer = (1.0 - cos_outer * cos_outer).max(0.0).sqrt();
+    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
+    let to_edge = (sin_outer * cos_theta - cos_outer * sin_theta)
+        .clamp(-1.0, 1.0)
+        .asin();
+    let linear = if cos_theta >= cos_inner {
+        1.0
+    } else {
+        (to_edge / (mode - 1.0).max(1e-6)).clamp(0.0, 1.0)
+    };
+    if cos_theta > cos_outer {
+        linear
+    } else {
+        0.0
+    }
 }
 
 /// A light without a surface seen from a point (lights.wgsl's `PunctualSample`).
@@ -205,7 +224,7 @@ pub fn sample_punctual(b: &Bindings, p: Vec3, u: f32) -> PunctualSample {
         dir = v / d2.sqrt();
         let mut falloff = 1.0;
         if e.kind == LIGHT_SPOT {
-            falloff = spot_falloff(-dir.dot(xyz(e.c)), e.a[3], e.b[3]);
+            falloff = spot_falloff(-dir.dot(xyz(e.c)), e.a[3], e.b[3], e.c[3]);
         }
         le *= falloff / d2;
     }

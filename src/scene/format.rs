@@ -428,7 +428,7 @@ pub enum LightDesc {
     },
     /// A point light in a cone about the axis `direction` (or toward `look_at`): the full
     /// `intensity` within `inner_angle` of the axis, none beyond `outer_angle` (degrees),
-    /// glTF's smooth falloff between (the square of a linear ramp in the cosine).
+    /// and between them `falloff`'s ramp.
     Spot {
         position: [f32; 3],
         direction: Option<[f32; 3]>,
@@ -438,6 +438,8 @@ pub enum LightDesc {
         inner_angle: f32,
         #[serde(default = "spot_outer_angle")]
         outer_angle: f32,
+        #[serde(default)]
+        falloff: SpotFalloff,
     },
     /// Parallel light travelling along `direction`: `irradiance` [r, g, b] in W/m^2 on a
     /// surface facing it, E cos(theta) on one tilted by theta.
@@ -467,6 +469,7 @@ impl LightDesc {
                 intensity,
                 inner_angle,
                 outer_angle,
+                falloff,
             } => LightDesc::Spot {
                 position: point(position),
                 direction: direction.map(dir),
@@ -474,6 +477,7 @@ impl LightDesc {
                 intensity,
                 inner_angle,
                 outer_angle,
+                falloff,
             },
             LightDesc::Directional {
                 direction,
@@ -484,6 +488,18 @@ impl LightDesc {
             },
         }
     }
+}
+
+/// A spot light's ramp between its inner and outer cones.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpotFalloff {
+    /// KHR_lights_punctual's: the square of a linear ramp in the cosine of the angle.
+    #[default]
+    Gltf,
+    /// Mitsuba 3's `spot`: linear in the angle itself (`beam_width` is the inner angle,
+    /// `cutoff_angle` the outer).
+    Mitsuba,
 }
 
 /// glTF's default outer cone angle, pi / 4.

@@ -4,7 +4,7 @@
 
 use glam::{Mat3, Vec3};
 
-use super::format::LightDesc;
+use super::format::{LightDesc, SpotFalloff};
 use super::materials::common::Surface;
 use super::records::{
     self, Emitter, Material, Primitive, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
@@ -111,6 +111,7 @@ pub fn punctual_lights<'a>(
                 intensity,
                 inner_angle,
                 outer_angle,
+                falloff,
             } => {
                 let p = Vec3::from(*position);
                 let axis = match (direction, look_at) {
@@ -128,7 +129,15 @@ pub fn punctual_lights<'a>(
                     kind: LIGHT_SPOT,
                     a: p.extend(cos_out).to_array(),
                     b: Vec3::from(*intensity).extend(cos_in).to_array(),
-                    c: axis.extend(0.0).to_array(),
+                    // c.w: for Mitsuba's ramp, linear in the angle, 1 + the cones'
+                    // difference in radians; 0 for glTF's
+                    c: axis
+                        .extend(if *falloff == SpotFalloff::Mitsuba {
+                            1.0 + (outer_angle - inner_angle).to_radians()
+                        } else {
+                            0.0
+                        })
+                        .to_array(),
                     power: (2.0 * PI * (1.0 - 0.5 * (cos_in + cos_out))).min(seen(p))
                         * lum(*intensity),
                     ..Default::default()

@@ -165,7 +165,8 @@ shared_constants! {
     LIGHT_ENVIRONMENT: u32 = 3;
     /// Lights without a surface (`[[lights]]`), last in the list: `a` = position (a spot:
     /// `.w` = cos of the outer angle), `b` = intensity (a spot: `.w` = cos of the inner
-    /// angle), `c` = a spot's unit axis; a directional light's `a` = the unit direction
+    /// angle), `c` = a spot's unit axis (`.w` = 1 + its cones' difference in radians for
+    /// Mitsuba's falloff, 0 for glTF's); a directional light's `a` = the unit direction
     /// toward it, `b` = its irradiance.
     LIGHT_POINT: u32 = 4;
     LIGHT_SPOT: u32 = 5;

@@ -333,6 +333,7 @@ impl Validator<'_> {
                 intensity,
                 inner_angle,
                 outer_angle,
+                ..
             } => {
                 let placed = self.finite3(&format!("{key}.position"), *position, at);
                 self.nonnegative3(&format!("{key}.intensity"), *intensity, at);

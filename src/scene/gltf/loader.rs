@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{Affine3A, Mat4, Vec3};
 
 use super::error::{GltfError, Result};
-use crate::scene::format::{CameraDesc, LightDesc, Projection, UvTransformDesc};
+use crate::scene::format::{CameraDesc, LightDesc, Projection, SpotFalloff, UvTransformDesc};
 use crate::scene::imported::{ImportedScene, NamedCamera};
 use crate::scene::mesh::MAX_TRIANGLES;
 use crate::scene::textures::ImageData;
@@ -220,6 +220,7 @@ impl<'a> Loader<'a> {
                     intensity: power,
                     inner_angle: inner_cone_angle.to_degrees(),
                     outer_angle: outer_cone_angle.to_degrees(),
+                    falloff: SpotFalloff::Gltf,
                 }
             }
         });
