@@ -1,6 +1,7 @@
 """Compares wgtrace with Mitsuba 3 on one scene given in both formats, and writes a report.
 
-usage: compare_mitsuba.py SCENE.toml SCENE.xml OUT.md [RUNS] [SPP]
+usage: [WGTRACE_ARGS="--filter tent"] [MITSUBA_PARAMS=filter=tent,...] \
+       compare_mitsuba.py SCENE.toml SCENE.xml OUT.md [RUNS] [SPP]
 
 Renders the scene RUNS times (default 8) with each renderer at SPP samples per pixel
 (default 1024), each run with its own seed: wgtrace with target/release/wgtrace (build it
@@ -11,6 +12,8 @@ by pixel (the z-test of Mitsuba's render tests: at least 99.75% of pixels within
 bound at significance 0.01) and
 over regions of the image named in the TOML file's comments as `# region NAME x0 y0 x1 y1`
 (pixels, exclusive ends); its comment lines `# report: TEXT` are copied under the figures.
+WGTRACE_ARGS adds options to each `wgtrace render`, MITSUBA_PARAMS sets the XML file's
+`<default>` values (comma-separated NAME=VALUE), so one scene pair serves several settings.
 Needs `pip install mitsuba numpy` and an LLVM of 15 or newer named
 by DRJIT_LIBLLVM_PATH (Debian 12: `apt-get install libllvm19`,
 /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1).
@@ -30,6 +33,8 @@ runs = int(sys.argv[4]) if len(sys.argv) > 4 else 8
 spp = int(sys.argv[5]) if len(sys.argv) > 5 else 1024
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 wgtrace = os.path.join(root, "target", "release", "wgtrace")
+wgtrace_args = os.environ.get("WGTRACE_ARGS", "").split()
+mitsuba_params = dict(kv.split("=", 1) for kv in os.environ.get("MITSUBA_PARAMS", "").split(",") if kv)
 
 mi.set_variant("llvm_ad_rgb")
 tmp = tempfile.mkdtemp()
@@ -41,7 +46,7 @@ def load(path):
 
 def render_wgtrace(seed):
     path = os.path.join(tmp, f"w{seed}.exr")
-    subprocess.run([wgtrace, "render", toml, "--spp", str(spp), "--seed", str(seed), "-o", path],
+    subprocess.run([wgtrace, "render", toml, "--spp", str(spp), "--seed", str(seed), "-o", path, *wgtrace_args],
                    check=True, capture_output=True)
     return load(path)
 
@@ -52,7 +57,7 @@ def render_mitsuba(scene, seed):
 
 w_runs = np.stack([render_wgtrace(s) for s in range(runs)])
 height, width = w_runs.shape[1:3]
-scene = mi.load_file(xml, res=width, spp=spp)
+scene = mi.load_file(xml, res=width, spp=spp, **mitsuba_params)
 m_runs = np.stack([render_mitsuba(scene, 1000 + s) for s in range(runs)])
 
 
@@ -118,10 +123,14 @@ mp, mpse = mean_se(m_runs)
 zp = (wp - mp) / np.sqrt(wpse**2 + mpse**2 + 1e-12)
 pixel_bound = sidak_bound(0.01, zp.size)
 within = float((np.abs(zp) <= pixel_bound).mean())
+worst_pixels = [f"pixel ({x}, {y}) {'RGB'[c]}: {wp[y, x, c]:.4f} against {mp[y, x, c]:.4f} (z {zp[y, x, c]:+.1f})"
+                for y, x, c in sorted(zip(*np.nonzero(np.abs(zp) > pixel_bound)), key=lambda i: -abs(zp[i]))[:8]]
 name = os.path.relpath(toml, root)
+env = "".join(f'{k}="{v}" ' for k, v in [("WGTRACE_ARGS", " ".join(wgtrace_args)),
+                                        ("MITSUBA_PARAMS", os.environ.get("MITSUBA_PARAMS", ""))] if v)
 report = f"""# wgtrace against Mitsuba 3: `{name}`
 
-Written by `bench/compare_mitsuba.py {name} {os.path.relpath(xml, root)} {os.path.relpath(out, root)} {runs} {spp}`
+Written by `{env}bench/compare_mitsuba.py {name} {os.path.relpath(xml, root)} {os.path.relpath(out, root)} {runs} {spp}`
 on {datetime.date.today()}: {runs} runs of {spp} spp per renderer, {width} x {height} pixels, each
 run with its own seed; wgtrace on its default backend, Mitsuba 3 {mi.__version__} (`llvm_ad_rgb`). Means
 ± their standard errors over the runs; *z* is the difference over both standard errors.
@@ -137,8 +146,8 @@ more than {bound:.2f} standard errors (significance 1e-3 over all tests, Sidak);
 Pixel by pixel, as Mitsuba's render tests judge an image (each pixel's difference over both
 standard errors, bound {pixel_bound:.2f} at significance 0.01 over {zp.size} tests, Sidak):
 {within * 100:.2f}% of pixels and channels are within the bound ({"agrees" if within >= 0.9975 else "DIFFERS"}: the
-test asks for 99.75%); the largest |z| is {np.abs(zp).max():.2f}.
-"""
+test asks for 99.75%); the largest |z| is {np.abs(zp).max():.2f}.{"" if not worst_pixels else " The farthest outside (x, y from the top left):"}
+""" + "".join(f"\n- {w}" for w in worst_pixels) + ("\n" if worst_pixels else "")
 notes = [line.split("# report:", 1)[1].strip() for line in open(toml) if line.startswith("# report:")]
 if notes:
     report += "\n" + " ".join(notes) + "\n"

@@ -381,7 +381,7 @@ fn main(
 #ifdef HAS_EMISSION
     var sample = params.sample_index;
     let end = sample + params.sample_count;
-    var path = start_path(camera_ray(x, y, sample_2d(pixel, sample, DIM_PIXEL), sample_2d(pixel, sample, DIM_LENS)));
+    var path = start_path(camera_ray(x, y, pixel_position(pixel, sample), sample_2d(pixel, sample, DIM_LENS)));
     loop {
 #ifdef HAS_LANE_STATS
         count_lanes(0u);
@@ -404,7 +404,7 @@ fn main(
             if (sample >= end) {
                 break;
             }
-            path = start_path(camera_ray(x, y, sample_2d(pixel, sample, DIM_PIXEL), sample_2d(pixel, sample, DIM_LENS)));
+            path = start_path(camera_ray(x, y, pixel_position(pixel, sample), sample_2d(pixel, sample, DIM_LENS)));
         }
     }
 #else

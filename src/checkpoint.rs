@@ -19,13 +19,15 @@ const MAGIC: &str = "wgtrace checkpoint";
 /// The renderer version a checkpoint must come from.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
-/// The checkpoint format (the `format` line of the header). 3: the scene hash covers every
-/// byte of every record ([`scene_hash`]). Format 2 hashed a material record only up to its
+/// The checkpoint format (the `format` line of the header). 4: the scene hash covers every
+/// byte of every record ([`scene_hash`]), the parameters' pixel filter among them. Format
+/// 3 hashed the parameters before they held the filter, so its hashes differ from
+/// format 4's for the same scene. Format 2 hashed a material record only up to its
 /// first 96 bytes unless pbr had a layer, so a material keeping parameters past them would
 /// not change its hash, and `--resume` or `merge` would take samples of another scene;
 /// format 1 (no `format` line) hashed with Rust's `DefaultHasher`, which a new Rust
-/// release may change. Files of either are refused with the reason.
-pub const FORMAT: u32 = 3;
+/// release may change. Files of any of them are refused with the reason.
+pub const FORMAT: u32 = 4;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
@@ -301,9 +303,12 @@ impl Checkpoint {
                     if format == 1 {
                         " (format 1 hashed the scene with Rust's DefaultHasher, which may \
                          change between builds, so its hash cannot be trusted)"
-                    } else if format < FORMAT {
+                    } else if format == 2 {
                         " (its scene hash left out part of each material record, so it \
                          cannot tell this scene from one that differs there)"
+                    } else if format < FORMAT {
+                        " (its scene hash came before the parameters held the pixel \
+                         filter, so it cannot match this wgtrace's hash of the same scene)"
                     } else {
                         " (written by a newer wgtrace)"
                     }

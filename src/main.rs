@@ -11,7 +11,7 @@ use wgtrace::checkpoint::Checkpoint;
 use wgtrace::gpu::limits::DeviceFit;
 use wgtrace::gpu::plan::{Feature, GpuPlan};
 use wgtrace::image_io::check_writable;
-use wgtrace::scene::format::{LightSampling, SamplerKind};
+use wgtrace::scene::format::{FilterKind, LightSampling, SamplerKind};
 use wgtrace::session::{
     Output, Passes, Saving, Session, SessionError, SessionOptions, StopRule, Stopped,
 };
@@ -206,6 +206,10 @@ struct RenderArgs {
     /// How paths find lights (overrides [render] light_sampling).
     #[arg(long, value_enum)]
     light_sampling: Option<LightSampling>,
+    /// Pixel filter (overrides [render] filter; its radius and deviation come from the
+    /// file, else Mitsuba 3's defaults).
+    #[arg(long, value_enum)]
+    filter: Option<FilterKind>,
     /// Stop after as many passes as fit in this many seconds, then write the image. Without
     /// --spp the scene's spp no longer caps the passes (except for hammersley and jittered,
     /// whose points depend on it).
@@ -675,6 +679,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         seed: args.seed,
         sampler: args.sampler,
         light_sampling: args.light_sampling,
+        filter: args.filter,
         background: args.background,
         camera: args.camera.clone(),
     };

@@ -47,7 +47,7 @@ fn the_scene_hash_is_the_same_on_every_build() {
     let scene = common::scene_from_str(SPHERE);
     assert_eq!(
         scene_hash(&scene),
-        0x4ca2_bb9f_ac22_849c,
+        0xaa05_bdff_daf2_ca2c,
         "the scene hash changed: checkpoints written before are refused as another scene's"
     );
     let with =
@@ -55,12 +55,20 @@ fn the_scene_hash_is_the_same_on_every_build() {
     assert_eq!(with("spp = 8", "spp = 64"), scene_hash(&scene));
     assert_ne!(with("spp = 8", "spp = 8\nseed = 1"), scene_hash(&scene));
     assert_ne!(with("radius = 1", "radius = 1.5"), scene_hash(&scene));
+    let filter = |f: &str| with("spp = 8", &format!("spp = 8\n{f}"));
+    assert_ne!(filter("filter = \"tent\""), scene_hash(&scene));
+    assert_ne!(filter("filter = \"gaussian\""), filter("filter = \"tent\""));
+    assert_ne!(
+        filter("filter = \"gaussian\""),
+        filter("filter = \"gaussian\"\nfilter_stddev = 0.4")
+    );
     let hammersley = |spp: &str| with("spp = 8", &format!("spp = {spp}\nsampler = \"hammersley\""));
     assert_ne!(hammersley("8"), hammersley("64"));
 }
 
 /// A checkpoint of an older format (1, no `format` line: its scene hash came from Rust's
-/// `DefaultHasher`; 2: its hash left out part of each material record) is refused, saying
+/// `DefaultHasher`; 2: its hash left out part of each material record; 3: its parameters
+/// held no pixel filter) is refused, saying
 /// why, and so is a newer one; the current format round-trips.
 #[test]
 fn an_older_checkpoint_format_is_refused_with_the_reason() {
@@ -103,6 +111,19 @@ fn an_older_checkpoint_format_is_refused_with_the_reason() {
         err.contains("two.ckpt")
             && err.contains("format 2")
             && err.contains("material record")
+            && err.contains("render again"),
+        "{err}"
+    );
+    // format 3 hashed the parameters before they held the pixel filter
+    let three = dir.join("three.ckpt");
+    let v3 =
+        String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "format = 3\n");
+    std::fs::write(&three, v3.as_bytes()).unwrap();
+    let err = Checkpoint::read(&three).unwrap_err().to_string();
+    assert!(
+        err.contains("three.ckpt")
+            && err.contains("format 3")
+            && err.contains("pixel filter")
             && err.contains("render again"),
         "{err}"
     );

@@ -516,6 +516,7 @@ fn overrides_replace_render_settings_and_are_validated() {
         seed: Some(9),
         sampler: None,
         light_sampling: Some(wgtrace::scene::format::LightSampling::Mixture),
+        filter: Some(wgtrace::scene::format::FilterKind::Tent),
         background: Some([0.5, 0.25, 0.125]),
         camera: None,
     };
@@ -529,6 +530,8 @@ fn overrides_replace_render_settings_and_are_validated() {
         s.light_sampling,
         wgtrace::scene::format::LightSampling::Mixture
     );
+    assert_eq!(s.filter.kind, wgtrace::scene::format::FilterKind::Tent);
+    assert_eq!(s.filter.radius, 1.0);
     let zero = Overrides {
         width: Some(0),
         ..Default::default()

@@ -1826,3 +1826,51 @@ fn strips_and_fans_become_triangles_wound_alike() {
         .contains("not a multiple of 3"));
     assert!(triangles(Mode::TriangleFan, &[0, 1]).unwrap().is_empty());
 }
+
+/// A grid of rough transmissive spheres over roughness and ior, ior 1 among them, under
+/// the studio environment (as glTF's public transmission-roughness test model has them)
+/// renders no non-finite sample on either backend: an index-matched boundary is smooth
+/// whatever its roughness (its record says so), where rough glass's generalized half
+/// vector was the zero vector and its weight NaN.
+#[test]
+fn rough_transmission_at_every_ior_renders_finite_samples() {
+    let mut w = GltfWriter::new();
+    w.use_extension("KHR_materials_transmission", true);
+    w.use_extension("KHR_materials_ior", true);
+    let sphere = gltf_writer::uv_sphere([0.0; 3], 0.45, 16, 32);
+    let mut nodes = Vec::new();
+    for (row, ior) in [1.0f32, 1.05, 1.5].into_iter().enumerate() {
+        for (col, roughness) in [0.3f32, 0.6, 1.0].into_iter().enumerate() {
+            let m = w.material(json!({
+                "pbrMetallicRoughness": { "roughnessFactor": roughness },
+                "extensions": {
+                    "KHR_materials_transmission": { "transmissionFactor": 1.0 },
+                    "KHR_materials_ior": { "ior": ior } } }));
+            let mesh = w.add_mesh_arrays(&sphere, Some(m), true);
+            let t = [col as f32 - 1.0, row as f32 - 1.0, 0.0];
+            nodes.push(w.node(json!({ "mesh": mesh, "translation": t })));
+        }
+    }
+    let c =
+        w.camera(json!({ "type": "perspective", "perspective": { "yfov": 0.9, "znear": 0.1 } }));
+    nodes.push(w.node(json!({ "camera": c, "translation": [0.0, 0.0, 3.5] })));
+    w.scene(&nodes);
+    let path = dir("rough-transmission").join("grid.glb");
+    w.to_glb(&path).unwrap();
+    let o = Overrides {
+        width: Some(64),
+        height: Some(64),
+        spp: Some(16),
+        ..Default::default()
+    };
+    let scene = wgtrace::load_scene(&path, &o).unwrap_or_else(|e| panic!("{e}"));
+    for m in &scene.materials[..3] {
+        assert_eq!(dielectric::Params::read(m).alpha, 0.0, "ior 1 is smooth");
+    }
+    for (name, sums) in [
+        ("gpu", common::render_gpu(&scene)),
+        ("cpu", common::render_cpu(&scene)),
+    ] {
+        assert_eq!(sums.non_finite(), 0, "{name}: non-finite samples");
+    }
+}

@@ -934,3 +934,269 @@ fn a_device_lost_mid_render_keeps_the_samples_read_back() {
         );
     }
 }
+
+/// Every pixel filter gives the same image on both backends: the tent, Mitsuba's Gaussian
+/// (radius 4 deviations) and pbrt-v4's (radius 1.5), each sample's position drawn from
+/// the filter on both.
+#[test]
+fn gpu_matches_cpu_with_every_pixel_filter() {
+    use wgtrace::scene::format::FilterKind;
+    let src = std::fs::read_to_string(common::repo_path("scenes/cornell.toml")).unwrap();
+    for (filter, extra) in [
+        (FilterKind::Tent, ""),
+        (FilterKind::Gaussian, ""),
+        (FilterKind::Gaussian, "filter_radius = 1.5\n"),
+    ] {
+        let src = src.replacen("[render]\n", &format!("[render]\n{extra}"), 1);
+        let o = Overrides {
+            width: Some(48),
+            height: Some(48),
+            spp: Some(16),
+            seed: Some(5),
+            filter: Some(filter),
+            ..Default::default()
+        };
+        let scene = wgtrace::load_scene_str(&src, &common::repo_path("scenes/cornell.toml"), &o)
+            .unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(scene.filter.kind, filter);
+        let c = compare(&render_gpu(&scene), &render_cpu(&scene), 8);
+        assert!(
+            c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
+            "{filter:?} {extra}: {} tiles outside the bound, {:.4} of pixels agree",
+            c.failed_tiles.len(),
+            c.agree_fraction
+        );
+    }
+}
+
+/// A step edge through each pixel filter renders the filter's CDF, on both backends: an
+/// orthographic view, one pixel a unit, of an emitter of radiance 1 over x > 0.25 (pixel
+/// coordinate 8.25 of 16), black elsewhere, at max_depth 1. Pixel i is the chance that a
+/// sample at i + 0.5 + offset lands past the edge, 1 - F(7.75 - i) for the filter's CDF F
+/// (integrated in f64 here): exactly 0 and 1 outside the filter's radius, and within
+/// 5 standard errors of a Bernoulli mean over the column's 4 x 256 samples inside it.
+#[test]
+fn a_step_edge_renders_each_pixel_filters_cdf() {
+    for (filter, extra, r, sd) in [
+        ("box", "", 0.5f64, 0.0f64),
+        ("tent", "", 1.0, 0.0),
+        ("tent", "filter_radius = 2", 2.0, 0.0),
+        ("gaussian", "", 2.0, 0.5),
+        ("gaussian", "filter_radius = 1.5", 1.5, 0.5),
+    ] {
+        let src = format!(
+            r#"
+[render]
+width = 16
+height = 4
+spp = 256
+max_depth = 1
+filter = "{filter}"
+{extra}
+
+[camera]
+projection = "orthographic"
+height = 4
+look_from = [0, 0, 2]
+look_at = [0, 0, 0]
+
+[materials]
+light = {{ type = "emissive", radiance = [1, 1, 1] }}
+
+[[objects]]
+type = "polygon"
+vertices = [[0.25, -10, 0], [20, -10, 0], [20, 10, 0], [0.25, 10, 0]]
+material = "light"
+"#
+        );
+        let scene = scene_from_str(&src);
+        let profile = |x: f64| match filter {
+            "box" => f64::from(x.abs() <= 0.5),
+            "tent" => (1.0 - x.abs() / r).max(0.0),
+            _ => {
+                let g = |t: f64| (-t * t / (2.0 * sd * sd)).exp();
+                (g(x) - g(r)).max(0.0)
+            }
+        };
+        // the CDF by the midpoint rule on 20,000 steps
+        let cdf = |x: f64| {
+            let n = 20_000;
+            let h = 2.0 * r / n as f64;
+            let part = |hi: f64| {
+                (0..n)
+                    .map(|i| -r + (i as f64 + 0.5) * h)
+                    .filter(|&t| t < hi)
+                    .map(profile)
+                    .sum::<f64>()
+            };
+            part(x) / part(r + 1.0)
+        };
+        for (name, render) in [
+            (
+                "gpu",
+                render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
+            ),
+            ("cpu", render_cpu),
+        ] {
+            let img = render(&scene);
+            for i in 0..16u32 {
+                let mean = (0..4)
+                    .map(|y| img.mean((y * 16 + i) as usize)[0] as f64)
+                    .sum::<f64>()
+                    / 4.0;
+                let d = 7.75 - i as f64;
+                let label = format!("{filter} {extra}, {name}, pixel {i}");
+                if d.abs() >= r {
+                    let want = if d > 0.0 { 0.0 } else { 1.0 };
+                    assert_eq!(mean, want, "{label}: outside the radius");
+                } else {
+                    let p = 1.0 - cdf(d);
+                    let se = (p * (1.0 - p) / 1024.0).sqrt();
+                    assert!(
+                        (mean - p).abs() <= 5.0 * se + 2e-3,
+                        "{label}: {mean} against {p} (standard error {se})"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// An opacity mask on any material, on both backends. Before an emitter of radiance 1, seen
+/// by an orthographic camera at max_depth 1 (a pixel a unit): a black Lambertian sheet of
+/// opacity 0.3 shows 0.7 (a Bernoulli mean, to 5 standard errors); a black conductor
+/// sheet masked by a solid checker (2-unit cells, black: opacity 0, white: 1) shows the
+/// emitter exactly where its cell is black and nothing where white. And shadow rays pass
+/// through masks: a sheet of opacity 0.25 between a point light and a white floor leaves
+/// the floor 0.75 of its light.
+#[test]
+fn opacity_masks_any_material_for_camera_and_shadow_rays() {
+    let src = r#"
+[render]
+width = 16
+height = 4
+spp = 256
+max_depth = 1
+
+[camera]
+projection = "orthographic"
+height = 4
+look_from = [0, 0, 3]
+look_at = [0, 0, 0]
+
+[textures]
+cells = { type = "checker", even = [0, 0, 0], odd = [1, 1, 1], scale = 0.5, mapping = "solid" }
+
+[materials]
+light = { type = "emissive", radiance = [1, 1, 1] }
+veil = { type = "lambertian", albedo = [0, 0, 0], opacity = 0.3 }
+grid = { type = "conductor", material = "none", specular = [0, 0, 0], opacity = "cells" }
+
+[[objects]]
+type = "polygon"
+vertices = [[-10, -10, -1], [10, -10, -1], [10, 10, -1], [-10, 10, -1]]
+material = "light"
+
+[[objects]]
+type = "polygon"
+vertices = [[-10, -10, 0.5], [0, -10, 0.5], [0, 10, 0.5], [-10, 10, 0.5]]
+material = "veil"
+
+[[objects]]
+type = "polygon"
+vertices = [[0, -10, 0.5], [10, -10, 0.5], [10, 10, 0.5], [0, 10, 0.5]]
+material = "grid"
+"#;
+    let scene = scene_from_str(src);
+    for (name, render) in [
+        (
+            "gpu",
+            render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
+        ),
+        ("cpu", render_cpu),
+    ] {
+        let img = render(&scene);
+        // the veil: columns 0..8, 4 x 256 samples each
+        for x in 0..8u32 {
+            let mean = (0..4u32)
+                .map(|y| img.mean((y * 16 + x) as usize)[0] as f64)
+                .sum::<f64>()
+                / 4.0;
+            let se = (0.7f64 * 0.3 / 1024.0).sqrt();
+            assert!(
+                (mean - 0.7).abs() <= 5.0 * se,
+                "{name}: veil column {x} reads {mean}"
+            );
+        }
+        // the checker: x in [k, k + 1] for column k + 8, y in [1 - row, 2 - row]
+        for y in 0..4u32 {
+            for x in 8..16u32 {
+                let (wx, wy) = (x as i32 - 8, 1 - y as i32);
+                let white = (wx.div_euclid(2) + wy.div_euclid(2)).rem_euclid(2) == 1;
+                let want = if white { 0.0 } else { 1.0 };
+                let got = img.mean((y * 16 + x) as usize);
+                assert_eq!(got, [want; 3], "{name}: pixel ({x}, {y})");
+            }
+        }
+    }
+    // shadow rays: a floor lit by a point light above it, through a sheet of opacity 0.25
+    let shadow = |veil: &str| {
+        format!(
+            r#"
+[render]
+width = 8
+height = 8
+spp = 256
+max_depth = 2
+
+[camera]   # below the veil: only the shadow rays cross it
+projection = "orthographic"
+height = 0.5
+look_from = [0, 0.5, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+
+[materials]
+floor = {{ type = "lambertian", albedo = [1, 1, 1] }}
+veil = {{ type = "lambertian", albedo = [0, 0, 0], opacity = {veil} }}
+
+[[objects]]
+type = "polygon"
+vertices = [[-5, 0, 5], [5, 0, 5], [5, 0, -5], [-5, 0, -5]]
+material = "floor"
+
+[[objects]]   # faces down, between the light and the floor
+type = "polygon"
+vertices = [[-5, 1, -5], [5, 1, -5], [5, 1, 5], [-5, 1, 5]]
+material = "veil"
+
+[[lights]]
+type = "point"
+position = [0, 2, 0]
+intensity = [4, 4, 4]
+"#
+        )
+    };
+    let open = scene_from_str(&shadow("0.0"));
+    let veiled = scene_from_str(&shadow("0.25"));
+    for (name, render) in [
+        (
+            "gpu",
+            render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
+        ),
+        ("cpu", render_cpu),
+    ] {
+        let (a, b) = (render(&open), render(&veiled));
+        let mean = |img: &wgtrace::Accumulation| {
+            (0..64).map(|i| img.mean(i)[0] as f64).sum::<f64>() / 64.0
+        };
+        let (lit, through) = (mean(&a), mean(&b));
+        assert!(lit > 0.0, "{name}: the open floor is lit");
+        // 64 x 256 Bernoulli shadow tests of p = 0.75 on a nearly constant light
+        let se = (0.75f64 * 0.25 / (64.0 * 256.0)).sqrt();
+        assert!(
+            (through / lit - 0.75).abs() <= 5.0 * se + 0.002,
+            "{name}: the veiled floor reads {through} against {lit} open"
+        );
+    }
+}

@@ -893,8 +893,18 @@ fn light_mistakes_are_named_with_their_line_and_key() {
             vec!["bad.toml:8:1: lights[1].direction: must be non-zero"],
         ),
         (
+            "[[lights]]\ntype = \"projector\"\nposition = [0, 1, 0]\nlook_at = [0, 0, 0]\n\
+             up = [0, 2, 0]\nfov = 180\nirradiance = \"slides\"\nscale = -1\n",
+            vec![
+                "bad.toml:4:1: lights[0].up: must not be parallel to the projector's axis",
+                "bad.toml:4:1: lights[0].fov: must be in (0, 180) degrees, got 180",
+                "bad.toml:4:1: lights[0].irradiance: unknown texture \"slides\" (defined: none)",
+                "bad.toml:4:1: lights[0].scale: must be >= 0, got -1",
+            ],
+        ),
+        (
             "[[lights]]\ntype = \"sun\"\ndirection = [0, -1, 0]\n",
-            vec!["bad.toml:5:8: unknown variant `sun`, expected one of `point`, `spot`, `directional`"],
+            vec!["bad.toml:5:8: unknown variant `sun`, expected one of `point`, `spot`, `directional`, `projector`"],
         ),
     ];
     for (lights, expected) in cases {
@@ -915,4 +925,154 @@ fn light_mistakes_are_named_with_their_line_and_key() {
         .unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(scene.num_punctual, 1);
     assert!(scene.emits());
+}
+
+/// The scene of the projector tests: a diffuse plane (albedo 0.5) at z = 0 facing +z, seen
+/// by an orthographic camera 4 units tall on 16 x 16 pixels (a pixel a quarter unit), lit
+/// only by `light` at max_depth 2.
+fn projector_scene(light: &str, textures: &str) -> String {
+    format!(
+        r#"
+[render]
+width = 16
+height = 16
+spp = 4
+max_depth = 2
+
+[camera]
+projection = "orthographic"
+height = 4
+look_from = [0, 0, 3]
+look_at = [0, 0, 0]
+
+[background]
+color = [0, 0, 0]
+
+{textures}
+
+[materials]
+plane = {{ type = "lambertian", albedo = [0.5, 0.5, 0.5] }}
+
+[[objects]]
+type = "polygon"
+vertices = [[-10, -10, 0], [10, -10, 0], [10, 10, 0], [-10, 10, 0]]
+material = "plane"
+
+[[lights]]
+type = "projector"
+position = [0, 0, 2]
+look_at = [0, 0, 0]
+fov = 53.13010235415598   # tan(fov / 2) = 0.5: the frustum is 2 units wide at the plane
+{light}
+"#
+    )
+}
+
+/// A projector of irradiance E times `scale` lights a diffuse plane facing it at distance D
+/// with pi E scale / D^2 everywhere inside its frustum (Mitsuba 3's projector: a flat
+/// projection stays flat) and nothing outside, so every pixel of the orthographic view
+/// wholly inside reads albedo E scale / D^2 and every pixel wholly outside 0, on both
+/// backends. An image lands upright and unmirrored (a 2 x 2 image's top-right texel, green,
+/// on the plane's top right), and its aspect sets the frustum's height (a 2 x 1 image
+/// lights half as tall a band).
+#[test]
+fn a_projector_lights_its_frustum_flat_upright_and_at_its_images_aspect() {
+    let dir = common::tmp_dir("projector");
+    let png = |name: &str, w: u32, h: u32, texels: &[[u8; 3]]| {
+        let mut img = image::RgbImage::new(w, h);
+        for (i, t) in texels.iter().enumerate() {
+            img.put_pixel(i as u32 % w, i as u32 / w, image::Rgb(*t));
+        }
+        let path = dir.join(name);
+        img.save(&path).unwrap();
+        path.display().to_string().replace('\\', "/")
+    };
+    let quad = png(
+        "quad.png",
+        2,
+        2,
+        &[[255, 0, 0], [0, 255, 0], [0, 0, 255], [255, 255, 255]],
+    );
+    let wide = png("wide.png", 2, 1, &[[255, 255, 255], [255, 255, 255]]);
+    let textures = format!(
+        "[textures]\nquad = {{ type = \"image\", path = \"{quad}\", filter = \"nearest\" }}\n\
+         wide = {{ type = \"image\", path = \"{wide}\", filter = \"nearest\" }}\n"
+    );
+    // pixel (x, y) covers x in [-2 + x / 4, -2 + (x + 1) / 4] and y in [2 - (y + 1) / 4,
+    // 2 - y / 4]: pixels 4..12 lie inside [-1, 1], the frustum's width at the plane
+    let inside = |i: u32, lo: u32, hi: u32| (lo..hi).contains(&i);
+    let red = [1.0f32, 0.0, 0.0];
+    let green = [0.0f32, 1.0, 0.0];
+    let blue = [0.0f32, 0.0, 1.0];
+    let white = [1.0f32; 3];
+    type Expect = Box<dyn Fn(u32, u32) -> Option<[f32; 3]>>;
+    let cases: [(&str, &str, Expect); 3] = [
+        (
+            "constant",
+            "irradiance = [1, 2, 4]\nscale = 2",
+            // 0.5 x 2 x E / 2^2
+            Box::new(move |x, y| {
+                let lit = inside(x, 4, 12) && inside(y, 4, 12);
+                let dark = !inside(x, 3, 13) || !inside(y, 3, 13);
+                (lit || dark).then_some(if lit { [0.25, 0.5, 1.0] } else { [0.0; 3] })
+            }),
+        ),
+        (
+            "2 x 2 image",
+            "irradiance = \"quad\"",
+            Box::new(move |x, y| {
+                let q = match (
+                    inside(x, 4, 8),
+                    inside(x, 8, 12),
+                    inside(y, 4, 8),
+                    inside(y, 8, 12),
+                ) {
+                    (true, _, true, _) => red,
+                    (_, true, true, _) => green,
+                    (true, _, _, true) => blue,
+                    (_, true, _, true) => white,
+                    _ => return (!inside(x, 3, 13) || !inside(y, 3, 13)).then_some([0.0; 3]),
+                };
+                Some(q.map(|c| 0.125 * c))
+            }),
+        ),
+        (
+            "2 x 1 image",
+            "irradiance = \"wide\"",
+            // tan of half the height's angle 0.25: y in [-0.5, 0.5], rows 6..10
+            Box::new(move |x, y| {
+                let lit = inside(x, 4, 12) && inside(y, 6, 10);
+                let dark = !inside(x, 3, 13) || !inside(y, 5, 11);
+                (lit || dark).then_some(if lit { [0.125; 3] } else { [0.0; 3] })
+            }),
+        ),
+    ];
+    for (name, light, expect) in &cases {
+        let scene = wgtrace::load_scene_str(
+            &projector_scene(light, &textures),
+            &dir.join("projector.toml"),
+            &Overrides::default(),
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        for (backend, img) in [("gpu", render_gpu(&scene)), ("cpu", render_cpu(&scene))] {
+            let mut checked = 0;
+            for y in 0..16u32 {
+                for x in 0..16u32 {
+                    let Some(want) = expect(x, y) else { continue };
+                    let got = img.mean((y * 16 + x) as usize);
+                    for c in 0..3 {
+                        assert!(
+                            (got[c] - want[c]).abs() <= 1e-4 * want[c].max(1e-3),
+                            "{name}, {backend}: pixel ({x}, {y}) reads {got:?}, expected {want:?}"
+                        );
+                    }
+                    checked += 1;
+                }
+            }
+            assert!(
+                checked >= 150,
+                "{name}, {backend}: {checked} pixels checked"
+            );
+        }
+    }
 }

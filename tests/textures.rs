@@ -512,3 +512,80 @@ fn images_wrap_per_axis_filter_nearest_and_read_their_uv_set() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// An image's `transform = { matrix = ... }` (Mitsuba's `to_uv`) maps uv by any affine map
+/// before the look-up, shear included, and equals the offset, rotation and scale it can
+/// spell; giving both, or a non-finite entry, is an error naming the key.
+#[test]
+fn an_image_reads_uv_through_its_affine_matrix() {
+    let dir = image_dir("matrix");
+    let s = scene(
+        "a = { type = \"image\", path = \"2x2.png\", transform = { matrix = [[0.5, 0.25, 0.125], [0, 1, -0.5]] } }\n\
+         b = { type = \"image\", path = \"2x2.png\", transform = { matrix = [[0, -2, 0.5], [2, 0, 0]] } }\n\
+         c = { type = \"image\", path = \"2x2.png\", transform = { rotation = 90, scale = [2, 2], offset = [0.5, 0] } }\n\
+         plain = { type = \"image\", path = \"2x2.png\" }",
+        &dir,
+    );
+    // names in order: a = 0, b = 1, c = 2, plain = 3
+    for uv in [[0.1f32, 0.2], [0.7, 0.4], [0.33, 0.9]] {
+        let [u, v] = uv;
+        let sheared = [0.5 * u + 0.25 * v + 0.125, v - 0.5];
+        assert_close(value(&s, 0, uv, [0.0; 3]), value(&s, 3, sheared, [0.0; 3]));
+        // b's matrix is c's offset + R(90) (2 uv)
+        assert_close(value(&s, 1, uv, [0.0; 3]), value(&s, 2, uv, [0.0; 3]));
+    }
+    let err = |t: &str| {
+        let src =
+            format!("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n{t}\n");
+        wgtrace::load_scene_str(&src, &dir.join("bad.toml"), &Default::default())
+            .unwrap_err()
+            .to_string()
+    };
+    let e = err("i = { type = \"image\", path = \"2x2.png\", transform = { matrix = [[1, 0, 0], [0, 1, 0]], scale = [2, 2] } }");
+    assert!(
+        e.contains("bad.toml:5:") && e.contains("textures.i.transform.matrix: replaces offset"),
+        "{e}"
+    );
+    let e = err("i = { type = \"image\", path = \"2x2.png\", transform = { matrix = [[1, 0, 0], [0, nan, 0]] } }");
+    assert!(e.contains("textures.i.transform: must be finite"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// An opacity mask's mistakes, each named by its file, line and key: a value outside [0,
+/// 1], a texture that does not exist, and a mask on a material that emits (a light cannot
+/// be masked); the emissive type has no `opacity` at all.
+#[test]
+fn opacity_masks_are_validated() {
+    let err = |t: &str, m: &str| {
+        let src = format!("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n{t}\n[materials]\n{m}\n");
+        wgtrace::load_scene_str(&src, Path::new("bad.toml"), &Default::default())
+            .unwrap_err()
+            .to_string()
+    };
+    let e = err(
+        "",
+        "m = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5], opacity = 1.5 }",
+    );
+    assert!(
+        e.contains("bad.toml:7:") && e.contains("materials.m.opacity: must be in [0, 1]"),
+        "{e}"
+    );
+    let e = err("", "m = { type = \"conductor\", opacity = \"leaves\" }");
+    assert!(
+        e.contains("materials.m.opacity: unknown texture \"leaves\""),
+        "{e}"
+    );
+    let e = err(
+        "",
+        "m = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5], emission = [1, 1, 1], opacity = 0.5 }",
+    );
+    assert!(
+        e.contains("bad.toml:7:") && e.contains("materials.m.opacity: a light cannot be masked"),
+        "{e}"
+    );
+    let e = err(
+        "",
+        "m = { type = \"emissive\", radiance = [1, 1, 1], opacity = 0.5 }",
+    );
+    assert!(e.contains("bad.toml:7:") && e.contains("opacity"), "{e}");
+}

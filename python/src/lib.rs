@@ -25,7 +25,7 @@ use wgtrace::aov::{check_output, image_layers, write_output, Aov, OutputError};
 use wgtrace::checkpoint::Checkpoint;
 use wgtrace::denoise::Denoiser;
 use wgtrace::image_io::Layer;
-use wgtrace::scene::format::{LightSampling, SamplerKind};
+use wgtrace::scene::format::{FilterKind, LightSampling, SamplerKind};
 use wgtrace::session::{Passes, Session, SessionError, SessionOptions, StopRule};
 use wgtrace::{BackendChoice, FlatScene, Overrides};
 
@@ -620,7 +620,7 @@ impl Sums {
 /// Loads a scene file: TOML, or a glTF 2.0 file (.gltf, .glb) on its own. The keywords are
 /// the command line's overrides.
 #[pyfunction]
-#[pyo3(signature = (path, *, width=None, height=None, spp=None, max_depth=None, seed=None, sampler=None, light_sampling=None, background=None, camera=None))]
+#[pyo3(signature = (path, *, width=None, height=None, spp=None, max_depth=None, seed=None, sampler=None, light_sampling=None, filter=None, background=None, camera=None))]
 #[allow(clippy::too_many_arguments)]
 fn load<'py>(
     py: Python<'py>,
@@ -632,6 +632,7 @@ fn load<'py>(
     seed: Option<&Bound<'py, PyAny>>,
     sampler: Option<&Bound<'py, PyAny>>,
     light_sampling: Option<&Bound<'py, PyAny>>,
+    filter: Option<&Bound<'py, PyAny>>,
     background: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Scene> {
@@ -640,6 +641,7 @@ fn load<'py>(
     let int = |name, v| arg::<u32>(name, "an int >= 0", v);
     let sampler: Option<String> = arg("sampler", "a str", sampler)?;
     let light_sampling: Option<String> = arg("light_sampling", "a str", light_sampling)?;
+    let filter: Option<String> = arg("filter", "a str", filter)?;
     let overrides = Overrides {
         width: int("width", width)?,
         height: int("height", height)?,
@@ -648,6 +650,7 @@ fn load<'py>(
         seed: int("seed", seed)?,
         sampler: choice::<SamplerKind>("sampler", sampler.as_deref())?,
         light_sampling: choice::<LightSampling>("light_sampling", light_sampling.as_deref())?,
+        filter: choice::<FilterKind>("filter", filter.as_deref())?,
         background: rgb(
             "background",
             arg("background", "three numbers (r, g, b)", background)?,

@@ -49,6 +49,7 @@ def render(
     max_depth=None,
     sampler=None,
     light_sampling=None,
+    filter=None,
     background=None,
     camera=None,
     denoise=False,
@@ -69,6 +70,7 @@ def render(
         seed=seed,
         sampler=sampler,
         light_sampling=light_sampling,
+        filter=filter,
         background=background,
         camera=camera,
     )

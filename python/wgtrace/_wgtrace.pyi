@@ -73,6 +73,7 @@ def load(
     seed: Optional[int] = None,
     sampler: Optional[str] = None,
     light_sampling: Optional[str] = None,
+    filter: Optional[str] = None,
     background: Optional[Sequence[float]] = None,
     camera: Optional[str] = None,
 ) -> Scene: ...

@@ -56,11 +56,7 @@ fn conductor_scatter(p: ConductorParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Sc
         return absorbed();
     }
     if (max(p.alpha_u, p.alpha_v) < ALPHA_SMOOTH) {
-        let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
-        if (side * dot(wi, hit.ng) <= 0.0) {
-            return absorbed();
-        }
-        return Scatter(true, wi, p.specular * fresnel_conductor(cos_o, p.eta, p.k), 0.0, true);
+        return mirror_scatter(ray, hit, side, n, p.specular * fresnel_conductor(cos_o, p.eta, p.k));
     }
     let tb = tangent_frame(n, p.tangent);
     let lo = vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o);

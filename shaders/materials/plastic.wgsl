@@ -103,11 +103,7 @@ fn plastic_scatter(p: PlasticParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatte
     let p_s = plastic_spec_prob(p, cos_o);
     let is_smooth = p.alpha < ALPHA_SMOOTH;
     if (is_smooth && u.x < p_s) {
-        let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
-        if (side * dot(wi, hit.ng) <= 0.0) {
-            return absorbed();
-        }
-        return Scatter(true, wi, p.specular * (plastic_fresnel(cos_o, p.ior) / p_s), 0.0, true);
+        return mirror_scatter(ray, hit, side, n, p.specular * (plastic_fresnel(cos_o, p.ior) / p_s));
     }
     var wi = vec3<f32>(0.0);
     if (u.x < p_s) {

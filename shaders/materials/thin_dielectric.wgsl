@@ -24,11 +24,7 @@ fn thin_dielectric_scatter(p: ThinDielectricParams, ray: Ray, hit: Hit, u: vec2<
     let n = side * hit.ns;
     let c = clamp(-dot(ray.dir, n), 0.0, 1.0);
     if (u.x < thin_dielectric_reflectance(c, p.ior)) {
-        let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
-        if (side * dot(wi, hit.ng) <= 0.0) {
-            return absorbed();
-        }
-        return Scatter(true, wi, p.specular, 0.0, true);
+        return mirror_scatter(ray, hit, side, n, p.specular);
     }
     return Scatter(true, ray.dir, p.tint, 0.0, true);
 }

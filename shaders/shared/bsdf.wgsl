@@ -54,6 +54,17 @@ fn density_sample(wi: vec3<f32>, f: vec3<f32>, pdf: f32, side: f32, hit: Hit) ->
     return Scatter(true, dir, f / pdf, pdf, false);
 }
 
+// A delta lobe's mirror reflection of the ray about n (the shading normal on its side,
+// `side` that of the geometric one), weighted `weight`: sent over the surface where a
+// shading normal tilts it under (over_surface), absorbed where it still is under.
+fn mirror_scatter(ray: Ray, hit: Hit, side: f32, n: vec3<f32>, weight: vec3<f32>) -> Scatter {
+    let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
+    if (side * dot(wi, hit.ng) <= 0.0) {
+        return absorbed();
+    }
+    return Scatter(true, wi, weight, 0.0, true);
+}
+
 // Mirror direction of d about the unit normal n: d - 2 (d . n) n.
 fn reflect_dir(d: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
     return d - 2.0 * dot(d, n) * n;
@@ -108,7 +119,13 @@ fn smith_g2(cos_o: f32, cos_i: f32, alpha: f32) -> f32 {
 // A visible normal of GGX seen from wo (local frame, z = the normal), sampled as in Heitz,
 // "Sampling the GGX Distribution of Visible Normals" (JCGT 2018).
 fn sample_ggx_vndf(wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
-    let vh = normalize(vec3<f32>(alpha * wo.x, alpha * wo.y, wo.z));
+    return sample_ggx_vndf_aniso(wo, alpha, alpha, u);
+}
+
+// The same for roughness alpha_u along x and alpha_v along y: the sampler in the
+// configuration stretched by them.
+fn sample_ggx_vndf_aniso(wo: vec3<f32>, alpha_u: f32, alpha_v: f32, u: vec2<f32>) -> vec3<f32> {
+    let vh = normalize(vec3<f32>(alpha_u * wo.x, alpha_v * wo.y, wo.z));
     let len2 = vh.x * vh.x + vh.y * vh.y;
     var t1 = vec3<f32>(1.0, 0.0, 0.0);
     if (len2 > 0.0) {
@@ -121,7 +138,7 @@ fn sample_ggx_vndf(wo: vec3<f32>, alpha: f32, u: vec2<f32>) -> vec3<f32> {
     let s = 0.5 * (1.0 + vh.z);
     let p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
     let nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
-    return normalize(vec3<f32>(alpha * nh.x, alpha * nh.y, max(0.0, nh.z)));
+    return normalize(vec3<f32>(alpha_u * nh.x, alpha_v * nh.y, max(0.0, nh.z)));
 }
 
 // The probability of the specular lobe of weight ws beside the diffuse one of weight wd:
@@ -239,41 +256,6 @@ fn mf_g1(m: Microfacet, v: vec3<f32>, h: vec3<f32>) -> f32 {
 // Beckmann's pieces, compiled for scenes that have it (HAS_BECKMANN): llvmpipe runs an
 // untaken branch under a mask, and a GGX-only scene would pay for the search.
 
-// The error function, by Abramowitz and Stegun's 7.1.26 (absolute error under 1.5e-7).
-fn erf_approx(x: f32) -> f32 {
-    let a = abs(x);
-    let t = 1.0 / (1.0 + 0.3275911 * a);
-    let poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
-    let v = 1.0 - poly * exp(-a * a);
-    return select(-v, v, x >= 0.0);
-}
-
-// The inverse error function on (-1, 1), by Giles's single-precision approximation (2010).
-fn erfinv_approx(x: f32) -> f32 {
-    let w = -log(max((1.0 - x) * (1.0 + x), 1e-30));
-    let w1 = w - 2.5;
-    var p1 = 2.81022636e-08;
-    p1 = 3.43273939e-07 + p1 * w1;
-    p1 = -3.5233877e-06 + p1 * w1;
-    p1 = -4.39150654e-06 + p1 * w1;
-    p1 = 0.00021858087 + p1 * w1;
-    p1 = -0.00125372503 + p1 * w1;
-    p1 = -0.00417768164 + p1 * w1;
-    p1 = 0.246640727 + p1 * w1;
-    p1 = 1.50140941 + p1 * w1;
-    let w2 = sqrt(w) - 3.0;
-    var p2 = -0.000200214257;
-    p2 = 0.000100950558 + p2 * w2;
-    p2 = 0.00134934322 + p2 * w2;
-    p2 = -0.00367342844 + p2 * w2;
-    p2 = 0.00573950773 + p2 * w2;
-    p2 = -0.0076224613 + p2 * w2;
-    p2 = 0.00943887047 + p2 * w2;
-    p2 = 1.00167406 + p2 * w2;
-    p2 = 2.83297682 + p2 * w2;
-    return select(p2, p1, w < 5.0) * x;
-}
-
 // The state of the Newton-bisection search of beckmann_slope_x: the guess b (in erf's
 // domain) and the bracket [lo, hi] the root is in.
 struct BeckmannSearch {
@@ -338,9 +320,9 @@ fn beckmann_slope(cos_i: f32, u: vec2<f32>) -> vec2<f32> {
 // sampler (JCGT 2018) in the stretched configuration; Beckmann's by a slope of the
 // unit-roughness distribution (beckmann_slope) rotated to wo's azimuth and stretched.
 fn mf_sample_visible(m: Microfacet, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
-    let vh = normalize(vec3<f32>(m.alpha_u * wo.x, m.alpha_v * wo.y, wo.z));
 #ifdef HAS_BECKMANN
     if (m.beckmann) {
+        let vh = normalize(vec3<f32>(m.alpha_u * wo.x, m.alpha_v * wo.y, wo.z));
         let len = length(vh.xy);
         let cs = select(vec2<f32>(1.0, 0.0), vh.xy / len, len > 0.0);
         let s = beckmann_slope(vh.z, u);
@@ -348,19 +330,7 @@ fn mf_sample_visible(m: Microfacet, wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
         return normalize(vec3<f32>(-slope.x, -slope.y, 1.0));
     }
 #endif
-    let len2 = vh.x * vh.x + vh.y * vh.y;
-    var t1 = vec3<f32>(1.0, 0.0, 0.0);
-    if (len2 > 0.0) {
-        t1 = vec3<f32>(-vh.y, vh.x, 0.0) / sqrt(len2);
-    }
-    let t2 = cross(vh, t1);
-    let r = sqrt(u.x);
-    let phi = 2.0 * PI * u.y;
-    let p1 = r * cos(phi);
-    let s = 0.5 * (1.0 + vh.z);
-    let p2 = (1.0 - s) * sqrt(max(0.0, 1.0 - p1 * p1)) + s * r * sin(phi);
-    let nh = p1 * t1 + p2 * t2 + sqrt(max(0.0, 1.0 - p1 * p1 - p2 * p2)) * vh;
-    return normalize(vec3<f32>(m.alpha_u * nh.x, m.alpha_v * nh.y, max(0.0, nh.z)));
+    return sample_ggx_vndf_aniso(wo, m.alpha_u, m.alpha_v, u);
 }
 
 // The density of mf_sample_visible's normals: G1(wo, h) max(0, wo . h) D(h) / wo.z.

@@ -179,6 +179,33 @@ fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32, mode: f32) -> f3
     return select(ramp * ramp, select(0.0, linear, cos_theta > cos_outer), mode >= 1.0);
 }
 
+#ifdef HAS_PROJECTOR
+// A projector's intensity toward w (from the light to the point p, any length) over its
+// colour: pi x its irradiance texture at the frustum's uv, over cos^3 of the angle from
+// its axis, so that a plane facing it at distance 1 along the axis receives pi x the
+// texture (Mitsuba 3's projector); 0 outside the frustum. The record holds the right and
+// up vectors over the tangents of the half angles: uv = (1 + (w . r, w . u) / (w . f)) / 2,
+// v up, for the axis f = u x r.
+fn projector_falloff(e: Emitter, w: vec3<f32>, p: vec3<f32>) -> vec3<f32> {
+    let r = vec3<f32>(e.a.w, e.b.w, e.c.w);
+    let u = e.c.xyz;
+    let z = dot(w, normalize(cross(u, r)));
+    let st = vec2<f32>(dot(w, r), dot(w, u)) / z;
+    if (!(z > 0.0 && abs(st.x) <= 1.0 && abs(st.y) <= 1.0)) {
+        return vec3<f32>(0.0);
+    }
+    var irradiance = vec3<f32>(1.0);
+#ifdef HAS_TEXTURES
+    if (e.texture != NO_TEXTURE) {
+        let uv = 0.5 + 0.5 * st;
+        irradiance = texture_value(e.texture, vec4<f32>(uv, uv), p);
+    }
+#endif
+    let c = z / length(w);
+    return irradiance * (PI / (c * c * c));
+}
+#endif
+
 // A light without a surface, seen from a point.
 struct PunctualSample {
     // the light (index in emitters)
@@ -213,6 +240,11 @@ fn sample_punctual(p: vec3<f32>, u: f32) -> PunctualSample {
         if (e.kind == LIGHT_SPOT) {
             falloff = spot_falloff(-dot(dir, e.c.xyz), e.a.w, e.b.w, e.c.w);
         }
+#ifdef HAS_PROJECTOR
+        if (e.kind == LIGHT_PROJECTOR) {
+            le *= projector_falloff(e, -v, p);
+        }
+#endif
         le *= falloff / d2;
     }
     return PunctualSample(i, dir, le, d2, e.prob, e.a.xyz, positioned);

@@ -75,8 +75,9 @@ fn normal_mapped(mat: Material, hit: Hit) -> Hit {
 
 #ifdef HAS_ALPHA
 // Whether a ray passes through a hit: a surface with alpha (its opacity times the alpha
-// of the texture in tex_color) cut out below its alpha_cutoff with MAT_FLAG_ALPHA_MASK,
-// or transparent when u >= alpha with MAT_FLAG_ALPHA_BLEND (u uniform in [0, 1)).
+// of the texture in tex_color, and the luminance of its opacity texture with
+// MAT_FLAG_OPACITY_TEXTURE) cut out below its alpha_cutoff with MAT_FLAG_ALPHA_MASK, or
+// transparent when u >= alpha with MAT_FLAG_ALPHA_BLEND (u uniform in [0, 1)).
 fn transparent_at(hit: Hit, u: f32) -> bool {
     let m = material_record(hit.material);
     if ((m.flags & (MAT_FLAG_ALPHA_MASK | MAT_FLAG_ALPHA_BLEND)) == 0u) {
@@ -91,6 +92,11 @@ fn transparent_at(hit: Hit, u: f32) -> bool {
     if (m.tex_color != NO_TEXTURE) {
         alpha *= texture_alpha(m.tex_color, hit.uv);
     }
+#ifdef HAS_OPACITY_TEXTURE
+    if ((m.flags & MAT_FLAG_OPACITY_TEXTURE) != 0u) {
+        alpha *= luminance(texture_value(s.opacity_texture, hit.uv, hit.p));
+    }
+#endif
 #endif
     if ((m.flags & MAT_FLAG_ALPHA_MASK) != 0u) {
         return alpha < s.alpha_cutoff;

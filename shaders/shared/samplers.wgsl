@@ -5,6 +5,7 @@
 // Later bounces always use rand_2d.
 #import shared/bindings
 #import shared/rng
+#import shared/sampling
 #import shared/types
 
 // The dimension pairs drawn at each bounce (rand_2d's `dim`: DIM_PIXEL, DIM_LENS,
@@ -113,3 +114,57 @@ fn bounce_2d(pixel: u32, sample: u32, depth: u32, dim: u32) -> vec2<f32> {
     }
     return rand_2d(pixel, sample, depth, dim, params.seed);
 }
+
+// A sample's position in its pixel ([0, 1)^2 is the pixel's square): the sampler's point,
+// moved by the pixel filter where the scene has one other than the box.
+fn pixel_position(pixel: u32, sample: u32) -> vec2<f32> {
+    let u = sample_2d(pixel, sample, DIM_PIXEL);
+#ifdef HAS_PIXEL_FILTER
+    return vec2<f32>(0.5 + filter_offset(u.x), 0.5 + filter_offset(u.y));
+#else
+    return u;
+#endif
+}
+
+#ifdef HAS_PIXEL_FILTER
+// Filter importance sampling (Ernst et al. 2006): a sample's offset from its pixel's
+// centre along one axis, drawn from the filter's profile by inverting its CDF at u, so
+// every sample weighs 1 and the pixel stays the mean of its samples. The filters are
+// separable (Mitsuba 3's and pbrt-v4's). Tent of radius r, 1 - |x| / r: inverted in
+// closed form. Gaussian: g(x) = exp(-x^2 / (2 s^2)) less g(r), on [-r, r]
+// (gaussian_filter_offset).
+fn filter_offset(u: f32) -> f32 {
+    let r = params.filter_shape.x;
+    if (params.pixel_filter == FILTER_TENT) {
+        return select(r * (1.0 - sqrt(2.0 - 2.0 * u)), r * (sqrt(2.0 * u) - 1.0), u < 0.5);
+    }
+    return gaussian_filter_offset(u);
+}
+
+// The Gaussian filter's offset at u: by symmetry the x in [0, r] where the integral of
+// g - g(r) from 0, s sqrt(pi / 2) erf(x / (s sqrt 2)) - g(r) x, is |2u - 1| times its
+// integral up to r; found by Newton's method kept inside a shrinking bracket (a step
+// that leaves it bisects), from the untruncated Gaussian's quantile.
+fn gaussian_filter_offset(u: f32) -> f32 {
+    let r = params.filter_shape.x;
+    let s = params.filter_shape.y;
+    let b = params.filter_shape.z;
+    let k = 0.70710678 / s;
+    let c = 1.25331414 * s;
+    let v = abs(2.0 * u - 1.0);
+    let edge = erf_approx(r * k);
+    let goal = v * (c * edge - b * r);
+    var lo = 0.0;
+    var hi = r;
+    var x = clamp(erfinv_approx(v * edge) / k, 0.0, r);
+    for (var i = 0u; i < 6u; i++) {
+        let e = c * erf_approx(x * k) - b * x - goal;
+        lo = select(lo, x, e <= 0.0);
+        hi = select(x, hi, e <= 0.0);
+        let xk = x * k;
+        let next = x - e / (exp(-xk * xk) - b);
+        x = select(0.5 * (lo + hi), next, next >= lo && next <= hi);
+    }
+    return select(-x, x, u >= 0.5);
+}
+#endif

@@ -56,3 +56,43 @@ fn max_abs(v: vec3<f32>) -> f32 {
     let a = abs(v);
     return max(a.x, max(a.y, a.z));
 }
+
+#ifdef HAS_ERF
+// The error function and its inverse, compiled for the scenes that need them (Beckmann
+// microfacets, the Gaussian pixel filter: HAS_ERF).
+
+// The error function, by Abramowitz and Stegun's 7.1.26 (absolute error under 1.5e-7).
+fn erf_approx(x: f32) -> f32 {
+    let a = abs(x);
+    let t = 1.0 / (1.0 + 0.3275911 * a);
+    let poly = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    let v = 1.0 - poly * exp(-a * a);
+    return select(-v, v, x >= 0.0);
+}
+
+// The inverse error function on (-1, 1), by Giles's single-precision approximation (2010).
+fn erfinv_approx(x: f32) -> f32 {
+    let w = -log(max((1.0 - x) * (1.0 + x), 1e-30));
+    let w1 = w - 2.5;
+    var p1 = 2.81022636e-08;
+    p1 = 3.43273939e-07 + p1 * w1;
+    p1 = -3.5233877e-06 + p1 * w1;
+    p1 = -4.39150654e-06 + p1 * w1;
+    p1 = 0.00021858087 + p1 * w1;
+    p1 = -0.00125372503 + p1 * w1;
+    p1 = -0.00417768164 + p1 * w1;
+    p1 = 0.246640727 + p1 * w1;
+    p1 = 1.50140941 + p1 * w1;
+    let w2 = sqrt(w) - 3.0;
+    var p2 = -0.000200214257;
+    p2 = 0.000100950558 + p2 * w2;
+    p2 = 0.00134934322 + p2 * w2;
+    p2 = -0.00367342844 + p2 * w2;
+    p2 = 0.00573950773 + p2 * w2;
+    p2 = -0.0076224613 + p2 * w2;
+    p2 = 0.00943887047 + p2 * w2;
+    p2 = 1.00167406 + p2 * w2;
+    p2 = 2.83297682 + p2 * w2;
+    return select(p2, p1, w < 5.0) * x;
+}
+#endif

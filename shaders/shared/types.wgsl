@@ -70,7 +70,8 @@ struct Material {
     tex_data5: u32,
     tex_normal2: u32,
     table: u32,
-    pad0: u32,
+    // the opacity mask's texture, with MAT_FLAG_OPACITY_TEXTURE
+    tex_opacity: u32,
     pad1: u32,
 }
 
@@ -110,7 +111,8 @@ struct Emitter {
     c: vec4<f32>,
     area: f32,
     power: f32,
-    pad0: u32,
+    // a projector's irradiance texture
+    texture: u32,
     pad1: u32,
 }
 
@@ -170,8 +172,12 @@ struct Params {
     num_punctual: u32,
     // 1: an orthographic camera (parallel rays along cam_forward), 0: a perspective one
     orthographic: u32,
+    // FILTER_*: the pixel filter a sample's position in the pixel follows
+    pixel_filter: u32,
     pad1: u32,
-    pad2: u32,
+    // the filter's radius (pixels), a Gaussian's standard deviation, its value at the
+    // radius (subtracted) and its 1D integral over [-radius, radius]
+    filter_shape: vec4<f32>,
 }
 
 struct Ray {

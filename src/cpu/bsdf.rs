@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::bindings::Bindings;
-use super::sampling::{onb_tangents, sample_cosine_hemisphere, PI};
+use super::sampling::{erf_approx, erfinv_approx, onb_tangents, sample_cosine_hemisphere, PI};
 use super::types::{Hit, Ray};
 
 pub use crate::scene::records::ALPHA_SMOOTH;
@@ -58,6 +58,22 @@ pub const ABSORBED: Scatter = Scatter {
     delta: true,
 };
 
+/// A delta lobe's mirror reflection of the ray about n, weighted `weight` (bsdf.wgsl's
+/// `mirror_scatter`).
+pub fn mirror_scatter(ray: &Ray, hit: &Hit, side: f32, n: Vec3, weight: Vec3) -> Scatter {
+    let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
+    if side * wi.dot(hit.ng) <= 0.0 {
+        return ABSORBED;
+    }
+    Scatter {
+        ok: true,
+        dir: wi,
+        weight,
+        pdf: 0.0,
+        delta: true,
+    }
+}
+
 /// Mirror direction of d about the unit normal n.
 #[inline]
 pub fn reflect_dir(d: Vec3, n: Vec3) -> Vec3 {
@@ -109,7 +125,12 @@ pub fn smith_g2(cos_o: f32, cos_i: f32, alpha: f32) -> f32 {
 
 /// A visible normal of GGX seen from wo (local frame, z = normal), Heitz 2018.
 pub fn sample_ggx_vndf(wo: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
-    let vh = Vec3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
+    sample_ggx_vndf_aniso(wo, alpha, alpha, u)
+}
+
+/// The same for roughness alpha_u along x and alpha_v along y.
+pub fn sample_ggx_vndf_aniso(wo: Vec3, alpha_u: f32, alpha_v: f32, u: [f32; 2]) -> Vec3 {
+    let vh = Vec3::new(alpha_u * wo.x, alpha_v * wo.y, wo.z).normalize();
     let len2 = vh.x * vh.x + vh.y * vh.y;
     let mut t1 = Vec3::X;
     if len2 > 0.0 {
@@ -122,7 +143,7 @@ pub fn sample_ggx_vndf(wo: Vec3, alpha: f32, u: [f32; 2]) -> Vec3 {
     let s = 0.5 * (1.0 + vh.z);
     let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
     let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-    Vec3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize()
+    Vec3::new(alpha_u * nh.x, alpha_v * nh.y, nh.z.max(0.0)).normalize()
 }
 
 /// The probability of the specular lobe of weight ws beside the diffuse one of weight wd:
@@ -277,49 +298,6 @@ pub fn mf_g1(m: &Microfacet, v: Vec3, h: Vec3) -> f32 {
     }
 }
 
-/// The error function (Abramowitz and Stegun 7.1.26).
-#[allow(clippy::excessive_precision)]
-pub fn erf_approx(x: f32) -> f32 {
-    let a = x.abs();
-    let t = 1.0 / (1.0 + 0.3275911 * a);
-    let poly = t
-        * (0.254829592
-            + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
-    let v = 1.0 - poly * (-a * a).exp();
-    if x >= 0.0 {
-        v
-    } else {
-        -v
-    }
-}
-
-/// The inverse error function on (-1, 1) (Giles 2010, single precision).
-#[allow(clippy::excessive_precision)]
-pub fn erfinv_approx(x: f32) -> f32 {
-    let w = -((1.0 - x) * (1.0 + x)).max(1e-30).ln();
-    let w1 = w - 2.5;
-    let mut p1 = 2.81022636e-08;
-    p1 = 3.43273939e-07 + p1 * w1;
-    p1 = -3.5233877e-06 + p1 * w1;
-    p1 = -4.39150654e-06 + p1 * w1;
-    p1 = 0.00021858087 + p1 * w1;
-    p1 = -0.00125372503 + p1 * w1;
-    p1 = -0.00417768164 + p1 * w1;
-    p1 = 0.246640727 + p1 * w1;
-    p1 = 1.50140941 + p1 * w1;
-    let w2 = w.sqrt() - 3.0;
-    let mut p2 = -0.000200214257;
-    p2 = 0.000100950558 + p2 * w2;
-    p2 = 0.00134934322 + p2 * w2;
-    p2 = -0.00367342844 + p2 * w2;
-    p2 = 0.00573950773 + p2 * w2;
-    p2 = -0.0076224613 + p2 * w2;
-    p2 = 0.00943887047 + p2 * w2;
-    p2 = 1.00167406 + p2 * w2;
-    p2 = 2.83297682 + p2 * w2;
-    (if w < 5.0 { p1 } else { p2 }) * x
-}
-
 /// The state of beckmann_slope's search (bsdf.wgsl's `BeckmannSearch`).
 #[derive(Clone, Copy, Debug)]
 pub struct BeckmannSearch {
@@ -391,8 +369,8 @@ pub fn beckmann_slope(cos_i: f32, u: [f32; 2]) -> [f32; 2] {
 
 /// A visible normal of the distribution seen from wo (bsdf.wgsl's `mf_sample_visible`).
 pub fn mf_sample_visible(m: &Microfacet, wo: Vec3, u: [f32; 2]) -> Vec3 {
-    let vh = Vec3::new(m.alpha_u * wo.x, m.alpha_v * wo.y, wo.z).normalize();
     if m.beckmann {
+        let vh = Vec3::new(m.alpha_u * wo.x, m.alpha_v * wo.y, wo.z).normalize();
         let len = vh.truncate().length();
         let cs = if len > 0.0 {
             vh.truncate() / len
@@ -404,19 +382,7 @@ pub fn mf_sample_visible(m: &Microfacet, wo: Vec3, u: [f32; 2]) -> Vec3 {
             * glam::Vec2::new(m.alpha_u, m.alpha_v);
         return Vec3::new(-slope.x, -slope.y, 1.0).normalize();
     }
-    let len2 = vh.x * vh.x + vh.y * vh.y;
-    let mut t1 = Vec3::X;
-    if len2 > 0.0 {
-        t1 = Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt();
-    }
-    let t2 = vh.cross(t1);
-    let r = u[0].sqrt();
-    let phi = 2.0 * PI * u[1];
-    let p1 = r * phi.cos();
-    let s = 0.5 * (1.0 + vh.z);
-    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
-    let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-    Vec3::new(m.alpha_u * nh.x, m.alpha_v * nh.y, nh.z.max(0.0)).normalize()
+    sample_ggx_vndf_aniso(wo, m.alpha_u, m.alpha_v, u)
 }
 
 /// The density of mf_sample_visible's normals: G1(wo, h) max(0, wo . h) D(h) / wo.z.

@@ -9,8 +9,9 @@ use super::sampling::{onb_tangents, sample_disk, sample_sphere, PI};
 use super::textures::texture_value;
 use super::types::{xyz, Ray, FAR};
 use crate::scene::records::{
-    BACKGROUND_GRADIENT, BACKGROUND_IMAGE, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
-    LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_LIGHT,
+    Emitter, BACKGROUND_GRADIENT, BACKGROUND_IMAGE, LIGHT_DIRECTIONAL, LIGHT_DISK,
+    LIGHT_ENVIRONMENT, LIGHT_PROJECTOR, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_LIGHT,
+    NO_TEXTURE,
 };
 
 pub use crate::scene::records::EDGE_ON_COS;
@@ -210,6 +211,26 @@ pub struct PunctualSample {
     pub positioned: bool,
 }
 
+/// A projector's intensity toward w over its colour: pi x its texture at the frustum's uv
+/// over cos^3 of the angle from its axis, 0 outside (lights.wgsl's `projector_falloff`).
+pub fn projector_falloff(b: &Bindings, e: &Emitter, w: Vec3, p: Vec3) -> Vec3 {
+    let r = Vec3::new(e.a[3], e.b[3], e.c[3]);
+    let u = xyz(e.c);
+    let z = w.dot(u.cross(r).normalize());
+    let st = Vec2::new(w.dot(r), w.dot(u)) / z;
+    // written as in WGSL, so a NaN takes the same branch on both backends
+    if !(z > 0.0 && st.x.abs() <= 1.0 && st.y.abs() <= 1.0) {
+        return Vec3::ZERO;
+    }
+    let mut irradiance = Vec3::ONE;
+    if e.texture != NO_TEXTURE {
+        let uv = 0.5 + 0.5 * st;
+        irradiance = texture_value(b, e.texture, Vec4::new(uv.x, uv.y, uv.x, uv.y), p);
+    }
+    let c = z / w.length();
+    irradiance * (PI / (c * c * c))
+}
+
 /// The light without a surface chosen by u (in proportion to its power), seen from p.
 pub fn sample_punctual(b: &Bindings, p: Vec3, u: f32) -> PunctualSample {
     let light = choose_punctual(b, u);
@@ -225,6 +246,9 @@ pub fn sample_punctual(b: &Bindings, p: Vec3, u: f32) -> PunctualSample {
         let mut falloff = 1.0;
         if e.kind == LIGHT_SPOT {
             falloff = spot_falloff(-dir.dot(xyz(e.c)), e.a[3], e.b[3], e.c[3]);
+        }
+        if e.kind == LIGHT_PROJECTOR {
+            le *= projector_falloff(b, e, -v, p);
         }
         le *= falloff / d2;
     }

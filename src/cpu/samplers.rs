@@ -2,7 +2,10 @@
 
 use super::bindings::Bindings;
 use super::rng::{pcg4d, rand_2d, u32_to_unit_float};
-use crate::scene::records::{SAMPLER_HAMMERSLEY, SAMPLER_JITTERED, SAMPLER_SOBOL};
+use super::sampling::{erf_approx, erfinv_approx};
+use crate::scene::records::{
+    Params, FILTER_BOX, FILTER_TENT, SAMPLER_HAMMERSLEY, SAMPLER_JITTERED, SAMPLER_SOBOL,
+};
 
 pub use crate::scene::records::{
     DIM_ALPHA, DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL, DIM_PUNCTUAL, DIM_RR,
@@ -95,4 +98,66 @@ pub fn bounce_2d(b: &Bindings, pixel: u32, sample: u32, depth: u32, dim: u32) ->
         return sample_2d(b, pixel, sample, dim);
     }
     rand_2d(pixel, sample, depth, dim, b.params.seed)
+}
+
+/// A sample's position in its pixel: the sampler's point, moved by the pixel filter
+/// unless it is the box.
+pub fn pixel_position(b: &Bindings, pixel: u32, sample: u32) -> [f32; 2] {
+    let u = sample_2d(b, pixel, sample, DIM_PIXEL);
+    if b.params.pixel_filter == FILTER_BOX {
+        return u;
+    }
+    [
+        0.5 + filter_offset(&b.params, u[0]),
+        0.5 + filter_offset(&b.params, u[1]),
+    ]
+}
+
+/// Filter importance sampling: a sample's offset from its pixel's centre along one axis,
+/// the filter's inverse CDF at u (tent in closed form, Gaussian by
+/// [`gaussian_filter_offset`]).
+pub fn filter_offset(p: &Params, u: f32) -> f32 {
+    let r = p.filter_shape[0];
+    if p.pixel_filter == FILTER_TENT {
+        return if u < 0.5 {
+            r * ((2.0 * u).sqrt() - 1.0)
+        } else {
+            r * (1.0 - (2.0 - 2.0 * u).sqrt())
+        };
+    }
+    gaussian_filter_offset(p, u)
+}
+
+/// The Gaussian filter's offset at u: Newton's method inside a shrinking bracket on the
+/// integral of g - g(r) from 0 (samplers.wgsl's `gaussian_filter_offset`).
+#[allow(clippy::excessive_precision)]
+pub fn gaussian_filter_offset(p: &Params, u: f32) -> f32 {
+    let [r, s, b, _] = p.filter_shape;
+    let k = std::f32::consts::FRAC_1_SQRT_2 / s;
+    let c = 1.25331414 * s;
+    let v = (2.0 * u - 1.0).abs();
+    let edge = erf_approx(r * k);
+    let goal = v * (c * edge - b * r);
+    let (mut lo, mut hi) = (0.0f32, r);
+    let mut x = (erfinv_approx(v * edge) / k).clamp(0.0, r);
+    for _ in 0..6 {
+        let e = c * erf_approx(x * k) - b * x - goal;
+        if e <= 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let xk = x * k;
+        let next = x - e / ((-xk * xk).exp() - b);
+        x = if next >= lo && next <= hi {
+            next
+        } else {
+            0.5 * (lo + hi)
+        };
+    }
+    if u >= 0.5 {
+        x
+    } else {
+        -x
+    }
 }

@@ -72,3 +72,46 @@ pub fn max_abs(v: Vec3) -> f32 {
     let a = v.abs();
     a.x.max(a.y.max(a.z))
 }
+
+/// The error function (Abramowitz and Stegun 7.1.26).
+#[allow(clippy::excessive_precision)]
+pub fn erf_approx(x: f32) -> f32 {
+    let a = x.abs();
+    let t = 1.0 / (1.0 + 0.3275911 * a);
+    let poly = t
+        * (0.254829592
+            + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    let v = 1.0 - poly * (-a * a).exp();
+    if x >= 0.0 {
+        v
+    } else {
+        -v
+    }
+}
+
+/// The inverse error function on (-1, 1) (Giles 2010, single precision).
+#[allow(clippy::excessive_precision)]
+pub fn erfinv_approx(x: f32) -> f32 {
+    let w = -((1.0 - x) * (1.0 + x)).max(1e-30).ln();
+    let w1 = w - 2.5;
+    let mut p1 = 2.81022636e-08;
+    p1 = 3.43273939e-07 + p1 * w1;
+    p1 = -3.5233877e-06 + p1 * w1;
+    p1 = -4.39150654e-06 + p1 * w1;
+    p1 = 0.00021858087 + p1 * w1;
+    p1 = -0.00125372503 + p1 * w1;
+    p1 = -0.00417768164 + p1 * w1;
+    p1 = 0.246640727 + p1 * w1;
+    p1 = 1.50140941 + p1 * w1;
+    let w2 = w.sqrt() - 3.0;
+    let mut p2 = -0.000200214257;
+    p2 = 0.000100950558 + p2 * w2;
+    p2 = 0.00134934322 + p2 * w2;
+    p2 = -0.00367342844 + p2 * w2;
+    p2 = 0.00573950773 + p2 * w2;
+    p2 = -0.0076224613 + p2 * w2;
+    p2 = 0.00943887047 + p2 * w2;
+    p2 = 1.00167406 + p2 * w2;
+    p2 = 2.83297682 + p2 * w2;
+    (if w < 5.0 { p1 } else { p2 }) * x
+}

@@ -13,7 +13,7 @@ use super::materials::{
     normal_mapped, scatter, scatter_pdf, transparent_at,
 };
 use super::rng::rand_2d;
-use super::samplers::{bounce_2d, sample_2d, DIM_ALPHA, DIM_PUNCTUAL, DIM_RR};
+use super::samplers::{bounce_2d, pixel_position, sample_2d, DIM_ALPHA, DIM_PUNCTUAL, DIM_RR};
 use super::sampling::{offset_ray, sample_disk};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::flat::FlatScene;
@@ -389,7 +389,7 @@ pub fn trace_pixel(b: &Bindings, x: u32, y: u32) -> Path {
     let p = &b.params;
     let pixel = y * p.width + x;
     let sample = p.sample_index;
-    let jitter = sample_2d(b, pixel, sample, DIM_PIXEL);
+    let jitter = pixel_position(b, pixel, sample);
     let lens = sample_2d(b, pixel, sample, DIM_LENS);
     trace_path(b, pixel, sample, camera_ray(b, x, y, jitter, lens))
 }

@@ -16,7 +16,7 @@ use super::error::GpuError;
 use super::limits::{DeviceFit, LLVMPIPE_LOOP_LIMIT};
 use super::shader::{self, ShaderError};
 use crate::scene::flat::FlatScene;
-use crate::scene::format::{LightSampling, SamplerKind};
+use crate::scene::format::{FilterKind, LightSampling, SamplerKind};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::MaterialKind;
 use crate::scene::materials::{conductor, dielectric, pbr, plastic};
@@ -92,6 +92,13 @@ pub enum Feature {
     Emission,
     /// The AOVs' sums beside the colour's (albedo, normal, depth, position).
     Aovs,
+    /// A pixel filter other than the box (tent, Gaussian): each sample's position in the
+    /// pixel drawn from it.
+    PixelFilter,
+    /// Projectors among the lights without a surface: their frustum and texture.
+    Projector,
+    /// Opacity masks read from a texture (`opacity = "NAME"` of any material).
+    OpacityTexture,
 }
 
 /// The features before the materials' in define order.
@@ -108,7 +115,7 @@ const GEOMETRY: [Feature; 9] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 24] = [
+const SHADING: [Feature; 27] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -133,6 +140,9 @@ const SHADING: [Feature; 24] = [
     Feature::EnvMap,
     Feature::Emission,
     Feature::Aovs,
+    Feature::PixelFilter,
+    Feature::Projector,
+    Feature::OpacityTexture,
 ];
 
 impl Feature {
@@ -181,6 +191,9 @@ impl Feature {
             Feature::Punctual => "HAS_PUNCTUAL",
             Feature::EnvMap => "HAS_ENV_MAP",
             Feature::Emission => "HAS_EMISSION",
+            Feature::PixelFilter => "HAS_PIXEL_FILTER",
+            Feature::Projector => "HAS_PROJECTOR",
+            Feature::OpacityTexture => "HAS_OPACITY_TEXTURE",
         }
     }
 
@@ -363,6 +376,20 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         .with(Feature::EnvMap, scene.env.is_some())
         .with(Feature::Emission, scene.emits() || scene.aovs)
         .with(Feature::Aovs, scene.aovs)
+        .with(Feature::PixelFilter, scene.filter.kind != FilterKind::Box)
+        .with(
+            Feature::Projector,
+            scene.num_punctual > 0
+                && nee
+                && scene.emitters.iter().any(|e| e.kind == r::LIGHT_PROJECTOR),
+        )
+        .with(
+            Feature::OpacityTexture,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.flags & r::MAT_FLAG_OPACITY_TEXTURE != 0),
+        )
 }
 
 /// What a shader is assembled from: its features, where its record arrays live, and the
@@ -404,9 +431,9 @@ impl ShaderSpec {
     /// every glass hit; shading normals a second eval and pdf to every light sample;
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
     /// compile of the full shader took minutes longer). The materials added after pbr
-    /// (conductor, thin_dielectric, plastic) too: the full shader of every other scene
-    /// stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 14] = [
+    /// (conductor, thin_dielectric, plastic), the pixel filters, projectors and opacity
+    /// textures too: the full shader of every other scene stays as it was.
+    pub const OPTIONAL_IN_FULL: [Feature; 17] = [
         Feature::Aovs,
         Feature::Alpha,
         Feature::NormalMap,
@@ -421,6 +448,9 @@ impl ShaderSpec {
         Feature::Material(MaterialKind::ThinDielectric),
         Feature::Material(MaterialKind::Plastic),
         Feature::Beckmann,
+        Feature::PixelFilter,
+        Feature::Projector,
+        Feature::OpacityTexture,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):
@@ -457,16 +487,19 @@ impl ShaderSpec {
         if self.lane_stats {
             d.insert(LANE_STATS);
         }
+        if f(Feature::Beckmann) || f(Feature::PixelFilter) {
+            d.insert(HAS_ERF);
+        }
         d
     }
 
     /// Every name a shader file's `#if` may ask about: each feature's define, each
-    /// `BAKED_*`, and `BOUNDED_TRIANGLES_ONLY`. The preprocessor refuses any other.
+    /// `BAKED_*`, `BOUNDED_TRIANGLES_ONLY`, `LANE_STATS` and `HAS_ERF`. The preprocessor refuses any other.
     pub fn known_defines() -> BTreeSet<&'static str> {
         Feature::all()
             .map(Feature::define)
             .chain(BAKED_DEFINES.map(|(_, d)| d))
-            .chain([BOUNDED_TRIANGLES_ONLY, LANE_STATS])
+            .chain([BOUNDED_TRIANGLES_ONLY, LANE_STATS, HAS_ERF])
             .collect()
     }
 
@@ -546,6 +579,10 @@ impl ShaderSpec {
 /// The define of a shader whose BVH leaves hold only untransformed triangles (they test
 /// without the tag's switch).
 const BOUNDED_TRIANGLES_ONLY: &str = "BOUNDED_TRIANGLES_ONLY";
+
+/// The define of a shader that needs the error function and its inverse (sampling.wgsl):
+/// Beckmann microfacets' masking and slopes, and the Gaussian pixel filter's inverse CDF.
+const HAS_ERF: &str = "HAS_ERF";
 
 /// The define of each record array that may be written into the shader.
 const BAKED_DEFINES: [(Slot, &str); 3] = [

@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::format::{LightSampling, SamplerKind};
+use super::format::{LightSampling, PixelFilter, SamplerKind};
 use super::records::{self, BvhNode, Emitter, Material, Params, Primitive, Texture};
 use super::texels::Texels;
 
@@ -41,6 +41,8 @@ pub struct FlatScene {
     pub max_depth: u32,
     pub seed: u32,
     pub sampler: SamplerKind,
+    /// The pixel filter a sample's position follows.
+    pub filter: PixelFilter,
     pub camera: CameraFrame,
     /// Background radiance: the constant colour, or the bottom of the gradient.
     pub background: [f32; 3],
@@ -168,6 +170,8 @@ impl FlatScene {
             env_light: self.env.map_or(records::NO_LIGHT, |e| e.light),
             rr_depth: self.rr_depth,
             orthographic: c.orthographic as u32,
+            pixel_filter: self.filter.kind.record(),
+            filter_shape: self.filter.shape(),
             ..Default::default()
         }
     }

@@ -7,7 +7,9 @@ use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
 
 use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
-use super::format::{LightDesc, ObjectDesc, Projection, SceneFile, TextureDesc, TransformDesc};
+use super::format::{
+    LightDesc, ObjectDesc, PixelFilter, Projection, SceneFile, TextureDesc, TransformDesc,
+};
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
 use super::materials::{pbr, plastic, MaterialDesc, MaterialKind};
@@ -591,9 +593,20 @@ pub fn flatten(
         .flat_map(|(m, g)| g.lights.iter().map(move |l| l.transformed(m)))
         .collect();
     let num_punctual = (file.lights.len() + gltf_lights.len()) as u32;
+    let texture = |name: &str| {
+        let i = texture_names
+            .iter()
+            .position(|n| n == name)
+            .expect("validated");
+        let aspect = texture_list[i]
+            .2
+            .map_or(1.0, |im| im.width as f32 / im.height as f32);
+        (i as u32, aspect)
+    };
     emitters.extend(punctual_lights(
         file.lights.iter().map(|l| l.get_ref()).chain(&gltf_lights),
         bounding_sphere(&boxes),
+        &texture,
     ));
     let rotation = bg.rotation.unwrap_or(0.0).to_radians();
 
@@ -606,6 +619,7 @@ pub fn flatten(
         max_depth: r.max_depth,
         seed: r.seed,
         sampler: r.sampler,
+        filter: PixelFilter::of(r),
         camera: camera_frame(file, r.width as f32 / r.height as f32),
         rr_depth: if build.russian_roulette { RR_DEPTH } else { 0 },
         light_sampling: r.light_sampling,

@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::materials::common::ColorDesc;
+use super::materials::common::{white_color, ColorDesc};
 use super::materials::MaterialDesc;
 use super::records;
 
@@ -43,6 +43,93 @@ pub struct RenderDesc {
     pub sampler: SamplerKind,
     /// How paths find lights.
     pub light_sampling: LightSampling,
+    /// The pixel filter (`box`, `tent`, `gaussian`), by filter importance sampling.
+    pub filter: FilterKind,
+    /// The tent's or Gaussian's radius in pixels (defaults: tent 1, Gaussian 4 standard
+    /// deviations, as Mitsuba 3's; pbrt-v4's are 2 and 1.5).
+    pub filter_radius: Option<f32>,
+    /// The Gaussian's standard deviation in pixels (default 0.5, Mitsuba's and pbrt's).
+    pub filter_stddev: Option<f32>,
+}
+
+/// `[render] filter` (and `--filter`): how a pixel weighs the image plane around it. Each
+/// sample's position in the pixel is drawn from the filter (filter importance sampling),
+/// so every sample weighs 1 and a pixel stays the mean of its samples.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum FilterKind {
+    /// The pixel's square (radius 0.5).
+    #[default]
+    Box,
+    /// 1 - |x| / radius per axis (Mitsuba's `tent`, pbrt-v4's `triangle`).
+    Tent,
+    /// exp(-x^2 / (2 stddev^2)) less its value at the radius, per axis (Mitsuba's and
+    /// pbrt-v4's `gaussian`).
+    Gaussian,
+}
+
+impl FilterKind {
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            FilterKind::Box => "box",
+            FilterKind::Tent => "tent",
+            FilterKind::Gaussian => "gaussian",
+        }
+    }
+
+    /// Its value in `Params::pixel_filter` (`records::FILTER_*`).
+    pub fn record(self) -> u32 {
+        match self {
+            FilterKind::Box => records::FILTER_BOX,
+            FilterKind::Tent => records::FILTER_TENT,
+            FilterKind::Gaussian => records::FILTER_GAUSSIAN,
+        }
+    }
+}
+
+/// A pixel filter with its radius and standard deviation resolved (the defaults applied).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelFilter {
+    pub kind: FilterKind,
+    /// Half the filter's support, in pixels (0.5 for the box).
+    pub radius: f32,
+    /// The Gaussian's standard deviation (0 for the others).
+    pub stddev: f32,
+}
+
+impl PixelFilter {
+    /// The filter `[render]` asks for, its defaults applied.
+    pub fn of(r: &RenderDesc) -> Self {
+        let stddev = match r.filter {
+            FilterKind::Gaussian => r.filter_stddev.unwrap_or(0.5),
+            _ => 0.0,
+        };
+        let radius = match r.filter {
+            FilterKind::Box => 0.5,
+            FilterKind::Tent => r.filter_radius.unwrap_or(1.0),
+            FilterKind::Gaussian => r.filter_radius.unwrap_or(4.0 * stddev),
+        };
+        PixelFilter {
+            kind: r.filter,
+            radius,
+            stddev,
+        }
+    }
+
+    /// `Params::filter_shape`: radius, standard deviation, the Gaussian's value at the
+    /// radius (which it subtracts), 0; zeros for the box.
+    pub fn shape(self) -> [f32; 4] {
+        match self.kind {
+            FilterKind::Box => [0.0; 4],
+            FilterKind::Tent => [self.radius, 0.0, 0.0, 0.0],
+            FilterKind::Gaussian => {
+                let s = self.stddev;
+                let bias = (-self.radius * self.radius / (2.0 * s * s)).exp();
+                [self.radius, s, bias, 0.0]
+            }
+        }
+    }
 }
 
 /// `[render] light_sampling` (and `--light-sampling`).
@@ -137,6 +224,9 @@ impl Default for RenderDesc {
             seed: 0,
             sampler: SamplerKind::default(),
             light_sampling: LightSampling::default(),
+            filter: FilterKind::default(),
+            filter_radius: None,
+            filter_stddev: None,
         }
     }
 }
@@ -272,7 +362,9 @@ pub enum ColorSpace {
 
 /// `transform = { offset, rotation, scale }` of an image texture's uv, as glTF's
 /// KHR_texture_transform in wgtrace's uv (v up): uv' = offset + R(rotation) (scale * uv),
-/// R turning counter-clockwise by `rotation` degrees.
+/// R turning counter-clockwise by `rotation` degrees; or `transform = { matrix = [[a, b,
+/// c], [d, e, f]] }`, any affine map (Mitsuba's `to_uv`): uv' = (a u + b v + c, d u + e v
+/// + f).
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct UvTransformDesc {
@@ -282,6 +374,9 @@ pub struct UvTransformDesc {
     pub rotation: f32,
     #[serde(default = "unit2")]
     pub scale: [f32; 2],
+    /// The map's two rows, instead of offset, rotation and scale.
+    #[serde(default)]
+    pub matrix: Option<[[f32; 3]; 2]>,
 }
 
 fn unit2() -> [f32; 2] {
@@ -291,6 +386,9 @@ fn unit2() -> [f32; 2] {
 impl UvTransformDesc {
     /// The two rows of the affine map uv -> uv'.
     pub fn rows(&self) -> [[f32; 3]; 2] {
+        if let Some(m) = self.matrix {
+            return m;
+        }
         let (s, c) = self.rotation.to_radians().sin_cos();
         let [sx, sy] = self.scale;
         [
@@ -306,7 +404,13 @@ impl UvTransformDesc {
             offset: [offset[0] + s * scale[1], 1.0 - offset[1] - c * scale[1]],
             rotation: rotation_radians.to_degrees(),
             scale,
+            matrix: None,
         }
+    }
+
+    /// Whether offset, rotation or scale differ from the identity's.
+    pub fn has_parts(&self) -> bool {
+        self.offset != [0.0; 2] || self.rotation != 0.0 || self.scale != [1.0; 2]
     }
 }
 
@@ -447,6 +551,26 @@ pub enum LightDesc {
         direction: [f32; 3],
         irradiance: [f32; 3],
     },
+    /// A projector (Mitsuba 3's `projector`): a point light at `position` that projects
+    /// `irradiance` (a colour or a texture's name, times `scale`) through a pinhole frustum
+    /// toward `look_at`, `fov` degrees wide (along the image's width; its height from an
+    /// image texture's aspect, else square). A surface facing it at distance 1 along its
+    /// axis receives pi x scale x irradiance; none outside the frustum.
+    Projector {
+        position: [f32; 3],
+        look_at: [f32; 3],
+        #[serde(default = "default_up")]
+        up: [f32; 3],
+        fov: f32,
+        #[serde(default = "white_color")]
+        irradiance: ColorDesc,
+        #[serde(default = "one")]
+        scale: f32,
+    },
+}
+
+fn one() -> f32 {
+    1.0
 }
 
 impl LightDesc {
@@ -485,6 +609,21 @@ impl LightDesc {
             } => LightDesc::Directional {
                 direction: dir(direction),
                 irradiance,
+            },
+            LightDesc::Projector {
+                position,
+                look_at,
+                up,
+                fov,
+                irradiance,
+                scale,
+            } => LightDesc::Projector {
+                position: point(position),
+                look_at: point(look_at),
+                up: dir(up),
+                fov,
+                irradiance,
+                scale,
             },
         }
     }

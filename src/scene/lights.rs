@@ -5,10 +5,12 @@
 use glam::{Mat3, Vec3};
 
 use super::format::{LightDesc, SpotFalloff};
+use super::materials::common::ColorDesc;
 use super::materials::common::Surface;
 use super::records::{
     self, Emitter, Material, Primitive, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
-    LIGHT_POINT, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_HIT, NO_LIGHT, PRIM_LIGHT_SHIFT,
+    LIGHT_POINT, LIGHT_PROJECTOR, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_HIT, NO_LIGHT,
+    NO_TEXTURE, PRIM_LIGHT_SHIFT,
 };
 use super::shapes::primitive_area;
 use super::textures::ImageData;
@@ -73,10 +75,13 @@ pub fn env_distribution(image: &ImageData, strength: f32) -> (Vec<f32>, f64) {
 /// (4 pi; a spot's cone to the middle of its falloff, 2 pi (1 - (cos inner + cos outer) /
 /// 2)) and the one the sphere subtends from it (4 pi from inside). Power alone (4 pi I,
 /// as pbrt-v4's power light sampler has it) would all but never choose a directional
-/// light over a point light in a small scene.
+/// light over a point light in a small scene. A projector's is pi E times the area of its
+/// frustum at distance 1 (the power it sends), for its colour E (a texture counted as 1).
+/// `texture` gives a texture's index and aspect (width / height; 1 but for images).
 pub fn punctual_lights<'a>(
     lights: impl IntoIterator<Item = &'a LightDesc>,
     bounds: (Vec3, f32),
+    texture: &dyn Fn(&str) -> (u32, f32),
 ) -> Vec<Emitter> {
     use std::f32::consts::PI;
     let (center, radius) = bounds;
@@ -154,6 +159,40 @@ pub fn punctual_lights<'a>(
                 power: PI * radius * radius * lum(*irradiance),
                 ..Default::default()
             },
+            LightDesc::Projector {
+                position,
+                look_at,
+                up,
+                fov,
+                irradiance,
+                scale,
+            } => {
+                let (color, index, aspect) = match irradiance {
+                    ColorDesc::Rgb(c) => (*c, NO_TEXTURE, 1.0),
+                    ColorDesc::Texture(name) => {
+                        let (index, aspect) = texture(name);
+                        ([1.0; 3], index, aspect)
+                    }
+                };
+                let p = Vec3::from(*position);
+                let forward = (Vec3::from(*look_at) - p).normalize();
+                let right = forward.cross(Vec3::from(*up)).normalize();
+                let up = right.cross(forward);
+                let tan_x = (fov.to_radians() / 2.0).tan();
+                let tan_y = tan_x / aspect;
+                let (r, u) = (right / tan_x, up / tan_y);
+                let color = Vec3::from(color) * *scale;
+                Emitter {
+                    primitive: NO_HIT,
+                    kind: LIGHT_PROJECTOR,
+                    a: p.extend(r.x).to_array(),
+                    b: color.extend(r.y).to_array(),
+                    c: u.extend(r.z).to_array(),
+                    texture: index,
+                    power: PI * (4.0 * tan_x * tan_y).min(seen(p)) * lum(color.to_array()),
+                    ..Default::default()
+                }
+            }
         })
         .collect();
     let powers: Vec<f64> = out.iter().map(|e| f64::from(e.power.max(0.0))).collect();

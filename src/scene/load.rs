@@ -13,8 +13,8 @@ use super::error::{self, Problem, SceneError};
 use super::flat::FlatScene;
 use super::flatten::{self, Build, FlattenError, SceneFiles};
 use super::format::{
-    BackgroundDesc, CameraDesc, ColorSpace, LightSampling, ObjectDesc, Projection, RenderDesc,
-    SamplerKind, SceneFile, TextureDesc,
+    BackgroundDesc, CameraDesc, ColorSpace, FilterKind, LightSampling, ObjectDesc, Projection,
+    RenderDesc, SamplerKind, SceneFile, TextureDesc,
 };
 use super::gltf::{self, GltfError};
 use super::imported::ImportedScene;
@@ -34,6 +34,8 @@ pub struct Overrides {
     pub seed: Option<u32>,
     pub sampler: Option<SamplerKind>,
     pub light_sampling: Option<LightSampling>,
+    /// The pixel filter (its radius and deviation from the file, else the defaults).
+    pub filter: Option<FilterKind>,
     /// A constant background radiance instead of the scene's.
     pub background: Option<[f32; 3]>,
     /// A glTF file's camera by its name or its node's (default: the first).
@@ -457,6 +459,7 @@ fn apply_overrides(file: &mut SceneFile, o: &Overrides) -> Vec<&'static str> {
     r.seed = o.seed.unwrap_or(r.seed);
     r.sampler = o.sampler.unwrap_or(r.sampler);
     r.light_sampling = o.light_sampling.unwrap_or(r.light_sampling);
+    r.filter = o.filter.unwrap_or(r.filter);
     if let Some(c) = o.background {
         file.background = BackgroundDesc {
             color: Some(c),
@@ -468,6 +471,7 @@ fn apply_overrides(file: &mut SceneFile, o: &Overrides) -> Vec<&'static str> {
         ("height", o.height.is_some()),
         ("spp", o.spp.is_some()),
         ("max_depth", o.max_depth.is_some()),
+        ("filter", o.filter.is_some()),
     ]
     .into_iter()
     .filter_map(|(k, set)| set.then_some(k))

@@ -86,6 +86,7 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
                         albedo: ColorDesc::Rgb([0.8; 3]),
                         emission: ColorDesc::Rgb([0.0; 3]),
                         two_sided: false,
+                        opacity: None,
                     }),
                 ));
                 out.materials.len() - 1

@@ -116,6 +116,9 @@ shared_constants! {
     /// Material flag: its roughness differs along the tangent and the bitangent
     /// (`roughness_u`, `roughness_v`): `material_at` gives it the hit's tangent.
     MAT_FLAG_ANISOTROPIC: u32 = 128;
+    /// Material flag: the surface view's `opacity_texture` names a texture whose luminance
+    /// multiplies its alpha (an `opacity` mask of any material, Mitsuba's `mask`).
+    MAT_FLAG_OPACITY_TEXTURE: u32 = 256;
 
     /// Texture tags: the cases of the `switch` in `textures.wgsl`.
     TEX_CONSTANT: u32 = 0;
@@ -148,6 +151,11 @@ shared_constants! {
     SAMPLER_HAMMERSLEY: u32 = 2;
     SAMPLER_SOBOL: u32 = 3;
 
+    /// Pixel filters (`Params::pixel_filter`), sampled by filter importance sampling.
+    FILTER_BOX: u32 = 0;
+    FILTER_TENT: u32 = 1;
+    FILTER_GAUSSIAN: u32 = 2;
+
     /// Light-sampling strategies (`Params::light_sampling`).
     LIGHT_SAMPLING_BSDF: u32 = 0;
     LIGHT_SAMPLING_MIXTURE: u32 = 1;
@@ -167,10 +175,14 @@ shared_constants! {
     /// `.w` = cos of the outer angle), `b` = intensity (a spot: `.w` = cos of the inner
     /// angle), `c` = a spot's unit axis (`.w` = 1 + its cones' difference in radians for
     /// Mitsuba's falloff, 0 for glTF's); a directional light's `a` = the unit direction
-    /// toward it, `b` = its irradiance.
+    /// toward it, `b` = its irradiance. A projector's `a.xyz` = position, `b.xyz` = its
+    /// irradiance colour times its scale, `c.xyz` = its up vector over tan(half its
+    /// height's angle) and (a.w, b.w, c.w) its right vector over tan(half its width's),
+    /// `texture` = its irradiance texture (or `NO_TEXTURE`).
     LIGHT_POINT: u32 = 4;
     LIGHT_SPOT: u32 = 5;
     LIGHT_DIRECTIONAL: u32 = 6;
+    LIGHT_PROJECTOR: u32 = 7;
     /// An index that names no light.
     NO_LIGHT: u32 = u32::MAX;
     /// `Primitive::flags >> PRIM_LIGHT_SHIFT` is the primitive's index in the light list
@@ -315,7 +327,8 @@ pub struct Material {
     pub tex_data5: u32,
     pub tex_normal2: u32,
     pub table: u32,
-    pub pad0: u32,
+    /// The opacity mask's texture, with `MAT_FLAG_OPACITY_TEXTURE` (else 0).
+    pub tex_opacity: u32,
     pub pad1: u32,
 }
 
@@ -343,7 +356,7 @@ impl Default for Material {
             tex_data5: NO_TEXTURE,
             tex_normal2: NO_TEXTURE,
             table: 0,
-            pad0: 0,
+            tex_opacity: 0,
             pad1: 0,
         }
     }
@@ -420,7 +433,8 @@ pub struct Emitter {
     pub area: f32,
     /// Emitted power estimate that `prob` is proportional to.
     pub power: f32,
-    pub pad0: u32,
+    /// A projector's irradiance texture, else 0.
+    pub texture: u32,
     pub pad1: u32,
 }
 
@@ -489,8 +503,13 @@ pub struct Params {
     /// 1: an orthographic camera (parallel rays along `cam_forward` from the view
     /// rectangle), 0: a perspective one.
     pub orthographic: u32,
+    /// `FILTER_*`: the pixel filter a sample's position in the pixel follows.
+    pub pixel_filter: u32,
     pub pad1: u32,
-    pub pad2: u32,
+    /// The filter's radius in pixels, a Gaussian's standard deviation, its value at the
+    /// radius (subtracted, so it falls to 0 there) and its integral over [-radius, radius]
+    /// (1D, after the subtraction); zeros for the box.
+    pub filter_shape: [f32; 4],
 }
 
 /// One node of the renderers' BVH (`bvh::collapse`): up to `BVH_WIDTH` = 8 children in 80
@@ -755,7 +774,7 @@ shared_record!(Material {
     tex_data5,
     tex_normal2,
     table,
-    pad0,
+    tex_opacity,
     pad1
 });
 shared_record!(Texture {
@@ -785,7 +804,7 @@ shared_record!(Emitter {
     c,
     area,
     power,
-    pad0,
+    texture,
     pad1
 });
 shared_record!(Params {
@@ -822,8 +841,9 @@ shared_record!(Params {
     sample_count,
     num_punctual,
     orthographic,
+    pixel_filter,
     pad1,
-    pad2
+    filter_shape
 });
 shared_record!(KernelRay { origin, dir });
 shared_record!(TextureLookup { uv, p });

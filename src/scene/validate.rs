@@ -6,7 +6,7 @@ use super::error::Problem;
 use toml::Spanned;
 
 use super::format::{
-    CameraDesc, LightDesc, ObjectDesc, Projection, RenderDesc, SceneFile, TextureDesc,
+    CameraDesc, FilterKind, LightDesc, ObjectDesc, Projection, RenderDesc, SceneFile, TextureDesc,
     TransformDesc,
 };
 use super::materials::common::ColorDesc;
@@ -20,6 +20,9 @@ pub const MAX_IMAGE_SIDE: u32 = 16384;
 pub const MAX_SPP: u32 = 1 << 24;
 /// Longest path accepted (rays per path).
 pub const MAX_DEPTH_LIMIT: u32 = 1024;
+
+/// The widest pixel filter, in pixels from the pixel's centre.
+pub const MAX_FILTER_RADIUS: f32 = 16.0;
 
 /// Collects every problem of a parsed scene (not only the first). `overridden` names the
 /// `[render]` keys whose values came from the command line (`--spp` for `spp`), so their
@@ -78,6 +81,40 @@ impl Validator<'_> {
         self.range_u32("render.height", r.height, 1, MAX_IMAGE_SIDE, 0);
         self.range_u32("render.spp", r.spp, 1, MAX_SPP, 0);
         self.range_u32("render.max_depth", r.max_depth, 1, MAX_DEPTH_LIMIT, 0);
+        let kind = r.filter;
+        if let Some(radius) = r.filter_radius {
+            if kind == FilterKind::Box {
+                self.push(
+                    0,
+                    "render.filter_radius",
+                    "applies to the tent and gaussian filters (the box's is 0.5)".into(),
+                );
+            } else if !(radius > 0.0 && radius <= MAX_FILTER_RADIUS) {
+                self.push(
+                    0,
+                    "render.filter_radius",
+                    format!("must be in (0, {MAX_FILTER_RADIUS}] pixels, got {radius}"),
+                );
+            }
+        }
+        if let Some(stddev) = r.filter_stddev {
+            if kind != FilterKind::Gaussian {
+                self.push(
+                    0,
+                    "render.filter_stddev",
+                    "applies to the gaussian filter only".into(),
+                );
+            } else if !(stddev > 0.0 && stddev <= MAX_FILTER_RADIUS / 4.0) {
+                self.push(
+                    0,
+                    "render.filter_stddev",
+                    format!(
+                        "must be in (0, {}] pixels, got {stddev}",
+                        MAX_FILTER_RADIUS / 4.0
+                    ),
+                );
+            }
+        }
     }
 
     /// `[camera]`: finite, a view direction, an up vector off it, a field of view and lens.
@@ -263,11 +300,20 @@ impl Validator<'_> {
                 self.nonnegative3(&format!("{key}.factor"), *factor, at);
                 if let Some(t) = transform {
                     let [a, b] = t.scale;
+                    let matrix = t.matrix.unwrap_or_default();
                     if ![a, b, t.rotation, t.offset[0], t.offset[1]]
                         .iter()
+                        .chain(matrix.iter().flatten())
                         .all(|x| x.is_finite())
                     {
                         self.push(at, &format!("{key}.transform"), "must be finite".into());
+                    }
+                    if t.matrix.is_some() && t.has_parts() {
+                        self.push(
+                            at,
+                            &format!("{key}.transform.matrix"),
+                            "replaces offset, rotation and scale: give one or the others".into(),
+                        );
                     }
                 }
             }
@@ -379,6 +425,49 @@ impl Validator<'_> {
             } => {
                 self.light_axis(&format!("{key}.direction"), *direction, at);
                 self.nonnegative3(&format!("{key}.irradiance"), *irradiance, at);
+            }
+            LightDesc::Projector {
+                position,
+                look_at,
+                up,
+                fov,
+                irradiance,
+                scale,
+            } => {
+                let placed = self.finite3(&format!("{key}.position"), *position, at)
+                    & self.finite3(&format!("{key}.look_at"), *look_at, at)
+                    & self.finite3(&format!("{key}.up"), *up, at);
+                let axis = Vec3::from(*look_at) - Vec3::from(*position);
+                if placed {
+                    match axis.try_normalize() {
+                        None => self.push(
+                            at,
+                            &format!("{key}.look_at"),
+                            "must differ from position".into(),
+                        ),
+                        Some(a) if a.cross(Vec3::from(*up)).try_normalize().is_none() => self.push(
+                            at,
+                            &format!("{key}.up"),
+                            "must not be parallel to the projector's axis".into(),
+                        ),
+                        Some(_) => {}
+                    }
+                }
+                if !(*fov > 0.0 && *fov < 180.0) {
+                    self.push(
+                        at,
+                        &format!("{key}.fov"),
+                        format!("must be in (0, 180) degrees, got {fov}"),
+                    );
+                }
+                self.color(&format!("{key}.irradiance"), irradiance, false, at);
+                if !(*scale >= 0.0 && scale.is_finite()) {
+                    self.push(
+                        at,
+                        &format!("{key}.scale"),
+                        format!("must be >= 0, got {scale}"),
+                    );
+                }
             }
         }
     }

@@ -4,7 +4,7 @@ use glam::Vec3;
 
 use crate::cpu::bsdf::{
     density_sample, fresnel_conductor, mf_d, mf_g1, mf_pdf_visible, mf_sample_visible,
-    over_surface, reflect_dir, tangent_frame, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    mirror_scatter, tangent_frame, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::conductor::Params;
@@ -66,17 +66,8 @@ impl Shading for Params {
             return ABSORBED;
         }
         if self.alpha_u.max(self.alpha_v) < ALPHA_SMOOTH {
-            let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
-            if side * wi.dot(hit.ng) <= 0.0 {
-                return ABSORBED;
-            }
-            return Scatter {
-                ok: true,
-                dir: wi,
-                weight: self.specular * fresnel_conductor(cos_o, self.eta, self.k),
-                pdf: 0.0,
-                delta: true,
-            };
+            let weight = self.specular * fresnel_conductor(cos_o, self.eta, self.k);
+            return mirror_scatter(ray, hit, side, n, weight);
         }
         let tb = tangent_frame(n, self.tangent);
         let lo = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);

@@ -17,15 +17,15 @@ pub mod thin_dielectric;
 use glam::Vec3;
 
 use super::bindings::Bindings;
-use super::bsdf::{mirrored, Scatter, Shading, ABSORBED};
+use super::bsdf::{luminance, mirrored, Scatter, Shading, ABSORBED};
 use super::textures::{map_normal, texture_alpha, texture_value};
 use super::types::{Hit, Ray};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::{for_each_material, MaterialKind};
 use crate::scene::records::{
     Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_ANISOTROPIC,
-    MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
-    NO_TEXTURE, SHADING_LIFT,
+    MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_OPACITY_TEXTURE,
+    MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -140,7 +140,8 @@ pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
 }
 
 /// Whether a ray passes through a hit (materials.wgsl's `transparent_at`): cut out below
-/// the cutoff (mask), or transparent when u >= alpha (blend).
+/// the cutoff (mask), or transparent when u >= alpha (blend); an opacity texture's
+/// luminance multiplies alpha.
 pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
     let m = &b.materials[hit.material as usize];
     if m.flags & (MAT_FLAG_ALPHA_MASK | MAT_FLAG_ALPHA_BLEND) == 0 {
@@ -150,6 +151,9 @@ pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
     let mut alpha = s.opacity * hit.color.w;
     if m.tex_color != NO_TEXTURE {
         alpha *= texture_alpha(b, m.tex_color, hit.uv);
+    }
+    if m.flags & MAT_FLAG_OPACITY_TEXTURE != 0 {
+        alpha *= luminance(texture_value(b, s.opacity_texture, hit.uv, hit.p));
     }
     if m.flags & MAT_FLAG_ALPHA_MASK != 0 {
         return alpha < s.alpha_cutoff;

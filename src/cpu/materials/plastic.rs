@@ -10,7 +10,7 @@ use glam::Vec3;
 
 use crate::cpu::bsdf::{
     density_sample, fresnel_dielectric, mf_d, mf_g1, mf_pdf_visible, mf_sample_visible,
-    over_surface, reflect_dir, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    mirror_scatter, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
 use crate::cpu::sampling::{onb_tangents, sample_cosine_hemisphere, PI};
 use crate::cpu::types::{Hit, Ray};
@@ -142,17 +142,8 @@ impl Shading for Params {
         let p_s = spec_prob(self, cos_o);
         let is_smooth = self.alpha < ALPHA_SMOOTH;
         if is_smooth && u[0] < p_s {
-            let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
-            if side * wi.dot(hit.ng) <= 0.0 {
-                return ABSORBED;
-            }
-            return Scatter {
-                ok: true,
-                dir: wi,
-                weight: self.specular * (fresnel(cos_o, self.ior) / p_s),
-                pdf: 0.0,
-                delta: true,
-            };
+            let weight = self.specular * (fresnel(cos_o, self.ior) / p_s);
+            return mirror_scatter(ray, hit, side, n, weight);
         }
         let wi = if u[0] < p_s {
             let tb = onb_tangents(n);

@@ -1,6 +1,6 @@
 //! Mirrors `shaders/materials/thin_dielectric.wgsl`.
 
-use crate::cpu::bsdf::{fresnel_dielectric, over_surface, reflect_dir, Scatter, Shading, ABSORBED};
+use crate::cpu::bsdf::{fresnel_dielectric, mirror_scatter, Scatter, Shading};
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::thin_dielectric::Params;
 
@@ -28,17 +28,7 @@ impl Shading for Params {
         let n = side * hit.ns;
         let c = (-ray.dir.dot(n)).clamp(0.0, 1.0);
         if u[0] < reflectance(c, self.ior) {
-            let wi = over_surface(reflect_dir(ray.dir, n), side, hit);
-            if side * wi.dot(hit.ng) <= 0.0 {
-                return ABSORBED;
-            }
-            return Scatter {
-                ok: true,
-                dir: wi,
-                weight: self.specular,
-                pdf: 0.0,
-                delta: true,
-            };
+            return mirror_scatter(ray, hit, side, n, self.specular);
         }
         Scatter {
             ok: true,

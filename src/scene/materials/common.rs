@@ -40,6 +40,26 @@ impl ColorDesc {
     }
 }
 
+/// `opacity` of any material (Mitsuba's `mask`): a number in [0, 1], or a texture's name
+/// whose luminance is the opacity at a hit. Where it is below 1 a ray passes through with
+/// probability 1 - opacity (stochastic transparency, as glTF's blend), shadow rays too.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum OpacityDesc {
+    Value(f32),
+    Texture(String),
+}
+
+impl OpacityDesc {
+    /// Its problems under `field`: a value in [0, 1], or a texture that exists.
+    pub fn check(&self, field: &str, c: &mut Check) {
+        match self {
+            OpacityDesc::Value(v) => c.unit(field, *v),
+            OpacityDesc::Texture(name) => c.texture(field, name),
+        }
+    }
+}
+
 impl Default for ColorDesc {
     fn default() -> Self {
         ColorDesc::Rgb([0.0; 3])
@@ -251,6 +271,10 @@ pub trait Model {
     /// Whether its roughness is anisotropic (its mesh then needs tangents too).
     fn anisotropic(&self) -> bool {
         false
+    }
+    /// Its opacity mask (`opacity`), for the types that take one.
+    fn opacity(&self) -> Option<&OpacityDesc> {
+        None
     }
 }
 
@@ -495,8 +519,10 @@ material_view! {
         /// Radiance emitted from the front side (both sides with `MAT_FLAG_TWO_SIDED`).
         emission: rgb = emission,
         emission_texture: u32 = tex_emission,
-        /// Opacity; times the `color` texture's alpha at a hit.
+        /// Opacity; times the `color` texture's alpha at a hit, and the luminance of
+        /// `opacity_texture` with `MAT_FLAG_OPACITY_TEXTURE`.
         opacity: f32 = color.w,
+        opacity_texture: u32 = tex_opacity,
         /// Cut out below this alpha (`MAT_FLAG_ALPHA_MASK`).
         alpha_cutoff: f32 = emission.w,
         /// A tangent-space normal map (linear, +y along v), its x and y scaled by

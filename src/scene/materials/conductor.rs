@@ -10,8 +10,8 @@
 use serde::Deserialize;
 
 use super::common::{
-    material_view, white_color, Check, ColorDesc, Distribution, Lobes, Model, Roughness,
-    TextureNames,
+    material_view, white_color, Check, ColorDesc, Distribution, Lobes, Model, OpacityDesc,
+    Roughness, TextureNames,
 };
 use crate::scene::metals::{metal, METALS};
 use crate::scene::records::{Material, MAT_FLAG_ANISOTROPIC};
@@ -40,6 +40,9 @@ pub struct Desc {
     /// Emit from the back side too.
     #[serde(default)]
     pub two_sided: bool,
+    /// An opacity mask: a number in [0, 1] or a texture's name.
+    #[serde(default)]
+    pub opacity: Option<OpacityDesc>,
 }
 
 material_view! {
@@ -127,6 +130,10 @@ impl Model for Desc {
 
     fn emission(&self) -> (&ColorDesc, bool) {
         (&self.emission, self.two_sided)
+    }
+
+    fn opacity(&self) -> Option<&OpacityDesc> {
+        self.opacity.as_ref()
     }
 
     fn lobes(&self) -> Lobes {

@@ -9,7 +9,8 @@
 use serde::Deserialize;
 
 use super::common::{
-    at_most_one, material_view, white_color, Check, ColorDesc, Lobes, Model, TextureNames,
+    at_most_one, material_view, white_color, Check, ColorDesc, Lobes, Model, OpacityDesc,
+    TextureNames,
 };
 use crate::scene::gltf::error::{GltfError, Result};
 use crate::scene::gltf::reader::{self, MaterialReader};
@@ -32,6 +33,9 @@ pub struct Desc {
     /// Emit from the back side too.
     #[serde(default)]
     pub two_sided: bool,
+    /// An opacity mask: a number in [0, 1] or a texture's name.
+    #[serde(default)]
+    pub opacity: Option<OpacityDesc>,
 }
 
 material_view! {
@@ -72,6 +76,21 @@ pub fn is_rough(m: &Material) -> bool {
     Params::read(m).alpha >= ALPHA_SMOOTH
 }
 
+impl Desc {
+    /// GGX alpha = roughness^2, and 0 (smooth) where ior = 1: an index-matched boundary
+    /// neither reflects nor bends light, whatever its microfacets (pbrt-v4's rule). Rough
+    /// glass's generalized half vector eta wo + wi is the zero vector there for the
+    /// straight-through direction, and its density infinite: glTF's transmission test
+    /// grids, whose ior runs from 1, rendered non-finite samples.
+    pub fn alpha(&self) -> f32 {
+        if self.ior == 1.0 {
+            0.0
+        } else {
+            self.roughness * self.roughness
+        }
+    }
+}
+
 impl Model for Desc {
     fn check(&self, c: &mut Check) {
         c.positive("ior", self.ior);
@@ -85,8 +104,12 @@ impl Model for Desc {
         (&self.emission, self.two_sided)
     }
 
+    fn opacity(&self) -> Option<&OpacityDesc> {
+        self.opacity.as_ref()
+    }
+
     fn lobes(&self) -> Lobes {
-        let density = has_density(self.roughness * self.roughness, self.absorption);
+        let density = has_density(self.alpha(), self.absorption);
         Lobes {
             density,
             delta: !density,
@@ -101,7 +124,7 @@ impl Model for Desc {
             tint_texture,
             ior: self.ior,
             absorption: self.absorption.into(),
-            alpha: self.roughness * self.roughness,
+            alpha: self.alpha(),
             back_face: 0.0,
         }
         .write(record);
@@ -186,6 +209,7 @@ pub fn from_gltf(
         roughness: pbr.roughness_factor(),
         emission,
         two_sided: m.double_sided(),
+        opacity: None,
     })
 }
 
@@ -210,6 +234,7 @@ pub fn from_mtl(m: &tobj::Material) -> std::result::Result<Desc, String> {
         roughness: 0.0,
         emission: ColorDesc::Rgb(m.emissive.unwrap_or([0.0; 3])),
         two_sided: false,
+        opacity: None,
     })
 }
 

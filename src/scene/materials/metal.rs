@@ -4,7 +4,7 @@
 
 use serde::Deserialize;
 
-use super::common::{material_view, Check, ColorDesc, Lobes, Model, TextureNames};
+use super::common::{material_view, Check, ColorDesc, Lobes, Model, OpacityDesc, TextureNames};
 use crate::scene::records::Material;
 
 /// Its entry in the scene format.
@@ -20,6 +20,9 @@ pub struct Desc {
     /// Emit from the back side too.
     #[serde(default)]
     pub two_sided: bool,
+    /// An opacity mask: a number in [0, 1] or a texture's name.
+    #[serde(default)]
+    pub opacity: Option<OpacityDesc>,
 }
 
 material_view! {
@@ -50,6 +53,10 @@ impl Model for Desc {
 
     fn emission(&self) -> (&ColorDesc, bool) {
         (&self.emission, self.two_sided)
+    }
+
+    fn opacity(&self) -> Option<&OpacityDesc> {
+        self.opacity.as_ref()
     }
 
     fn lobes(&self) -> Lobes {

@@ -25,9 +25,10 @@ pub mod thin_dielectric;
 use serde::Deserialize;
 
 use crate::scene::records::{
-    Material, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
+    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_OPACITY_TEXTURE,
+    MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
 };
-use common::{Check, Lobes, Model, Surface, TextureNames, View};
+use common::{Check, Lobes, Model, OpacityDesc, Surface, TextureNames, View};
 
 /// Calls macro `$then` with the type list: for each material, its doc comment, its
 /// [`MaterialKind`] variant, its tag, its module (its name in the format, its WGSL file,
@@ -161,7 +162,17 @@ impl MaterialDesc {
         textures: &[String],
     ) -> Vec<(String, String)> {
         let mut c = Check::new(key, textures);
-        self.model().check(&mut c);
+        let model = self.model();
+        model.check(&mut c);
+        if let Some(o) = model.opacity() {
+            o.check("opacity", &mut c);
+            if self.emits() {
+                c.push(
+                    "opacity",
+                    "a light cannot be masked: leave out the opacity or the emission".into(),
+                );
+            }
+        }
         c.problems()
     }
 
@@ -201,6 +212,21 @@ impl MaterialDesc {
         (surface.emission, surface.emission_texture) = names.color(emission);
         surface.write(&mut record);
         model.pack(&names, &mut record);
+        // an opacity mask: stochastic transparency where it is below 1
+        let mut surface = Surface::read(&record);
+        match model.opacity() {
+            Some(OpacityDesc::Value(v)) if *v < 1.0 => {
+                surface.opacity = *v;
+                record.flags |= MAT_FLAG_ALPHA_BLEND;
+            }
+            Some(OpacityDesc::Texture(name)) => {
+                surface.opacity = 1.0;
+                surface.opacity_texture = names.index(name);
+                record.flags |= MAT_FLAG_ALPHA_BLEND | MAT_FLAG_OPACITY_TEXTURE;
+            }
+            _ => {}
+        }
+        surface.write(&mut record);
         record
     }
 }

@@ -18,7 +18,8 @@ use glam::DVec3;
 use serde::Deserialize;
 
 use super::common::{
-    material_view, white_color, Check, ColorDesc, Distribution, Lobes, Model, TextureNames,
+    material_view, white_color, Check, ColorDesc, Distribution, Lobes, Model, OpacityDesc,
+    TextureNames,
 };
 use crate::scene::records::{Material, ALPHA_SMOOTH, MAT_FLAG_COLOR2_CLAMPED, PLASTIC_TABLE_SIZE};
 
@@ -58,6 +59,9 @@ pub struct Desc {
     /// Emit from the back side too.
     #[serde(default)]
     pub two_sided: bool,
+    /// An opacity mask: a number in [0, 1] or a texture's name.
+    #[serde(default)]
+    pub opacity: Option<OpacityDesc>,
 }
 
 material_view! {
@@ -106,6 +110,10 @@ impl Model for Desc {
 
     fn emission(&self) -> (&ColorDesc, bool) {
         (&self.emission, self.two_sided)
+    }
+
+    fn opacity(&self) -> Option<&OpacityDesc> {
+        self.opacity.as_ref()
     }
 
     fn lobes(&self) -> Lobes {

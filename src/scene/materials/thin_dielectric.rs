@@ -9,7 +9,8 @@
 use serde::Deserialize;
 
 use super::common::{
-    glass_ior, material_view, white_color, Check, ColorDesc, Lobes, Model, TextureNames,
+    glass_ior, material_view, white_color, Check, ColorDesc, Lobes, Model, OpacityDesc,
+    TextureNames,
 };
 use crate::scene::records::{Material, MAT_FLAG_COLOR2_CLAMPED};
 
@@ -30,6 +31,9 @@ pub struct Desc {
     /// Emit from the back side too.
     #[serde(default)]
     pub two_sided: bool,
+    /// An opacity mask: a number in [0, 1] or a texture's name.
+    #[serde(default)]
+    pub opacity: Option<OpacityDesc>,
 }
 
 material_view! {
@@ -62,6 +66,10 @@ impl Model for Desc {
 
     fn emission(&self) -> (&ColorDesc, bool) {
         (&self.emission, self.two_sided)
+    }
+
+    fn opacity(&self) -> Option<&OpacityDesc> {
+        self.opacity.as_ref()
     }
 
     fn lobes(&self) -> Lobes {
