@@ -56,8 +56,12 @@ fn shadowed(ray: Ray, t_max: f32, u: f32) -> bool {
         if (!transparent_at(hit, alpha_u(u, k))) {
             return true;
         }
+        // the rest of the segment, shortened by 2^-16 of itself (offset_ray's relative
+        // step): the end stands a few ulps off the light's own surface, which the
+        // rounding of the pass-through would otherwise reach on some rays (and not on
+        // the CPU's), shadowing them
         let next = spawn_ray(hit, r.dir);
-        t -= dot(next.origin - r.origin, r.dir);
+        t = (t - dot(next.origin - r.origin, r.dir)) * (1.0 - 1.0 / 65536.0);
         if (t <= 0.0) {
             return false;
         }
