@@ -107,7 +107,7 @@ pub const FNV1A64_BASIS: u64 = 0xcbf2_9ce4_8422_2325;
 
 /// A hash of everything that decides a render's samples: every byte of the records both
 /// backends read, the tables, the texel banks (their kinds and sizes, then their bytes)
-/// and the parameters (camera, size, seed, sampler, light sampling, depth), as their
+/// and the parameters (camera, size, seed, sampler, pixel filter, light sampling, depth), as their
 /// little-endian bytes, each array preceded by its length. The sample count is left out,
 /// so a resumed render may ask for more samples, except for samplers whose points depend
 /// on it (`SamplerKind::depends_on_spp`).
