@@ -129,7 +129,11 @@ fn materials_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     let q = material_queries[i];
     let ray = Ray(q.origin.xyz, q.dir.xyz);
+#ifdef HAS_BUMP
+    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, vec4<f32>(q.uv.xy, q.uv1.xy), q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0), q.color, vec3<f32>(0.0), vec3<f32>(0.0));
+#else
     let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, vec4<f32>(q.uv.xy, q.uv1.xy), q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0), q.color);
+#endif
     let mat = material_at(material_record(q.material), hit);
     let s = scatter(mat, ray, hit, q.uv.zw);
     var flags = select(0u, 1u, s.ok) | select(0u, 2u, s.delta);

@@ -232,7 +232,13 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         return false;
     }
     let surface = surface_at((*path).ray, cand);
-    let mat = material_at(material_record(surface.material), surface);
+#ifdef HAS_BLEND
+    // a blend's part, chosen here for all the vertex does
+    let record = blend_choice(surface.material, surface, bounce_2d(pixel, sample, (*path).depth, DIM_BLEND).x);
+#else
+    let record = material_record(surface.material);
+#endif
+    let mat = material_at(record, surface);
 #ifdef HAS_NORMAL_MAP
     let mapped = normal_mapped(mat, surface);
 #else

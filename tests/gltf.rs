@@ -1257,6 +1257,8 @@ fn textures_on_a_second_uv_set_and_the_specular_texture_are_read() {
         err: 0.0,
         tangent: glam::Vec4::ZERO,
         color: glam::Vec4::ONE,
+        dpdu: glam::Vec3::ZERO,
+        dpdv: glam::Vec3::ZERO,
     };
     let at = pbr::Params::read(&wgtrace::cpu::materials::material_at(&b, &mat, &hit));
     assert!((at.specular - 0.5 * 64.0 / 255.0).abs() < 1e-6, "{:?}", at);

@@ -262,6 +262,365 @@ material = "floor"
     }
 }
 
+/// `one_sided`: a Lambertian floor of albedo 0.5 under a white sky shows exactly 0.5 from
+/// its front, one-sided or not; seen from its back (the plane's normal turned away from
+/// the camera) it shows 0.5 by default (both sides reflect) and exactly 0 when one-sided,
+/// on both backends, every pixel.
+#[test]
+fn one_sided_materials_are_black_behind() {
+    let src = r#"
+[render]
+width = 16
+height = 16
+spp = 8
+max_depth = 2
+[camera]
+look_from = [0, 1, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+vfov = 30
+[background]
+color = [1, 1, 1]
+[materials]
+floor = { type = "lambertian", albedo = [0.5, 0.5, 0.5] ONE_SIDED }
+[[objects]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, NORMAL, 0]
+material = "floor"
+"#;
+    for (one_sided, normal, expected) in [
+        (false, "1", 0.5f32),
+        (true, "1", 0.5),
+        (false, "-1", 0.5),
+        (true, "-1", 0.0),
+    ] {
+        let s = scene_from_str(
+            &src.replace(
+                "ONE_SIDED",
+                if one_sided { ", one_sided = true" } else { "" },
+            )
+            .replace("NORMAL", normal),
+        );
+        for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+            let bad = (0..img.pixel_count())
+                .filter(|&i| (0..3).any(|c| (img.mean(i)[c] - expected).abs() > 1e-5))
+                .count();
+            assert_eq!(
+                bad, 0,
+                "{name}: one_sided {one_sided}, normal y {normal}: {bad} pixels off"
+            );
+        }
+    }
+}
+
+/// `blend`: under a white sky at max_depth 2, a blend of a white (albedo 1) and a black
+/// Lambertian material returns 1 or 0 per sample, so its mean is the white part's share:
+/// 1 - weight for a number; for a checker of weights (cells of 0.2 and 0.6) what a
+/// Lambertian floor of the complementary checker (0.8 and 0.4) reflects, exactly; 1/4 for
+/// a blend of a 50/50 blend and black at 1/2. Each image mean within 4 standard errors of
+/// the Bernoulli mean, on both backends. Then under a small
+/// light with MIS, a blend of a rough conductor and a Lambertian at 0.3 equals 0.7 x the
+/// Lambertian's image plus 0.3 x the conductor's (each rendered on its own), within 4
+/// combined standard errors of the image means.
+#[test]
+fn blends_mix_their_parts_by_weight() {
+    let src = r#"
+[render]
+width = 16
+height = 16
+spp = 64
+max_depth = 2
+[camera]
+look_from = [0, 1, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+vfov = 30
+[background]
+color = [1, 1, 1]
+[textures]
+cells = { type = "checker", scale = 40, even = [0.2, 0.2, 0.2], odd = [0.6, 0.6, 0.6] }
+complement = { type = "checker", scale = 40, even = [0.8, 0.8, 0.8], odd = [0.4, 0.4, 0.4] }
+[materials]
+white = { type = "lambertian", albedo = [1, 1, 1] }
+black = { type = "lambertian", albedo = [0, 0, 0] }
+half = { type = "blend", first = "white", second = "black", weight = 0.5 }
+floor = BLEND
+[[objects]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+material = "floor"
+"#;
+    for (blend, expected) in [
+        (
+            "{ type = \"blend\", first = \"white\", second = \"black\", weight = 0.3 }",
+            0.7f64,
+        ),
+        (
+            "{ type = \"blend\", first = \"black\", second = \"white\", weight = 0.9 }",
+            0.9,
+        ),
+        (
+            "{ type = \"blend\", first = \"white\", second = \"black\", weight = \"cells\" }",
+            -1.0,
+        ),
+        (
+            "{ type = \"blend\", first = \"half\", second = \"black\", weight = 0.5 }",
+            0.25,
+        ),
+    ] {
+        let s = scene_from_str(&src.replace("BLEND", blend));
+        // a textured weight: the white part's share is what a Lambertian floor of the
+        // complementary checker reflects, exactly, sample by sample
+        let exact = scene_from_str(&src.replace(
+            "BLEND",
+            "{ type = \"lambertian\", albedo = \"complement\" }",
+        ));
+        for (name, img, reference) in [
+            ("gpu", render_gpu(&s), render_gpu(&exact)),
+            ("cpu", render_cpu(&s), render_cpu(&exact)),
+        ] {
+            let (mean, _) = common::image_mean(&img);
+            let expected = if expected < 0.0 {
+                common::image_mean(&reference).0[0]
+            } else {
+                expected
+            };
+            let n = (img.pixel_count() * 64) as f64;
+            // at most the Bernoulli spread of the mean share (a spread of shares has less)
+            let se = (expected * (1.0 - expected) / n).sqrt();
+            assert!(
+                (mean[0] - expected).abs() <= 4.0 * se,
+                "{name}: {blend}: {} vs {expected} (standard error {se})",
+                mean[0]
+            );
+        }
+    }
+    let lit = r#"
+[render]
+width = 16
+height = 16
+spp = 256
+max_depth = 3
+light_sampling = "mis"
+[camera]
+look_from = [0, 2, 3]
+look_at = [0, 0, 0]
+vfov = 40
+[materials]
+gold = { type = "conductor", material = "Au", roughness = 0.4 }
+clay = { type = "lambertian", albedo = [0.7, 0.5, 0.3] }
+mix = { type = "blend", first = "clay", second = "gold", weight = 0.3 }
+lamp = { type = "emissive", radiance = [20, 20, 20] }
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "SURFACE"
+[[objects]]
+type = "sphere"
+center = [1.5, 2.5, 1]
+radius = 0.3
+material = "lamp"
+"#;
+    let parts = |backend: fn(&wgtrace::FlatScene) -> wgtrace::Accumulation, m: &str| {
+        common::image_mean(&backend(&scene_from_str(&lit.replace("SURFACE", m))))
+    };
+    for (name, backend) in [
+        ("gpu", render_gpu as fn(&_) -> _),
+        ("cpu", render_cpu as fn(&_) -> _),
+    ] {
+        let (mix, mix_se) = parts(backend, "mix");
+        let (clay, clay_se) = parts(backend, "clay");
+        let (gold, gold_se) = parts(backend, "gold");
+        for c in 0..3 {
+            let expected = 0.7 * clay[c] + 0.3 * gold[c];
+            let se = (mix_se[c].powi(2) + (0.7 * clay_se[c]).powi(2) + (0.3 * gold_se[c]).powi(2))
+                .sqrt();
+            assert!(
+                (mix[c] - expected).abs() <= 4.0 * se,
+                "{name} channel {c}: blend {} vs parts {expected} (standard error {se})",
+                mix[c]
+            );
+        }
+    }
+}
+
+/// Bump maps by their closed form: a floor (normal +y, uv = 0.1 x (x, -z), so dp/du =
+/// (10, 0, 0) and dp/dv = (0, 0, -10)) bumped by a 2 x 1 black-and-white image (clamped,
+/// linear), whose height rises 2 per unit of u between its texel centres. With
+/// `bump_scale` k the surface's slope along x is 2k / 10, so its normal tilts toward -x
+/// by atan(0.2 k). Seen from above where u is in [0.4, 0.6], lit straight down by a
+/// directional light of irradiance E and nothing else (black sky, max_depth 2), a white
+/// Lambertian floor shows E cos(tilt) / pi in every pixel, exactly, on both backends: k =
+/// 0 (no bump), 2.5 (cos 0.894427), -2.5 (the same tilt the other way). A light from
+/// (-1, 1, 0) tells the two tilts apart: E cos(45 deg -+ tilt) / pi.
+#[test]
+fn bump_maps_tilt_the_normal_by_their_slope() {
+    let dir = common::tmp_dir("bump");
+    let img = image::ImageBuffer::<image::Rgb<u8>, _>::from_fn(2, 1, |x, _| {
+        image::Rgb([(x * 255) as u8; 3])
+    });
+    img.save(dir.join("ramp.png")).unwrap();
+    let src = r#"
+[render]
+width = 8
+height = 8
+spp = 4
+max_depth = 2
+[camera]
+look_from = [5, 2, 0]
+look_at = [5, 0, 0]
+up = [0, 0, -1]
+vfov = 20
+[textures]
+ramp = { type = "image", path = "ramp.png", wrap = "clamp", color_space = "linear" }
+[materials]
+floor = { type = "lambertian", albedo = [1, 1, 1], bump = "ramp", bump_scale = SCALE }
+[[objects]]
+type = "plane"
+point = [0, 0, 0]
+normal = [0, 1, 0]
+uv_scale = 0.1
+material = "floor"
+[[lights]]
+type = "directional"
+direction = [DIRECTION]
+irradiance = [2, 2, 2]
+"#;
+    let pi = std::f32::consts::PI;
+    let tilt = |k: f32| (0.2 * k).atan();
+    for (k, direction, expected) in [
+        (0.0f32, "0, -1, 0", 2.0 / pi),
+        (2.5, "0, -1, 0", 2.0 * tilt(2.5).cos() / pi),
+        (-2.5, "0, -1, 0", 2.0 * tilt(2.5).cos() / pi),
+        // the light comes from -x: a normal tilted toward -x faces it more
+        (2.5, "1, -1, 0", 2.0 * (pi / 4.0 - tilt(2.5)).cos() / pi),
+        (-2.5, "1, -1, 0", 2.0 * (pi / 4.0 + tilt(2.5)).cos() / pi),
+    ] {
+        let text = src
+            .replace("SCALE", &k.to_string())
+            .replace("DIRECTION", direction);
+        let path = dir.join("bump.toml");
+        let s = wgtrace::load_scene_str(&text, &path, &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"));
+        for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+            let worst = (0..img.pixel_count())
+                .map(|i| (img.mean(i)[0] - expected).abs())
+                .fold(0.0f32, f32::max);
+            assert!(
+                worst <= 2e-4 * expected,
+                "{name}: bump_scale {k}, light {direction}: off by {worst} from {expected}"
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Bump maps on every shape (sphere, triangles of a mesh with uvs, plane, box, cylinder,
+/// disk, and a transformed sphere), with an image and with noise for heights, render
+/// alike on the GPU and the CPU: no tile's mean outside the z-test's bound, and the
+/// pixels within what the spot check allows.
+#[test]
+fn bump_maps_render_alike_on_both_backends() {
+    let dir = common::tmp_dir("bump-shapes");
+    let img = image::ImageBuffer::<image::Rgb<u8>, _>::from_fn(16, 16, |x, y| {
+        let v = (((x as f32 * 0.9).sin() * (y as f32 * 0.7).cos() * 0.5 + 0.5) * 255.0) as u8;
+        image::Rgb([v; 3])
+    });
+    img.save(dir.join("bumps.png")).unwrap();
+    std::fs::write(
+        dir.join("quad.obj"),
+        "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nvt 0 0\nvt 2 0\nvt 2 2\nvt 0 2\nf 1/1 4/4 3/3 2/2\n",
+    )
+    .unwrap();
+    let src = r#"
+[render]
+width = 48
+height = 32
+spp = 64
+max_depth = 3
+[camera]
+look_from = [0, 4, 9]
+look_at = [0, 0.5, 0]
+vfov = 45
+[background]
+top = [0.8, 0.9, 1.0]
+bottom = [0.2, 0.2, 0.2]
+[textures]
+bumps = { type = "image", path = "bumps.png", color_space = "linear" }
+noise = { type = "noise", scale = 4 }
+[materials]
+a = { type = "lambertian", albedo = [0.8, 0.6, 0.4], bump = "bumps", bump_scale = 0.05 }
+b = { type = "conductor", material = "Cu", roughness = 0.3, bump = "noise", bump_scale = 0.3 }
+c = { type = "plastic", albedo = [0.2, 0.4, 0.8], bump = "bumps", bump_scale = 0.02 }
+[[objects]]
+type = "plane"
+point = [0, -1, 0]
+normal = [0, 1, 0]
+material = "c"
+[[objects]]
+type = "sphere"
+center = [-3, 0.5, 0]
+radius = 1
+material = "a"
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "b"
+transform = { scale = [1.5, 1, 1], translate = [0, 0.5, 2] }
+[[objects]]
+type = "mesh"
+path = "quad.obj"
+material = "a"
+transform = { translate = [3, 1.5, 0], rotate = [60, 0, 0] }
+[[objects]]
+type = "box"
+min = [1.5, -1, -3]
+max = [3, 0.5, -1.5]
+material = "b"
+[[objects]]
+type = "cylinder"
+base = [-1, -1, -3]
+top = [-1, 1, -3]
+radius = 0.6
+material = "a"
+[[objects]]
+type = "disk"
+center = [-3, 1.8, -2]
+normal = [0, 0.5, 1]
+radius = 0.8
+material = "c"
+"#;
+    let s = wgtrace::load_scene_str(src, &dir.join("shapes.toml"), &Default::default())
+        .unwrap_or_else(|e| panic!("{e}"));
+    let (gpu, cpu) = (render_gpu(&s), render_cpu(&s));
+    let c = compare(&gpu, &cpu, 8);
+    assert!(c.failed_tiles.is_empty(), "{:?}", c.failed_tiles);
+    // a bump map's slopes are differences of heights over a small step: they magnify the
+    // last bits in which the backends' arithmetic differs (a noise's by 1e4), and a
+    // glossy reflection or a far, minified bump turns those into a few percent of some
+    // pixels: what the spot check allows a right GPU (PIXEL_TOLERANCE of the brightest
+    // channel, MIN_AGREEMENT of the pixels) is asked here
+    use wgtrace::spot_check::{MIN_AGREEMENT, PIXEL_TOLERANCE};
+    let agree = (0..cpu.pixel_count())
+        .filter(|&i| {
+            let (a, b) = (gpu.mean(i), cpu.mean(i));
+            let top = b[0].max(b[1]).max(b[2]);
+            (0..3)
+                .all(|k| (a[k] - b[k]).abs() <= 1e-3 * b[k].abs().max(1.0) + PIXEL_TOLERANCE * top)
+        })
+        .count();
+    assert!(
+        agree as f64 >= MIN_AGREEMENT * cpu.pixel_count() as f64,
+        "{agree} of {} pixels agree",
+        cpu.pixel_count()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// White furnace per material: albedo 1 under a uniform background of radiance 1. Every
 /// sample of a lossless material (Lambertian, mirror metal, clear glass, which splits light
 /// between reflection and refraction) returns exactly 1; no material ever returns more than

@@ -366,6 +366,8 @@ fn gpu_materials_match_cpu_query_by_query() {
             err: 0.0,
             tangent: glam::Vec4::ZERO,
             color: glam::Vec4::from(q.color),
+            dpdu: glam::Vec3::ZERO,
+            dpdv: glam::Vec3::ZERO,
         };
         let mat = material_at(&b, &s.materials[q.material as usize], &hit);
         let sc = scatter(&mat, &ray, &hit, [q.uv[2], q.uv[3]]);

@@ -477,6 +477,8 @@ fn microfacet_roughness_near_zero_is_finite_and_continuous() {
         err: 1e-6,
         tangent: glam::Vec4::ZERO,
         color: glam::Vec4::ONE,
+        dpdu: glam::Vec3::ZERO,
+        dpdv: glam::Vec3::ZERO,
     };
     let mut last_spread = 0.0f64;
     for alpha in [1.0f32, 1e-2, 1e-3, 1e-4, 1e-6, 0.0] {

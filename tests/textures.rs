@@ -268,6 +268,8 @@ fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
         err: 0.0,
         tangent: glam::Vec4::ZERO,
         color: Vec4::ONE,
+        dpdu: glam::Vec3::ZERO,
+        dpdv: glam::Vec3::ZERO,
     };
     // materials are numbered in name order: a, b, c
     let at = |i: usize| material_at(&b, &s.materials[i], &hit);

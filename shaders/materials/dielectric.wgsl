@@ -9,7 +9,7 @@
 // internal reflection when eta^2 sin^2(theta_i) >= 1; otherwise reflection with the exact
 // Fresnel probability (fresnel_dielectric; ior 1 is invisible). Weight = tint, times the
 // Beer-Lambert transmittance exp(-absorption x distance) for a segment that ran inside.
-// Deltas when smooth; a rough one (GGX alpha at least ALPHA_SMOOTH) scatters by
+// Deltas when smooth; a rough one (an alpha at least ALPHA_SMOOTH) scatters by
 // dielectric_rough_scatter.
 fn dielectric_scatter(p: DielectricParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     let entering = hit.front_face;
@@ -20,7 +20,7 @@ fn dielectric_scatter(p: DielectricParams, ray: Ray, hit: Hit, u: vec2<f32>) -> 
         weight *= exp(-p.absorption * length(hit.p - ray.origin));
     }
 #ifdef HAS_ROUGH_DIELECTRIC
-    if (p.alpha >= ALPHA_SMOOTH) {
+    if (max(p.alpha, p.alpha_v) >= ALPHA_SMOOTH) {
         return dielectric_rough_scatter(p, ray, hit, n, eta, weight, u);
     }
 #endif
@@ -71,10 +71,24 @@ fn dielectric_half(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec3
     return select(-h, h, dot(h, n) > 0.0);
 }
 
+// Rough glass's microfacets: GGX or Beckmann, alpha along the tangent and the bitangent
+// (in the frame tangent_frame makes of n and the hit's tangent).
+fn dielectric_microfacet(p: DielectricParams) -> Microfacet {
+    return Microfacet(p.alpha, p.alpha_v, p.beckmann > 0.5);
+}
+
+// Whether rough glass is other than isotropic GGX (Beckmann, or anisotropic): compiled
+// for scenes that have such glass (HAS_GLASS_MICROFACETS), isotropic GGX keeps its own
+// shorter code.
+fn dielectric_general(p: DielectricParams) -> bool {
+    return p.beckmann > 0.5 || p.alpha != p.alpha_v;
+}
+
 // Rough glass toward wi, for unit wo and wi about the unit normal n on wo's side,
 // eta = eta_o / eta_i: (BSDF x |cos(theta_i)|, the pdf of dielectric_rough_scatter's
 // directions), computed together since the scatter needs both.
-// BSDF (GGX alpha, exact Fresnel F at wo . h): reflection F D G2 / (4 cos_o);
+// BSDF (microfacets D, Smith's height-correlated G2 = 1 / (1 + Lambda(wo) + Lambda(wi)),
+// exact Fresnel F at wo . h): reflection F D G2 / (4 cos_o);
 // refraction (Walter et al. 2007, for radiance: times eta^2, the 1 / eta_t^2 scaling of
 // radiance across the boundary) eta^2 (1 - F) D G2 |wi . h| |wo . h| /
 // ((wi . h + eta wo . h)^2 cos_o).
@@ -82,7 +96,7 @@ fn dielectric_half(n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec3
 // reflection (1 / (4 wo . h)) with probability dielectric_reflect_prob (1 where h
 // reflects totally: a refraction chosen there reflects instead), or through the
 // refraction (|wi . h| / (wi . h + eta wo . h)^2) with the rest.
-fn dielectric_rough_lobes(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec2<f32> {
+fn dielectric_rough_lobes(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec2<f32> {
     let cos_o = dot(n, wo);
     let cos_i = dot(n, wi);
     let h = dielectric_half(n, wo, wi, eta);
@@ -92,9 +106,23 @@ fn dielectric_rough_lobes(alpha: f32, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>
     if (cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0) {
         return vec2<f32>(0.0);
     }
-    let d = ggx_d(dot(n, h), alpha);
-    let g2 = smith_g2(cos_o, abs(cos_i), alpha);
-    let visible = d / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
+    let alpha = p.alpha;
+    var d = ggx_d(dot(n, h), alpha);
+    var g2 = smith_g2(cos_o, abs(cos_i), alpha);
+    var visible = d / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
+#ifdef HAS_GLASS_MICROFACETS
+    if (dielectric_general(p)) {
+        let m = dielectric_microfacet(p);
+        let tb = tangent_frame(n, p.tangent);
+        let lh = vec3<f32>(dot(h, tb[0]), dot(h, tb[1]), dot(h, n));
+        let g_o = mf_g1(m, vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o), lh);
+        let g_i = mf_g1(m, vec3<f32>(dot(wi, tb[0]), dot(wi, tb[1]), cos_i), lh);
+        d = mf_d(m, lh);
+        // 1 / (1 + Lambda(wo) + Lambda(wi)), Lambda = 1 / G1 - 1
+        g2 = select(0.0, g_o * g_i / (g_o + g_i - g_o * g_i), g_o * g_i > 0.0);
+        visible = d * g_o / cos_o;
+    }
+#endif
     let f = dielectric_fresnel(oh, eta);
     let p_r = dielectric_reflect_prob(cos_o, eta);
     if (cos_i > 0.0) {
@@ -123,9 +151,14 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
     let p_r = dielectric_reflect_prob(cos_o, eta);
     let chose_reflection = u.x < p_r;
     let uh = vec2<f32>(select((u.x - p_r) / (1.0 - p_r), u.x / p_r, chose_reflection), u.y);
-    let tb = onb_tangents(n);
-    let local = vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o);
-    let h_l = sample_ggx_vndf(local, p.alpha, uh);
+    var tb = onb_tangents(n);
+    var h_l = sample_ggx_vndf(vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o), p.alpha, uh);
+#ifdef HAS_GLASS_MICROFACETS
+    if (dielectric_general(p)) {
+        tb = tangent_frame(n, p.tangent);
+        h_l = mf_sample_visible(dielectric_microfacet(p), vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o), uh);
+    }
+#endif
     let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
     let oh = dot(wo, h);
     let sin2_t = eta * eta * max(0.0, 1.0 - oh * oh);
@@ -134,7 +167,7 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
     let wi = select(normalize(-eta * wo + (eta * oh - cos_t) * h), normalize(2.0 * oh * h - wo), is_reflection);
     let side = select(-1.0, 1.0, hit.front_face);
     let above = side * dot(wi, hit.ng) > 0.0;
-    let lobes = dielectric_rough_lobes(p.alpha, n, wo, wi, eta);
+    let lobes = dielectric_rough_lobes(p, n, wo, wi, eta);
     if (!(lobes.y > 0.0) || above != is_reflection) {
         return absorbed();
     }
@@ -145,7 +178,7 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
 // Whether the glass has a density that light sampling weighs: rough and not absorbing
 // (scene::materials::dielectric::has_density says why).
 fn dielectric_has_density(p: DielectricParams) -> bool {
-    return p.alpha >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0));
+    return max(p.alpha, p.alpha_v) >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0));
 }
 
 // eta = eta_o / eta_i at a hit: 1 / ior from outside (the front face), ior from inside.
@@ -160,7 +193,7 @@ fn dielectric_eta(p: DielectricParams) -> f32 {
 fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 #ifdef HAS_ROUGH_DIELECTRIC
     if (dielectric_has_density(p)) {
-        return p.tint * dielectric_rough_lobes(p.alpha, n, wo, wi, dielectric_eta(p)).x;
+        return p.tint * dielectric_rough_lobes(p, n, wo, wi, dielectric_eta(p)).x;
     }
 #endif
     return vec3<f32>(0.0);
@@ -171,7 +204,7 @@ fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
 fn dielectric_pdf(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
 #ifdef HAS_ROUGH_DIELECTRIC
     if (dielectric_has_density(p)) {
-        return dielectric_rough_lobes(p.alpha, n, wo, wi, dielectric_eta(p)).y;
+        return dielectric_rough_lobes(p, n, wo, wi, dielectric_eta(p)).y;
     }
 #endif
     return 0.0;

@@ -798,16 +798,117 @@ fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface {
     return s;
 }
 
+#ifdef HAS_BUMP
+// The derivatives of the point along the first uv set of a surface point s of a
+// primitive, in its own space (HAS_BUMP: what a bump map's slopes are measured against,
+// as in Mitsuba and pbrt): a sphere's longitude and latitude (kept off the poles'
+// singularity), a triangle's vertex uvs (its default (0, 0), (1, 0), (0, 1) without
+// them; a frame of its normal where they are degenerate), a plane's scaled frame, a box
+// face's extent, a cylinder's and a disk's angle and height or radius.
+fn surface_uv_derivatives(prim: Primitive, s: Surface, cand: Candidate) -> array<vec3<f32>, 2> {
+    var d = onb_tangents(s.ng);
+    switch prim.tag {
+#ifdef HAS_SPHERE
+        case PRIM_SPHERE: {
+            let r = prim.a.w;
+            let n = s.ng;
+            let rho = max(sqrt(n.x * n.x + n.z * n.z), 1e-6);
+            d[0] = 2.0 * PI * r * vec3<f32>(n.z, 0.0, -n.x);
+            d[1] = PI * r * vec3<f32>(-n.y * n.x / rho, rho, -n.y * n.z / rho);
+        }
+#endif
+#ifdef HAS_TRIANGLE
+        case PRIM_TRIANGLE: {
+            var uv0 = vec2<f32>(0.0);
+            var uv1 = vec2<f32>(1.0, 0.0);
+            var uv2 = vec2<f32>(0.0, 1.0);
+            if ((prim.flags & PRIM_FLAG_ATTRIBUTES) != 0u) {
+                let a3 = shape_data[prim.data + 3u];
+                uv0 = vec2<f32>(shape_data[prim.data].w, a3.x);
+                uv1 = vec2<f32>(shape_data[prim.data + 1u].w, a3.y);
+                uv2 = vec2<f32>(shape_data[prim.data + 2u].w, a3.z);
+            }
+            let duv02 = uv0 - uv2;
+            let duv12 = uv1 - uv2;
+            let dp02 = prim.a.xyz - prim.c.xyz;
+            let dp12 = prim.b.xyz - prim.c.xyz;
+            let det = duv02.x * duv12.y - duv02.y * duv12.x;
+            if (abs(det) > 1e-12) {
+                d[0] = (duv12.y * dp02 - duv02.y * dp12) / det;
+                d[1] = (duv02.x * dp12 - duv12.x * dp02) / det;
+            }
+        }
+#endif
+#ifdef HAS_PLANE
+        case PRIM_PLANE: {
+            let tb = onb_tangents(prim.b.xyz);
+            d[0] = tb[0] / prim.a.w;
+            d[1] = tb[1] / prim.a.w;
+        }
+#endif
+#ifdef HAS_BOX
+        case PRIM_BOX: {
+            let axis = u32(cand.u);
+            let i = (axis + 1u) % 3u;
+            let j = (axis + 2u) % 3u;
+            d[0] = vec3<f32>(0.0);
+            d[1] = vec3<f32>(0.0);
+            d[0][i] = prim.b[i] - prim.a[i];
+            d[1][j] = prim.b[j] - prim.a[j];
+        }
+#endif
+#ifdef HAS_CYLINDER
+        case PRIM_CYLINDER: {
+            let axis = prim.b.xyz - prim.a.xyz;
+            let ax = normalize(axis);
+            let q = s.p - prim.a.xyz;
+            let radial = q - dot(q, ax) * ax;
+            let len = max(length(radial), 1e-12);
+            let tb = onb_tangents(ax);
+            let c = radial / len;
+            // the direction of growing angle (angle_uv), times the circumference's length
+            let around = dot(c, tb[0]) * tb[1] - dot(c, tb[1]) * tb[0];
+            d[0] = 2.0 * PI * len * around;
+            d[1] = select(c * prim.a.w, axis, cand.u == 0.0);
+        }
+#endif
+#ifdef HAS_DISK
+        case PRIM_DISK: {
+            let n = prim.b.xyz;
+            let qp = s.p - prim.a.xyz;
+            let len = max(length(qp), 1e-12);
+            let tb = onb_tangents(n);
+            let c = qp / len;
+            let around = dot(c, tb[0]) * tb[1] - dot(c, tb[1]) * tb[0];
+            d[0] = 2.0 * PI * len * around;
+            d[1] = c * prim.a.w;
+        }
+#endif
+        default: {}
+    }
+    return d;
+}
+#endif
+
 // Shading record of a candidate hit, in world space.
 fn surface_at(ray: Ray, cand: Candidate) -> Hit {
     let prim = primitive_record(cand.prim);
     var s: Surface;
+#ifdef HAS_BUMP
+    var dp: array<vec3<f32>, 2>;
+#endif
 #ifdef HAS_TRANSFORMS
     if ((prim.flags & PRIM_FLAG_TRANSFORM) != 0u) {
         let r = ray_to_object(prim.data, ray);
         let scale = length(r.dir);
         let local = Candidate(cand.t * scale, cand.prim, cand.u, cand.v);
         s = surface_local(prim, Ray(r.origin, r.dir / scale), local);
+#ifdef HAS_BUMP
+        // tangent vectors go to world space by the object-to-world matrix itself
+        dp = surface_uv_derivatives(prim, s, local);
+        dp[0] = point_to_world(prim.data, dp[0]) - point_to_world(prim.data, vec3<f32>(0.0));
+        dp[1] = point_to_world(prim.data, dp[1]) - point_to_world(prim.data, vec3<f32>(0.0));
+#endif
         let p_obj = s.p;
         s.p = point_to_world(prim.data, p_obj);
         s.ng = normal_to_world(prim.data, s.ng);
@@ -815,14 +916,24 @@ fn surface_at(ray: Ray, cand: Candidate) -> Hit {
         s.err = transform_error(prim.data, p_obj, s.err);
     } else {
         s = surface_local(prim, ray, cand);
+#ifdef HAS_BUMP
+        dp = surface_uv_derivatives(prim, s, cand);
+#endif
     }
 #else
     s = surface_local(prim, ray, cand);
+#ifdef HAS_BUMP
+    dp = surface_uv_derivatives(prim, s, cand);
+#endif
 #endif
 #ifdef HAS_UV1
     let uv1 = select(s.uv, s.uv1, (prim.flags & PRIM_FLAG_UV1) != 0u);
 #else
     let uv1 = s.uv;
 #endif
+#ifdef HAS_BUMP
+    return Hit(s.p, s.ng, s.ns, vec4<f32>(s.uv, uv1), dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent, s.color, dp[0], dp[1]);
+#else
     return Hit(s.p, s.ng, s.ns, vec4<f32>(s.uv, uv1), dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent, s.color);
+#endif
 }

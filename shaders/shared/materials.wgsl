@@ -27,7 +27,8 @@ fn emitted(mat: Material, hit: Hit) -> vec3<f32> {
 // material's own textures. Compiled only for scenes with textures (HAS_TEXTURES):
 // llvmpipe runs untaken branches under a mask, and the look-ups cost an untextured scene
 // about 30% of its speed. A triangle's vertex colour multiplies color (HAS_VERTEX_COLORS;
-// still at most 1).
+// still at most 1). The back of a one-sided surface (MAT_FLAG_ONE_SIDED, HAS_ONE_SIDED)
+// is black: the tag MAT_BLACK, which the dispatch absorbs.
 fn material_at(m: Material, hit: Hit) -> Material {
     var mat = m;
     // which side the hit is on, for a material whose eval needs it (rough glass's eta)
@@ -55,17 +56,30 @@ fn material_at(m: Material, hit: Hit) -> Material {
 #ifdef HAS_VERTEX_COLORS
     mat.color = vec4<f32>(min(mat.color.rgb * hit.color.rgb, vec3<f32>(1.0)), mat.color.w);
 #endif
+#ifdef HAS_ONE_SIDED
+    // the back of a one-sided surface absorbs (it still emits as its flags say)
+    if ((mat.flags & MAT_FLAG_ONE_SIDED) != 0u && !hit.front_face) {
+        mat.tag = MAT_BLACK;
+        mat.flags &= ~(MAT_FLAG_NEE | MAT_FLAG_DELTA);
+    }
+#endif
     return mat;
 }
 
 #ifdef HAS_NORMAL_MAP
 // The hit with its shading normal taken from the surface's tangent-space normal map
-// (map_normal).
+// (map_normal), or from its bump map (MAT_FLAG_BUMP: bump_normal).
 fn normal_mapped(mat: Material, hit: Hit) -> Hit {
     var h = hit;
 #ifdef HAS_TEXTURES
     let s = surface_params(mat);
     if (s.normal_texture != NO_TEXTURE) {
+#ifdef HAS_BUMP
+        if ((mat.flags & MAT_FLAG_BUMP) != 0u) {
+            h.ns = bump_normal(s.normal_texture, s.normal_scale, hit);
+            return h;
+        }
+#endif
         h.ns = map_normal(s.normal_texture, s.normal_scale, hit);
     }
 #endif

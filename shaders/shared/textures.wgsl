@@ -1,5 +1,6 @@
 // Textures: constant, checker, image (bilinear, wrapped), Perlin noise.
 #import shared/bindings
+#import shared/bsdf
 #import shared/types
 
 // A texture coordinate folded into [0, 1] by the wrap mode (0 repeat, 1 clamp, 2 mirror).
@@ -221,6 +222,42 @@ fn map_normal(index: u32, scale: f32, hit: Hit) -> vec3<f32> {
         return m / len;
     }
     return hit.ns;
+}
+#endif
+
+#ifdef HAS_BUMP
+// A height texture's slopes (dh/du, dh/dv) at a hit: forward differences of its
+// luminance along the first uv set, the point moved along dp/du and dp/dv with it (so a
+// solid texture has slopes too); the step a 64th of an image's texel (within a texel
+// its bilinear look-up is linear along each axis, so this is its derivative there, as
+// Mitsuba's analytic gradient), else 1e-4.
+fn texture_slopes(index: u32, hit: Hit) -> vec2<f32> {
+    let tex = textures[index];
+    let delta = select(1e-4, 1.0 / (64.0 * f32(max(tex.width, tex.height))), tex.tag == TEX_IMAGE);
+    let h = luminance(texture_value(index, hit.uv, hit.p));
+    let hu = luminance(texture_value(index, hit.uv + vec4<f32>(delta, 0.0, delta, 0.0), hit.p + delta * hit.dpdu));
+    let hv = luminance(texture_value(index, hit.uv + vec4<f32>(0.0, delta, 0.0, delta), hit.p + delta * hit.dpdv));
+    return vec2<f32>(hu - h, hv - h) / delta;
+}
+
+// The shading normal that bump map `index` (a height, times `scale`) gives a hit: the
+// normal of the surface displaced by the height along its shading normal n, dp/du and
+// dp/dv made tangent to n and lifted by the height's slopes (dp'/du = dp/du - n (n .
+// dp/du) + (dh/du) n, the same along v), n' = dp'/du x dp'/dv turned to n's side, as
+// Mitsuba's `bumpmap`. A hit without a parametrization, or a normal that would face away
+// from the geometric side, keeps its normal.
+fn bump_normal(index: u32, scale: f32, hit: Hit) -> vec3<f32> {
+    let n = hit.ns;
+    let g = scale * texture_slopes(index, hit);
+    let du = hit.dpdu - n * dot(n, hit.dpdu) + g.x * n;
+    let dv = hit.dpdv - n * dot(n, hit.dpdv) + g.y * n;
+    var m = cross(du, dv);
+    let len = length(m);
+    if (!(len > 0.0)) {
+        return n;
+    }
+    m = m * (select(-1.0, 1.0, dot(m, n) >= 0.0) / len);
+    return select(n, m, dot(m, hit.ng) > 0.0);
 }
 #endif
 

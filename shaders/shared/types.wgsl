@@ -218,4 +218,10 @@ struct Hit {
     // interpolated vertex colour (linear rgb, alpha) of a triangle with vertex colours
     // (HAS_VERTEX_COLORS), else 1
     color: vec4<f32>,
+#ifdef HAS_BUMP
+    // the derivatives of p along the surface's first uv set (surface_uv_derivatives), for
+    // bump maps
+    dpdu: vec3<f32>,
+    dpdv: vec3<f32>,
+#endif
 }

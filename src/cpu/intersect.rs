@@ -7,10 +7,10 @@ use super::bindings::Bindings;
 use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
-    BvhNode, Primitive, ATTRIBUTE_ENTRIES, BVH_NODE_BITS, BVH_SLAB_ERROR, BVH_STACK_SIZE, PRIM_BOX,
-    PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_COLORS,
-    PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS, PRIM_FLAG_TRANSFORM, PRIM_FLAG_UV1, PRIM_PLANE,
-    PRIM_SPHERE, PRIM_TRIANGLE, TANGENT_ENTRIES, UV1_ENTRIES,
+    BvhNode, Primitive, ATTRIBUTE_ENTRIES, BVH_NODE_BITS, BVH_SLAB_ERROR, BVH_STACK_SIZE,
+    MAT_FLAG_BUMP, PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS,
+    PRIM_FLAG_COLORS, PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS, PRIM_FLAG_TRANSFORM,
+    PRIM_FLAG_UV1, PRIM_PLANE, PRIM_SPHERE, PRIM_TRIANGLE, TANGENT_ENTRIES, UV1_ENTRIES,
 };
 
 /// Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `ray.dir` is unit length.
@@ -723,9 +723,84 @@ pub fn surface_local(b: &Bindings, prim: &Primitive, ray: &Ray, cand: &Candidate
     s
 }
 
+/// The derivatives of the point along the first uv set of a surface point `s` of a
+/// primitive, in its own space (intersect.wgsl's `surface_uv_derivatives`).
+pub fn surface_uv_derivatives(
+    b: &Bindings,
+    prim: &Primitive,
+    s: &Surface,
+    cand: &Candidate,
+) -> [Vec3; 2] {
+    let mut d = onb_tangents(s.ng);
+    match prim.tag {
+        PRIM_SPHERE => {
+            let r = prim.a[3];
+            let n = s.ng;
+            let rho = (n.x * n.x + n.z * n.z).sqrt().max(1e-6);
+            d[0] = 2.0 * PI * r * Vec3::new(n.z, 0.0, -n.x);
+            d[1] = PI * r * Vec3::new(-n.y * n.x / rho, rho, -n.y * n.z / rho);
+        }
+        PRIM_TRIANGLE => {
+            let (mut uv0, mut uv1, mut uv2) = (Vec2::ZERO, Vec2::X, Vec2::Y);
+            if prim.flags & PRIM_FLAG_ATTRIBUTES != 0 {
+                let a3 = row(b, prim.data + 3);
+                uv0 = Vec2::new(row(b, prim.data).w, a3.x);
+                uv1 = Vec2::new(row(b, prim.data + 1).w, a3.y);
+                uv2 = Vec2::new(row(b, prim.data + 2).w, a3.z);
+            }
+            let (duv02, duv12) = (uv0 - uv2, uv1 - uv2);
+            let (dp02, dp12) = (xyz(prim.a) - xyz(prim.c), xyz(prim.b) - xyz(prim.c));
+            let det = duv02.x * duv12.y - duv02.y * duv12.x;
+            if det.abs() > 1e-12 {
+                d[0] = (duv12.y * dp02 - duv02.y * dp12) / det;
+                d[1] = (duv02.x * dp12 - duv12.x * dp02) / det;
+            }
+        }
+        PRIM_PLANE => {
+            let tb = onb_tangents(xyz(prim.b));
+            d[0] = tb[0] / prim.a[3];
+            d[1] = tb[1] / prim.a[3];
+        }
+        PRIM_BOX => {
+            let axis = cand.u as usize;
+            let (i, j) = ((axis + 1) % 3, (axis + 2) % 3);
+            d = [Vec3::ZERO; 2];
+            d[0][i] = prim.b[i] - prim.a[i];
+            d[1][j] = prim.b[j] - prim.a[j];
+        }
+        PRIM_CYLINDER => {
+            let axis = xyz(prim.b) - xyz(prim.a);
+            let ax = axis.normalize();
+            let q = s.p - xyz(prim.a);
+            let radial = q - q.dot(ax) * ax;
+            let len = radial.length().max(1e-12);
+            let tb = onb_tangents(ax);
+            let c = radial / len;
+            let around = c.dot(tb[0]) * tb[1] - c.dot(tb[1]) * tb[0];
+            d[0] = 2.0 * PI * len * around;
+            d[1] = if cand.u == 0.0 { axis } else { c * prim.a[3] };
+        }
+        PRIM_DISK => {
+            let n = xyz(prim.b);
+            let qp = s.p - xyz(prim.a);
+            let len = qp.length().max(1e-12);
+            let tb = onb_tangents(n);
+            let c = qp / len;
+            let around = c.dot(tb[0]) * tb[1] - c.dot(tb[1]) * tb[0];
+            d[0] = 2.0 * PI * len * around;
+            d[1] = c * prim.a[3];
+        }
+        _ => {}
+    }
+    d
+}
+
 /// Shading record of a candidate hit, in world space.
 pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
     let prim = &b.primitives[cand.prim as usize];
+    // the uv derivatives, where a bump map needs them
+    let bumped = b.materials[prim.material as usize].flags & MAT_FLAG_BUMP != 0;
+    let mut dp = [Vec3::ZERO; 2];
     let s = if prim.flags & PRIM_FLAG_TRANSFORM != 0 {
         let r = ray_to_object(b, prim.data, ray);
         let scale = r.dir.length();
@@ -738,6 +813,12 @@ pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
             dir: r.dir / scale,
         };
         let mut s = surface_local(b, prim, &local_ray, &local);
+        if bumped {
+            // tangent vectors go to world space by the object-to-world matrix itself
+            let o = point_to_world(b, prim.data, Vec3::ZERO);
+            dp = surface_uv_derivatives(b, prim, &s, &local)
+                .map(|v| point_to_world(b, prim.data, v) - o);
+        }
         let p_obj = s.p;
         s.p = point_to_world(b, prim.data, p_obj);
         s.ng = normal_to_world(b, prim.data, s.ng);
@@ -745,7 +826,11 @@ pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
         s.err = transform_error(b, prim.data, p_obj, s.err);
         s
     } else {
-        surface_local(b, prim, ray, cand)
+        let s = surface_local(b, prim, ray, cand);
+        if bumped {
+            dp = surface_uv_derivatives(b, prim, &s, cand);
+        }
+        s
     };
     let uv1 = if prim.flags & PRIM_FLAG_UV1 != 0 {
         s.uv1
@@ -762,5 +847,7 @@ pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
         err: s.err,
         tangent: s.tangent,
         color: s.color,
+        dpdu: dp[0],
+        dpdv: dp[1],
     }
 }

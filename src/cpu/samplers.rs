@@ -8,7 +8,8 @@ use crate::scene::records::{
 };
 
 pub use crate::scene::records::{
-    DIM_ALPHA, DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL, DIM_PUNCTUAL, DIM_RR,
+    DIM_ALPHA, DIM_BLEND, DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL, DIM_PUNCTUAL,
+    DIM_RR,
 };
 
 /// Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction

@@ -3,6 +3,7 @@
 use glam::{IVec3, Vec2, Vec3, Vec4};
 
 use super::bindings::Bindings;
+use super::bsdf::luminance;
 use super::types::{xyz, Hit};
 use crate::scene::records::{
     Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_NEAREST, TEX_FLAG_SOLID, TEX_FLAG_SRGB, TEX_IMAGE,
@@ -199,6 +200,54 @@ pub fn map_normal(b: &Bindings, index: u32, scale: f32, hit: &Hit) -> Vec3 {
         return m / len;
     }
     hit.ns
+}
+
+/// A height texture's slopes (dh/du, dh/dv) at a hit (textures.wgsl's
+/// `texture_slopes`): forward differences of its luminance along the first uv set, the
+/// point moved along dp/du and dp/dv with it, by a 64th of an image's texel, else 1e-4.
+pub fn texture_slopes(b: &Bindings, index: u32, hit: &Hit) -> Vec2 {
+    let tex = &b.textures[index as usize];
+    let delta = if tex.tag == TEX_IMAGE {
+        1.0 / (64.0 * tex.width.max(tex.height) as f32)
+    } else {
+        1e-4
+    };
+    let h = luminance(texture_value(b, index, hit.uv, hit.p));
+    let hu = luminance(texture_value(
+        b,
+        index,
+        hit.uv + Vec4::new(delta, 0.0, delta, 0.0),
+        hit.p + delta * hit.dpdu,
+    ));
+    let hv = luminance(texture_value(
+        b,
+        index,
+        hit.uv + Vec4::new(0.0, delta, 0.0, delta),
+        hit.p + delta * hit.dpdv,
+    ));
+    Vec2::new(hu - h, hv - h) / delta
+}
+
+/// The shading normal that bump map `index` (a height, times `scale`) gives a hit
+/// (textures.wgsl's `bump_normal`): the normal of the surface displaced along its shading
+/// normal; the hit's own without a parametrization or where it would face away.
+pub fn bump_normal(b: &Bindings, index: u32, scale: f32, hit: &Hit) -> Vec3 {
+    let n = hit.ns;
+    let g = scale * texture_slopes(b, index, hit);
+    let du = hit.dpdu - n * n.dot(hit.dpdu) + g.x * n;
+    let dv = hit.dpdv - n * n.dot(hit.dpdv) + g.y * n;
+    let m = du.cross(dv);
+    let len = m.length();
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(len > 0.0) {
+        return n;
+    }
+    let m = m * (if m.dot(n) >= 0.0 { 1.0 } else { -1.0 } / len);
+    if m.dot(hit.ng) > 0.0 {
+        m
+    } else {
+        n
+    }
 }
 
 /// A texture's alpha at uv: an image's own, else 1.

@@ -8,15 +8,19 @@ use super::intersect::{intersect_scene, occluded, surface_at};
 use super::lights::{
     background_radiance, light_pdf, light_pdf_total, power_heuristic, sample_light, sample_punctual,
 };
+use super::materials::blend;
 use super::materials::{
     alpha_u, bent_normal, bsdf_eval, bsdf_pdf, emitted, material_at, mixture_applies, nee_applies,
     normal_mapped, scatter, scatter_pdf, transparent_at,
 };
 use super::rng::rand_2d;
-use super::samplers::{bounce_2d, pixel_position, sample_2d, DIM_ALPHA, DIM_PUNCTUAL, DIM_RR};
+use super::samplers::{
+    bounce_2d, pixel_position, sample_2d, DIM_ALPHA, DIM_BLEND, DIM_PUNCTUAL, DIM_RR,
+};
 use super::sampling::{offset_ray, sample_disk};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::flat::FlatScene;
+use crate::scene::materials::MaterialKind;
 use crate::scene::records::{
     accum_entries, Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE,
     MAX_ALPHA_SKIPS, NO_LIGHT, PRIM_LIGHT_SHIFT,
@@ -277,7 +281,13 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         return false;
     }
     let surface = surface_at(b, &path.ray, &cand);
-    let mat = &material_at(b, &b.materials[surface.material as usize], &surface);
+    // a blend's part, chosen here for all the vertex does
+    let mut record = b.materials[surface.material as usize];
+    if record.tag == MaterialKind::Blend.tag() {
+        let u_blend = bounce_2d(b, pixel, sample, path.depth, DIM_BLEND)[0];
+        record = blend::choice(b, surface.material, &surface, u_blend);
+    }
+    let mat = &material_at(b, &record, &surface);
     let hit = bent_normal(&normal_mapped(b, mat, &surface), &path.ray);
     let mut le = emitted(mat, &hit);
     if path.depth == 0 {

@@ -45,4 +45,8 @@ pub struct Hit {
     /// Interpolated vertex colour (linear rgb, alpha) of a triangle with vertex colours,
     /// else 1.
     pub color: Vec4,
+    /// The derivatives of p along the first uv set (`surface_uv_derivatives`), for a
+    /// surface with a bump map; else zero.
+    pub dpdu: Vec3,
+    pub dpdv: Vec3,
 }

@@ -59,6 +59,9 @@ pub enum Feature {
     VertexColors,
     /// Rough glass (`dielectric` with a roughness): its microfacet lobes.
     RoughDielectric,
+    /// Rough glass of Beckmann or anisotropic microfacets: the general distribution in
+    /// the tangent's frame (isotropic GGX glass keeps its own shorter code).
+    GlassMicrofacets,
     /// Beckmann microfacets (a conductor's or a plastic's `distribution`): their
     /// masking's error function and the visible-slope sampler's search.
     Beckmann,
@@ -99,6 +102,10 @@ pub enum Feature {
     Projector,
     /// Opacity masks read from a texture (`opacity = "NAME"` of any material).
     OpacityTexture,
+    /// Materials whose back side is black (`one_sided`).
+    OneSided,
+    /// Bump maps: the hit's uv derivatives and the height's slopes.
+    Bump,
 }
 
 /// The features before the materials' in define order.
@@ -115,7 +122,7 @@ const GEOMETRY: [Feature; 9] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 27] = [
+const SHADING: [Feature; 30] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -143,6 +150,9 @@ const SHADING: [Feature; 27] = [
     Feature::PixelFilter,
     Feature::Projector,
     Feature::OpacityTexture,
+    Feature::GlassMicrofacets,
+    Feature::OneSided,
+    Feature::Bump,
 ];
 
 impl Feature {
@@ -194,6 +204,9 @@ impl Feature {
             Feature::PixelFilter => "HAS_PIXEL_FILTER",
             Feature::Projector => "HAS_PROJECTOR",
             Feature::OpacityTexture => "HAS_OPACITY_TEXTURE",
+            Feature::GlassMicrofacets => "HAS_GLASS_MICROFACETS",
+            Feature::OneSided => "HAS_ONE_SIDED",
+            Feature::Bump => "HAS_BUMP",
         }
     }
 
@@ -343,7 +356,29 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
             scene.materials.iter().any(|m| {
                 (m.tag == MaterialKind::Conductor.tag() && conductor::is_beckmann(m))
                     || (m.tag == MaterialKind::Plastic.tag() && plastic::is_beckmann(m))
+                    || (m.tag == MaterialKind::Dielectric.tag() && dielectric::is_beckmann(m))
             }),
+        )
+        .with(
+            Feature::GlassMicrofacets,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.tag == MaterialKind::Dielectric.tag() && dielectric::is_general(m)),
+        )
+        .with(
+            Feature::OneSided,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.flags & r::MAT_FLAG_ONE_SIDED != 0),
+        )
+        .with(
+            Feature::Bump,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.flags & r::MAT_FLAG_BUMP != 0),
         )
         .with(Feature::Clearcoat, clearcoat)
         .with(Feature::Sheen, sheen)
@@ -431,9 +466,10 @@ impl ShaderSpec {
     /// every glass hit; shading normals a second eval and pdf to every light sample;
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
     /// compile of the full shader took minutes longer). The materials added after pbr
-    /// (conductor, thin_dielectric, plastic), the pixel filters, projectors and opacity
-    /// textures too: the full shader of every other scene stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 17] = [
+    /// (conductor, thin_dielectric, plastic, blend), the pixel filters, projectors, opacity
+    /// textures, Beckmann or anisotropic glass, one-sided materials and bump maps too: the full shader of every other
+    /// scene stays as it was.
+    pub const OPTIONAL_IN_FULL: [Feature; 21] = [
         Feature::Aovs,
         Feature::Alpha,
         Feature::NormalMap,
@@ -447,10 +483,14 @@ impl ShaderSpec {
         Feature::Material(MaterialKind::Conductor),
         Feature::Material(MaterialKind::ThinDielectric),
         Feature::Material(MaterialKind::Plastic),
+        Feature::Material(MaterialKind::Blend),
         Feature::Beckmann,
         Feature::PixelFilter,
         Feature::Projector,
         Feature::OpacityTexture,
+        Feature::GlassMicrofacets,
+        Feature::OneSided,
+        Feature::Bump,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):

@@ -12,7 +12,7 @@ use super::format::{
 };
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
-use super::materials::{pbr, plastic, MaterialDesc, MaterialKind};
+use super::materials::{blend, pbr, plastic, MaterialDesc, MaterialKind};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
@@ -538,6 +538,18 @@ pub fn flatten(
         .iter()
         .map(|m| m.1.record(&texture_names))
         .collect();
+    // each blend's parts, by their places in the list
+    for (i, m) in material_list.iter().enumerate() {
+        if let MaterialDesc::Blend(b) = m.1 {
+            let index = |name: &str| {
+                material_names
+                    .iter()
+                    .position(|n| n == name)
+                    .expect("validated") as u32
+            };
+            blend::point_at_parts(&mut materials[i], index(&b.first), index(&b.second));
+        }
+    }
     // the sheen's albedo table, after the background's distribution
     let is_pbr = |m: &Material| m.tag == MaterialKind::Pbr.tag();
     if materials.iter().any(|m| is_pbr(m) && pbr::has_sheen(m)) {

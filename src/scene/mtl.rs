@@ -87,6 +87,9 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
                         emission: ColorDesc::Rgb([0.0; 3]),
                         two_sided: false,
                         opacity: None,
+                        bump: None,
+                        bump_scale: 1.0,
+                        one_sided: false,
                     }),
                 ));
                 out.materials.len() - 1

@@ -68,6 +68,8 @@ shared_constants! {
     /// Most surfaces a ray passes through where they are transparent (alpha) before it
     /// stops at the next one, whatever it is: a bound on the loop, never met in practice.
     MAX_ALPHA_SKIPS: u32 = 16;
+    /// How deep `blend` materials may nest (a blend whose part is a blend ...).
+    MAX_BLEND_DEPTH: u32 = 4;
     /// `vec4<f32>` entries per pixel of the accumulation: (sum rgb, count), (sum of squares
     /// rgb, samples dropped as not finite).
     ACCUM_ENTRIES: u32 = 2;
@@ -119,6 +121,15 @@ shared_constants! {
     /// Material flag: the surface view's `opacity_texture` names a texture whose luminance
     /// multiplies its alpha (an `opacity` mask of any material, Mitsuba's `mask`).
     MAT_FLAG_OPACITY_TEXTURE: u32 = 256;
+    /// Material flag: its back side is black (`one_sided`): `material_at` gives a hit on
+    /// it the tag `MAT_BLACK`.
+    MAT_FLAG_ONE_SIDED: u32 = 512;
+    /// Material flag: the surface view's `normal_texture` is a bump map (a height, times
+    /// `normal_scale`), not a tangent-space normal map.
+    MAT_FLAG_BUMP: u32 = 1024;
+    /// The tag `material_at` gives the back of a one-sided surface: no type has it, so
+    /// the dispatch's default absorbs, with no BSDF and no density.
+    MAT_BLACK: u32 = u32::MAX;
 
     /// Texture tags: the cases of the `switch` in `textures.wgsl`.
     TEX_CONSTANT: u32 = 0;
@@ -213,6 +224,8 @@ shared_constants! {
     /// `.x` decides which transparent (alpha blend) surfaces the bounce's ray passes
     /// through, `.y` those of its shadow rays.
     DIM_ALPHA: u32 = 7;
+    /// `.x` chooses among the parts of a `blend` material.
+    DIM_BLEND: u32 = 8;
 
     /// The f32 nearest to pi.
     PI: f32 = std::f32::consts::PI;

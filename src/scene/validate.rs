@@ -10,7 +10,8 @@ use super::format::{
     TransformDesc,
 };
 use super::materials::common::ColorDesc;
-use super::materials::MaterialDesc;
+use super::materials::{blend, MaterialDesc};
+use super::records::MAX_BLEND_DEPTH;
 use super::shapes::polygon_normal;
 
 /// Largest image side accepted.
@@ -52,6 +53,9 @@ pub fn validate(file: &SceneFile, src: &str, overridden: &[&str]) -> Vec<Problem
     }
     for (name, m) in &file.materials {
         v.material(name, m);
+        if let MaterialDesc::Blend(b) = m.get_ref() {
+            v.blend(name, b, m.span().start, file);
+        }
     }
     for (i, obj) in file.objects.iter().enumerate() {
         v.object(i, obj, file);
@@ -330,6 +334,67 @@ impl Validator<'_> {
         let key = |field: &str| format!("materials.{name}.{field}");
         for (key, message) in m.get_ref().check(&key, &names) {
             self.push(m.span().start, &key, message);
+        }
+    }
+
+    /// A blend's parts: materials of the file, neither emitting nor masked (a blend
+    /// chooses between them after the hit is found), nested at most `MAX_BLEND_DEPTH`
+    /// levels and never in a cycle.
+    fn blend(&mut self, name: &str, b: &blend::Desc, at: usize, file: &SceneFile) {
+        for (field, part) in [("first", &b.first), ("second", &b.second)] {
+            let key = format!("materials.{name}.{field}");
+            let Some(m) = file.materials.get(part) else {
+                let known: Vec<&str> = file.materials.keys().map(String::as_str).collect();
+                self.push(
+                    at,
+                    &key,
+                    format!(
+                        "unknown material \"{part}\" (defined: {})",
+                        known.join(", ")
+                    ),
+                );
+                continue;
+            };
+            if m.get_ref().emits() {
+                self.push(
+                    at,
+                    &key,
+                    format!("\"{part}\" emits: a blend's parts cannot be lights"),
+                );
+            }
+            if m.get_ref().model().opacity().is_some() {
+                self.push(
+                    at,
+                    &key,
+                    format!("\"{part}\" has an opacity mask: a blend's parts cannot be masked"),
+                );
+            }
+        }
+        // the depth of nesting below this blend, following parts that are blends
+        fn depth(file: &SceneFile, name: &str, seen: &mut Vec<String>) -> Option<u32> {
+            if seen.iter().any(|s| s == name) {
+                return None;
+            }
+            let Some(MaterialDesc::Blend(b)) = file.materials.get(name).map(|m| m.get_ref()) else {
+                return Some(0);
+            };
+            seen.push(name.to_string());
+            let d = depth(file, &b.first, seen)?.max(depth(file, &b.second, seen)?);
+            seen.pop();
+            Some(d + 1)
+        }
+        match depth(file, name, &mut Vec::new()) {
+            None => self.push(
+                at,
+                &format!("materials.{name}"),
+                "a blend that contains itself (a cycle of parts)".into(),
+            ),
+            Some(d) if d > MAX_BLEND_DEPTH => self.push(
+                at,
+                &format!("materials.{name}"),
+                format!("blends nest {d} deep; at most {MAX_BLEND_DEPTH}"),
+            ),
+            _ => {}
         }
     }
 

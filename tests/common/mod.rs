@@ -331,6 +331,12 @@ const fn row(name: &'static str, keys: &'static str, lossless: bool, chi2: bool)
 pub const MATERIALS: &[TestMaterial] = &[
     row("lambertian white", "type = \"lambertian\"\nalbedo = [1, 1, 1]", true, true),
     row("lambertian coloured", "type = \"lambertian\"\nalbedo = [0.8, 0.4, 0.1]", false, true),
+    row(
+        "lambertian one-sided",
+        "type = \"lambertian\"\nalbedo = [0.7, 0.7, 0.7]\none_sided = true",
+        false,
+        true,
+    ),
     row("emissive", "type = \"emissive\"\nradiance = [1, 1, 1]", false, false),
     row("metal mirror", "type = \"metal\"\nalbedo = [1, 1, 1]", true, false),
     row("metal fuzz 0.4", "type = \"metal\"\nalbedo = [0.9, 0.9, 0.9]\nfuzz = 0.4", false, false),
@@ -350,6 +356,18 @@ pub const MATERIALS: &[TestMaterial] = &[
     row(
         "dielectric rough 1.0 tinted",
         "type = \"dielectric\"\nior = 1.33\nroughness = 1\ntint = [0.9, 0.8, 0.7]",
+        false,
+        false,
+    ),
+    row(
+        "dielectric beckmann 0.5",
+        "type = \"dielectric\"\nior = 1.5\nroughness = 0.5\ndistribution = \"beckmann\"",
+        false,
+        false,
+    ),
+    row(
+        "dielectric anisotropic 0.2 x 0.7",
+        "type = \"dielectric\"\nior = 1.5\nroughness_u = 0.2\nroughness_v = 0.7",
         false,
         false,
     ),

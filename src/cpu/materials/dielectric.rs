@@ -3,8 +3,8 @@
 use glam::Vec3;
 
 use crate::cpu::bsdf::{
-    fresnel_dielectric, ggx_d, reflect_dir, sample_ggx_vndf, smith_g2, smith_lambda, Scatter,
-    Shading, ABSORBED, ALPHA_SMOOTH,
+    fresnel_dielectric, ggx_d, mf_d, mf_g1, mf_sample_visible, reflect_dir, sample_ggx_vndf,
+    smith_g2, smith_lambda, tangent_frame, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
 use crate::cpu::sampling::onb_tangents;
 use crate::cpu::types::{Hit, Ray};
@@ -17,14 +17,14 @@ impl Shading for Params {
         if !has_density(self) {
             return Vec3::ZERO;
         }
-        self.tint * rough_lobes(self.alpha, n, wo, wi, eta(self)).0
+        self.tint * rough_lobes(self, n, wo, wi, eta(self)).0
     }
 
     fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
         if !has_density(self) {
             return 0.0;
         }
-        rough_lobes(self.alpha, n, wo, wi, eta(self)).1
+        rough_lobes(self, n, wo, wi, eta(self)).1
     }
 
     /// Snell refraction (eta = 1 / ior entering, ior leaving, the normal turned toward
@@ -40,7 +40,7 @@ impl Shading for Params {
         if !entering {
             weight *= (-self.absorption * (hit.p - ray.origin).length()).exp();
         }
-        if self.alpha >= ALPHA_SMOOTH {
+        if self.alpha.max(self.alpha_v) >= ALPHA_SMOOTH {
             return rough_scatter(self, ray, hit, n, eta, weight, u);
         }
         let cos_i = (-ray.dir.dot(n)).clamp(0.0, 1.0);
@@ -106,12 +106,28 @@ pub fn half(n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> Vec3 {
     }
 }
 
+/// Rough glass's microfacets (dielectric.wgsl's `dielectric_microfacet`).
+pub fn microfacet(p: &Params) -> Microfacet {
+    Microfacet {
+        alpha_u: p.alpha,
+        alpha_v: p.alpha_v,
+        beckmann: p.beckmann > 0.5,
+    }
+}
+
+/// Whether rough glass is other than isotropic GGX (dielectric.wgsl's
+/// `dielectric_general`).
+pub fn general(p: &Params) -> bool {
+    p.beckmann > 0.5 || p.alpha != p.alpha_v
+}
+
 /// Rough glass toward wi: (BSDF x |cos(theta_i)|, the pdf of `rough_scatter`'s
-/// directions), computed together. BSDF: reflection F D G2 / (4 cos_o); refraction, for
-/// radiance, eta^2 (1 - F) D G2 |wi . h| |wo . h| / ((wi . h + eta wo . h)^2 cos_o).
-/// pdf: the visible normal's density through the reflection (probability
-/// `reflect_prob`, 1 where h reflects totally) or the refraction (the rest).
-pub fn rough_lobes(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
+/// directions), computed together. BSDF (D, Smith's height-correlated G2, exact F):
+/// reflection F D G2 / (4 cos_o); refraction, for radiance, eta^2 (1 - F) D G2 |wi . h|
+/// |wo . h| / ((wi . h + eta wo . h)^2 cos_o). pdf: the visible normal's density through
+/// the reflection (probability `reflect_prob`, 1 where h reflects totally) or the
+/// refraction (the rest).
+pub fn rough_lobes(p: &Params, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
     let cos_o = n.dot(wo);
     let cos_i = n.dot(wi);
     let h = half(n, wo, wi, eta);
@@ -120,9 +136,26 @@ pub fn rough_lobes(alpha: f32, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f
     if cos_o <= 0.0 || cos_i == 0.0 || oh <= 0.0 || ih * cos_i <= 0.0 {
         return (0.0, 0.0);
     }
-    let d = ggx_d(n.dot(h), alpha);
-    let g2 = smith_g2(cos_o, cos_i.abs(), alpha);
-    let visible = d / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o);
+    let (d, g2, visible) = if general(p) {
+        let m = microfacet(p);
+        let tb = tangent_frame(n, p.tangent);
+        let lh = Vec3::new(h.dot(tb[0]), h.dot(tb[1]), h.dot(n));
+        let g_o = mf_g1(&m, Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o), lh);
+        let g_i = mf_g1(&m, Vec3::new(wi.dot(tb[0]), wi.dot(tb[1]), cos_i), lh);
+        let d = mf_d(&m, lh);
+        // 1 / (1 + Lambda(wo) + Lambda(wi)), Lambda = 1 / G1 - 1
+        let g2 = if g_o * g_i > 0.0 {
+            g_o * g_i / (g_o + g_i - g_o * g_i)
+        } else {
+            0.0
+        };
+        (d, g2, d * g_o / cos_o)
+    } else {
+        let alpha = p.alpha;
+        let d = ggx_d(n.dot(h), alpha);
+        let g2 = smith_g2(cos_o, cos_i.abs(), alpha);
+        (d, g2, d / ((1.0 + smith_lambda(cos_o, alpha)) * cos_o))
+    };
     let f = fresnel(oh, eta);
     let p_r = reflect_prob(cos_o, eta);
     if cos_i > 0.0 {
@@ -166,9 +199,15 @@ pub fn rough_scatter(
         },
         u[1],
     ];
-    let tb = onb_tangents(n);
-    let local = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);
-    let h_l = sample_ggx_vndf(local, p.alpha, uh);
+    let (tb, h_l) = if general(p) {
+        let tb = tangent_frame(n, p.tangent);
+        let local = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);
+        (tb, mf_sample_visible(&microfacet(p), local, uh))
+    } else {
+        let tb = onb_tangents(n);
+        let local = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);
+        (tb, sample_ggx_vndf(local, p.alpha, uh))
+    };
     let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
     let oh = wo.dot(h);
     let sin2_t = eta * eta * (1.0 - oh * oh).max(0.0);
@@ -181,7 +220,7 @@ pub fn rough_scatter(
     };
     let side = if hit.front_face { 1.0 } else { -1.0 };
     let above = side * wi.dot(hit.ng) > 0.0;
-    let (f, pdf) = rough_lobes(p.alpha, n, wo, wi, eta);
+    let (f, pdf) = rough_lobes(p, n, wo, wi, eta);
     // written as in WGSL, so a NaN pdf takes the same branch on both backends
     #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(pdf > 0.0) || above != reflect {
@@ -209,5 +248,5 @@ pub fn eta(p: &Params) -> f32 {
 /// Whether the glass has a density (dielectric.wgsl's `dielectric_has_density`): the
 /// scene's own rule.
 pub fn has_density(p: &Params) -> bool {
-    dielectric::has_density(p.alpha, p.absorption.into())
+    dielectric::has_density((p.alpha, p.alpha_v), p.absorption.into())
 }

@@ -4,6 +4,7 @@
 //! file per material beside this one mirrors `shaders/materials/NAME.wgsl`; the dispatch
 //! below is written from the type list (`scene::materials::for_each_material!`).
 
+pub mod blend;
 pub mod conductor;
 pub mod dielectric;
 pub mod emissive;
@@ -18,14 +19,14 @@ use glam::Vec3;
 
 use super::bindings::Bindings;
 use super::bsdf::{luminance, mirrored, Scatter, Shading, ABSORBED};
-use super::textures::{map_normal, texture_alpha, texture_value};
+use super::textures::{bump_normal, map_normal, texture_alpha, texture_value};
 use super::types::{Hit, Ray};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::{for_each_material, MaterialKind};
 use crate::scene::records::{
-    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_ANISOTROPIC,
-    MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_OPACITY_TEXTURE,
-    MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
+    Material, MAT_BLACK, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_ANISOTROPIC,
+    MAT_FLAG_BUMP, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_ONE_SIDED,
+    MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -92,7 +93,8 @@ pub fn emitted(mat: &Material, hit: &Hit) -> Vec3 {
 
 /// The material at a hit with its textured colours looked up (the record's rules:
 /// `color` clamped to 1, `color2` where `MAT_FLAG_COLOR2_CLAMPED` says, `emission` as it
-/// is), then its own textures; the vertex colour multiplies `color` (at most 1).
+/// is), then its own textures; the vertex colour multiplies `color` (at most 1). The
+/// back of a one-sided surface is black (`MAT_BLACK`).
 pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     let mut mat = *m;
     // which side the hit is on, for a material whose eval needs it (rough glass's eta)
@@ -125,6 +127,11 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     let mut mat = material_textures(b, &mat, hit);
     let c = (Vec3::from_slice(&mat.color[..3]) * hit.color.truncate()).min(Vec3::ONE);
     mat.color = c.extend(mat.color[3]).to_array();
+    // the back of a one-sided surface absorbs (it still emits as its flags say)
+    if mat.flags & MAT_FLAG_ONE_SIDED != 0 && !hit.front_face {
+        mat.tag = MAT_BLACK;
+        mat.flags &= !(MAT_FLAG_NEE | MAT_FLAG_DELTA);
+    }
     mat
 }
 
@@ -134,7 +141,11 @@ pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
     let mut h = *hit;
     let s = Surface::read(mat);
     if s.normal_texture != NO_TEXTURE {
-        h.ns = map_normal(b, s.normal_texture, s.normal_scale, hit);
+        h.ns = if mat.flags & MAT_FLAG_BUMP != 0 {
+            bump_normal(b, s.normal_texture, s.normal_scale, hit)
+        } else {
+            map_normal(b, s.normal_texture, s.normal_scale, hit)
+        };
     }
     h
 }

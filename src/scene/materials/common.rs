@@ -276,6 +276,14 @@ pub trait Model {
     fn opacity(&self) -> Option<&OpacityDesc> {
         None
     }
+    /// Its bump map (`bump`, `bump_scale`), for the types that take one.
+    fn bump(&self) -> Option<(&str, f32)> {
+        None
+    }
+    /// Whether its back side is black (`one_sided`), for the types that only reflect.
+    fn one_sided(&self) -> bool {
+        false
+    }
 }
 
 /// A microfacet distribution's name in the format: `ggx` (the default) or `beckmann`.

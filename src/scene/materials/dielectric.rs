@@ -1,7 +1,9 @@
 //! `type = "dielectric"`: glass, smooth or rough. Smooth, reflection or refraction is
-//! chosen by the exact Fresnel reflectance; rough (`roughness` > 0, GGX alpha =
-//! roughness^2), GGX microfacets reflect and refract as Walter et al. 2007 define them,
-//! sampled by their visible normals. `tint` multiplies every scattering and `absorption`
+//! chosen by the exact Fresnel reflectance; rough (`roughness` > 0, alpha =
+//! roughness^2, or `roughness_u` along the tangent and `roughness_v` along the
+//! bitangent), GGX or Beckmann microfacets (`distribution`) reflect and refract as Walter
+//! et al. 2007 define them, with Smith's height-correlated masking-shadowing, sampled by
+//! their visible normals. `tint` multiplies every scattering and `absorption`
 //! (per unit length, Beer-Lambert) acts inside. glTF's KHR_materials_transmission (with
 //! KHR_materials_volume) and .mtl's refracting illumination models map onto it. Shading:
 //! `shaders/materials/dielectric.wgsl`, CPU twin `cpu/materials/dielectric.rs`.
@@ -9,12 +11,12 @@
 use serde::Deserialize;
 
 use super::common::{
-    at_most_one, material_view, white_color, Check, ColorDesc, Lobes, Model, OpacityDesc,
-    TextureNames,
+    at_most_one, material_view, one, white_color, Check, ColorDesc, Distribution, Lobes, Model,
+    OpacityDesc, Roughness, TextureNames,
 };
 use crate::scene::gltf::error::{GltfError, Result};
 use crate::scene::gltf::reader::{self, MaterialReader};
-use crate::scene::records::{Material, ALPHA_SMOOTH};
+use crate::scene::records::{Material, ALPHA_SMOOTH, MAT_FLAG_ANISOTROPIC};
 
 /// Its entry in the scene format.
 #[derive(Debug, Clone, Deserialize)]
@@ -25,9 +27,14 @@ pub struct Desc {
     pub tint: ColorDesc,
     #[serde(default)]
     pub absorption: [f32; 3],
-    /// Perceptual roughness in [0, 1] (GGX alpha = its square); 0 is smooth glass.
+    /// Perceptual roughness in [0, 1] (alpha = its square); 0 is smooth glass. Or
+    /// `roughness_u` along the tangent and `roughness_v` along the bitangent.
+    pub roughness: Option<f32>,
+    pub roughness_u: Option<f32>,
+    pub roughness_v: Option<f32>,
+    /// GGX (default) or Beckmann microfacets.
     #[serde(default)]
-    pub roughness: f32,
+    pub distribution: Distribution,
     #[serde(default)]
     pub emission: ColorDesc,
     /// Emit from the back side too.
@@ -36,6 +43,11 @@ pub struct Desc {
     /// An opacity mask: a number in [0, 1] or a texture's name.
     #[serde(default)]
     pub opacity: Option<OpacityDesc>,
+    /// A bump map: a height texture (its luminance) that tilts the shading normal, times
+    /// `bump_scale`.
+    pub bump: Option<String>,
+    #[serde(default = "one")]
+    pub bump_scale: f32,
 }
 
 material_view! {
@@ -48,8 +60,16 @@ material_view! {
         ior: f32 = scalars.x,
         /// Beer-Lambert coefficient per unit length inside.
         absorption: rgb = color2,
-        /// GGX alpha = roughness^2; below ALPHA_SMOOTH smooth glass.
+        /// Alpha = roughness^2 (along the tangent where it is anisotropic); below
+        /// ALPHA_SMOOTH on both axes smooth glass.
         alpha: f32 = scalars.y,
+        /// Alpha along the bitangent (`alpha` where it is isotropic).
+        alpha_v: f32 = scalars.z,
+        /// 1: Beckmann, 0: GGX.
+        beckmann: f32 = scalars.w,
+        /// The hit's tangent, which `material_at` writes for an anisotropic one
+        /// (`MAT_FLAG_ANISOTROPIC`); zero elsewhere (the normal's own frame).
+        tangent: rgb = normal2,
         /// At a hit: 1 on the back face (inside), else 0 (`material_at`).
         back_face: f32 = normal2.w,
     }
@@ -67,26 +87,48 @@ pub const LOBES: Lobes = Lobes {
 /// Next-event estimation at a hit inside absorbing glass would need the transmittance of
 /// the segment the ray ran, which the BSDF's questions do not carry: absorbing rough
 /// glass is found by its own sampling, as a delta.
-pub fn has_density(alpha: f32, absorption: [f32; 3]) -> bool {
-    alpha >= ALPHA_SMOOTH && absorption == [0.0; 3]
+pub fn has_density(alpha: (f32, f32), absorption: [f32; 3]) -> bool {
+    alpha.0.max(alpha.1) >= ALPHA_SMOOTH && absorption == [0.0; 3]
 }
 
 /// Whether a dielectric's record is rough glass (`HAS_ROUGH_DIELECTRIC`).
 pub fn is_rough(m: &Material) -> bool {
-    Params::read(m).alpha >= ALPHA_SMOOTH
+    let p = Params::read(m);
+    p.alpha.max(p.alpha_v) >= ALPHA_SMOOTH
+}
+
+/// Whether a dielectric's record is rough glass other than isotropic GGX: Beckmann or
+/// anisotropic (`HAS_GLASS_MICROFACETS`; dielectric.wgsl's `dielectric_general`).
+pub fn is_general(m: &Material) -> bool {
+    let p = Params::read(m);
+    is_rough(m) && (p.beckmann > 0.5 || p.alpha != p.alpha_v)
+}
+
+/// Whether a dielectric's record has Beckmann microfacets (`HAS_BECKMANN`).
+pub fn is_beckmann(m: &Material) -> bool {
+    is_rough(m) && Params::read(m).beckmann > 0.5
 }
 
 impl Desc {
-    /// GGX alpha = roughness^2, and 0 (smooth) where ior = 1: an index-matched boundary
-    /// neither reflects nor bends light, whatever its microfacets (pbrt-v4's rule). Rough
-    /// glass's generalized half vector eta wo + wi is the zero vector there for the
-    /// straight-through direction, and its density infinite: glTF's transmission test
-    /// grids, whose ior runs from 1, rendered non-finite samples.
-    pub fn alpha(&self) -> f32 {
+    fn roughness(&self) -> Roughness {
+        Roughness {
+            roughness: self.roughness,
+            roughness_u: self.roughness_u,
+            roughness_v: self.roughness_v,
+        }
+    }
+
+    /// Alpha along the tangent and the bitangent (the squares of the roughnesses, kept
+    /// off 0 when rough: `Roughness::packed`), and 0 (smooth) where ior = 1: an
+    /// index-matched boundary neither reflects nor bends light, whatever its microfacets
+    /// (pbrt-v4's rule). Rough glass's generalized half vector eta wo + wi is the zero
+    /// vector there for the straight-through direction, and its density infinite: glTF's
+    /// transmission test grids, whose ior runs from 1, rendered non-finite samples.
+    pub fn alpha(&self) -> (f32, f32) {
         if self.ior == 1.0 {
-            0.0
+            (0.0, 0.0)
         } else {
-            self.roughness * self.roughness
+            self.roughness().packed()
         }
     }
 }
@@ -96,7 +138,7 @@ impl Model for Desc {
         c.positive("ior", self.ior);
         c.color("tint", &self.tint, true);
         c.nonnegative3("absorption", self.absorption);
-        c.unit("roughness", self.roughness);
+        self.roughness().check(c);
         c.color("emission", &self.emission, false);
     }
 
@@ -106,6 +148,15 @@ impl Model for Desc {
 
     fn opacity(&self) -> Option<&OpacityDesc> {
         self.opacity.as_ref()
+    }
+
+    fn bump(&self) -> Option<(&str, f32)> {
+        Some((self.bump.as_deref()?, self.bump_scale))
+    }
+
+    fn anisotropic(&self) -> bool {
+        let (u, v) = self.alpha();
+        u != v
     }
 
     fn lobes(&self) -> Lobes {
@@ -119,15 +170,22 @@ impl Model for Desc {
 
     fn pack(&self, t: &TextureNames, record: &mut Material) {
         let (tint, tint_texture) = t.color(&self.tint);
+        let (alpha, alpha_v) = self.alpha();
         Params {
             tint,
             tint_texture,
             ior: self.ior,
             absorption: self.absorption.into(),
-            alpha: self.alpha(),
+            alpha,
+            alpha_v,
+            beckmann: self.distribution.code(),
+            tangent: glam::Vec3::ZERO,
             back_face: 0.0,
         }
         .write(record);
+        if self.anisotropic() {
+            record.flags |= MAT_FLAG_ANISOTROPIC;
+        }
     }
 }
 
@@ -206,10 +264,15 @@ pub fn from_gltf(
         ior,
         tint,
         absorption,
-        roughness: pbr.roughness_factor(),
+        roughness: Some(pbr.roughness_factor()),
+        roughness_u: None,
+        roughness_v: None,
+        distribution: Distribution::Ggx,
         emission,
         two_sided: m.double_sided(),
         opacity: None,
+        bump: None,
+        bump_scale: 1.0,
     })
 }
 
@@ -231,10 +294,15 @@ pub fn from_mtl(m: &tobj::Material) -> std::result::Result<Desc, String> {
         ior,
         tint,
         absorption: [0.0; 3],
-        roughness: 0.0,
+        roughness: None,
+        roughness_u: None,
+        roughness_v: None,
+        distribution: Distribution::Ggx,
         emission: ColorDesc::Rgb(m.emissive.unwrap_or([0.0; 3])),
         two_sided: false,
         opacity: None,
+        bump: None,
+        bump_scale: 1.0,
     })
 }
 

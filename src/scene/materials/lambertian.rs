@@ -4,7 +4,9 @@
 
 use serde::Deserialize;
 
-use super::common::{material_view, Check, ColorDesc, Lobes, Model, OpacityDesc, TextureNames};
+use super::common::{
+    material_view, one, Check, ColorDesc, Lobes, Model, OpacityDesc, TextureNames,
+};
 use crate::scene::records::Material;
 
 /// Its entry in the scene format.
@@ -20,6 +22,15 @@ pub struct Desc {
     /// An opacity mask: a number in [0, 1] or a texture's name.
     #[serde(default)]
     pub opacity: Option<OpacityDesc>,
+    /// A bump map: a height texture (its luminance) that tilts the shading normal, times
+    /// `bump_scale`.
+    pub bump: Option<String>,
+    #[serde(default = "one")]
+    pub bump_scale: f32,
+    /// The back side is black (Mitsuba's BSDFs without `twosided`); by default it
+    /// reflects as the front does.
+    #[serde(default)]
+    pub one_sided: bool,
 }
 
 material_view! {
@@ -50,6 +61,14 @@ impl Model for Desc {
 
     fn opacity(&self) -> Option<&OpacityDesc> {
         self.opacity.as_ref()
+    }
+
+    fn bump(&self) -> Option<(&str, f32)> {
+        Some((self.bump.as_deref()?, self.bump_scale))
+    }
+
+    fn one_sided(&self) -> bool {
+        self.one_sided
     }
 
     fn lobes(&self) -> Lobes {

@@ -11,6 +11,7 @@
 //!
 //! The material modules import `common` and never this file: it imports them.
 
+pub mod blend;
 pub mod common;
 pub mod conductor;
 pub mod dielectric;
@@ -25,8 +26,8 @@ pub mod thin_dielectric;
 use serde::Deserialize;
 
 use crate::scene::records::{
-    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_OPACITY_TEXTURE,
-    MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
+    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_BUMP, MAT_FLAG_DELTA, MAT_FLAG_NEE,
+    MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
 };
 use common::{Check, Lobes, Model, OpacityDesc, Surface, TextureNames, View};
 
@@ -55,6 +56,8 @@ macro_rules! for_each_material {
             ThinDielectric = 7, thin_dielectric, "HAS_THIN_DIELECTRIC";
             /// A dielectric coating over a Lambertian base.
             Plastic = 8, plastic, "HAS_PLASTIC";
+            /// Two materials mixed by a weight.
+            Blend = 9, blend, "HAS_BLEND";
         }
     };
 }
@@ -164,6 +167,10 @@ impl MaterialDesc {
         let mut c = Check::new(key, textures);
         let model = self.model();
         model.check(&mut c);
+        if let Some((name, scale)) = model.bump() {
+            c.texture("bump", name);
+            c.finite("bump_scale", scale);
+        }
         if let Some(o) = model.opacity() {
             o.check("opacity", &mut c);
             if self.emits() {
@@ -205,6 +212,7 @@ impl MaterialDesc {
         };
         let flag = |on: bool, f: u32| if on { f } else { 0 };
         record.flags = flag(two_sided, MAT_FLAG_TWO_SIDED)
+            | flag(model.one_sided(), MAT_FLAG_ONE_SIDED)
             | flag(lobes.density, MAT_FLAG_NEE)
             | flag(lobes.delta, MAT_FLAG_DELTA)
             | flag(lobes.transmission, MAT_FLAG_TRANSMITS);
@@ -225,6 +233,12 @@ impl MaterialDesc {
                 record.flags |= MAT_FLAG_ALPHA_BLEND | MAT_FLAG_OPACITY_TEXTURE;
             }
             _ => {}
+        }
+        // a bump map, in the place of a normal map (no type has both)
+        if let Some((name, scale)) = model.bump() {
+            surface.normal_texture = names.index(name);
+            surface.normal_scale = scale;
+            record.flags |= MAT_FLAG_BUMP;
         }
         surface.write(&mut record);
         record

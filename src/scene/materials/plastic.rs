@@ -18,7 +18,7 @@ use glam::DVec3;
 use serde::Deserialize;
 
 use super::common::{
-    material_view, white_color, Check, ColorDesc, Distribution, Lobes, Model, OpacityDesc,
+    material_view, one, white_color, Check, ColorDesc, Distribution, Lobes, Model, OpacityDesc,
     TextureNames,
 };
 use crate::scene::records::{Material, ALPHA_SMOOTH, MAT_FLAG_COLOR2_CLAMPED, PLASTIC_TABLE_SIZE};
@@ -62,6 +62,15 @@ pub struct Desc {
     /// An opacity mask: a number in [0, 1] or a texture's name.
     #[serde(default)]
     pub opacity: Option<OpacityDesc>,
+    /// A bump map: a height texture (its luminance) that tilts the shading normal, times
+    /// `bump_scale`.
+    pub bump: Option<String>,
+    #[serde(default = "one")]
+    pub bump_scale: f32,
+    /// The back side is black (Mitsuba's BSDFs without `twosided`); by default it
+    /// reflects as the front does.
+    #[serde(default)]
+    pub one_sided: bool,
 }
 
 material_view! {
@@ -114,6 +123,14 @@ impl Model for Desc {
 
     fn opacity(&self) -> Option<&OpacityDesc> {
         self.opacity.as_ref()
+    }
+
+    fn bump(&self) -> Option<(&str, f32)> {
+        Some((self.bump.as_deref()?, self.bump_scale))
+    }
+
+    fn one_sided(&self) -> bool {
+        self.one_sided
     }
 
     fn lobes(&self) -> Lobes {

@@ -9,7 +9,7 @@
 use serde::Deserialize;
 
 use super::common::{
-    glass_ior, material_view, white_color, Check, ColorDesc, Lobes, Model, OpacityDesc,
+    glass_ior, material_view, one, white_color, Check, ColorDesc, Lobes, Model, OpacityDesc,
     TextureNames,
 };
 use crate::scene::records::{Material, MAT_FLAG_COLOR2_CLAMPED};
@@ -34,6 +34,11 @@ pub struct Desc {
     /// An opacity mask: a number in [0, 1] or a texture's name.
     #[serde(default)]
     pub opacity: Option<OpacityDesc>,
+    /// A bump map: a height texture (its luminance) that tilts the shading normal, times
+    /// `bump_scale`.
+    pub bump: Option<String>,
+    #[serde(default = "one")]
+    pub bump_scale: f32,
 }
 
 material_view! {
@@ -70,6 +75,10 @@ impl Model for Desc {
 
     fn opacity(&self) -> Option<&OpacityDesc> {
         self.opacity.as_ref()
+    }
+
+    fn bump(&self) -> Option<(&str, f32)> {
+        Some((self.bump.as_deref()?, self.bump_scale))
     }
 
     fn lobes(&self) -> Lobes {
