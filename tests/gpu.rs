@@ -621,6 +621,99 @@ material = "c"
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `mesh_attribute` textures: a PLY quad under a white sky (max_depth 2, so a Lambertian
+/// pixel is its albedo exactly) on both backends. With vertex colours (1, 1, 0), an albedo
+/// of `vertex_color` shows (1, 1, 0), not its square; an albedo of 0.5 is tinted by them
+/// as before, (0.5, 0.5, 0). With face colours, red and blue, `face_color` shows each
+/// face's colour, constant over it: every pixel is red or blue, and both occur.
+#[test]
+fn mesh_attributes_read_vertex_and_face_colours() {
+    let dir = common::tmp_dir("mesh-attribute");
+    let header = |vertex_colours: bool, face_colours: bool| {
+        let mut h = String::from("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n");
+        if vertex_colours {
+            h += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+        }
+        h += "element face 2\nproperty list uchar int vertex_indices\n";
+        if face_colours {
+            h += "property uchar red\nproperty uchar green\nproperty uchar blue\n";
+        }
+        h + "end_header\n"
+    };
+    let corners = ["-1 0 -1", "1 0 -1", "1 0 1", "-1 0 1"];
+    let vertex_ply = header(true, false)
+        + &corners.map(|c| format!("{c} 255 255 0\n")).concat()
+        + "3 0 3 2\n3 0 2 1\n";
+    let face_ply = header(false, true)
+        + &corners.map(|c| format!("{c}\n")).concat()
+        + "3 0 3 2 255 0 0\n3 0 2 1 0 0 255\n";
+    std::fs::write(dir.join("vertex.ply"), vertex_ply).unwrap();
+    std::fs::write(dir.join("face.ply"), face_ply).unwrap();
+    let src = |mesh: &str, albedo: &str| {
+        format!(
+            r#"
+[render]
+width = 16
+height = 16
+spp = 4
+max_depth = 2
+[camera]
+look_from = [0, 3, 0]
+look_at = [0, 0, 0]
+up = [0, 0, -1]
+vfov = 30
+[background]
+color = [1, 1, 1]
+[textures]
+vc = {{ type = "mesh_attribute", name = "vertex_color" }}
+fc = {{ type = "mesh_attribute", name = "face_color" }}
+[materials]
+m = {{ type = "lambertian", albedo = {albedo} }}
+[[objects]]
+type = "mesh"
+path = "{mesh}"
+material = "m"
+"#
+        )
+    };
+    let load = |text: String| {
+        wgtrace::load_scene_str(&text, &dir.join("s.toml"), &Default::default())
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    for (albedo, expected) in [
+        ("\"vc\"", [1.0f32, 1.0, 0.0]),
+        ("[0.5, 0.5, 0.5]", [0.5, 0.5, 0.0]),
+    ] {
+        let s = load(src("vertex.ply", albedo));
+        for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+            let bad = (0..img.pixel_count())
+                .filter(|&i| (0..3).any(|c| (img.mean(i)[c] - expected[c]).abs() > 1e-5))
+                .count();
+            assert_eq!(
+                bad,
+                0,
+                "{name}: albedo {albedo}: {bad} pixels off {expected:?} (first {:?})",
+                img.mean(0)
+            );
+        }
+    }
+    let s = load(src("face.ply", "\"fc\""));
+    for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+        let is = |i: usize, c: [f32; 3]| (0..3).all(|k| (img.mean(i)[k] - c[k]).abs() <= 1e-5);
+        let red = (0..img.pixel_count())
+            .filter(|&i| is(i, [1.0, 0.0, 0.0]))
+            .count();
+        let blue = (0..img.pixel_count())
+            .filter(|&i| is(i, [0.0, 0.0, 1.0]))
+            .count();
+        assert!(red > 0 && blue > 0, "{name}: {red} red, {blue} blue");
+        // pixels on the diagonal mix the two faces' samples
+        let mixed = img.pixel_count() - red - blue;
+        assert!(mixed <= 16, "{name}: {mixed} pixels neither red nor blue");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// White furnace per material: albedo 1 under a uniform background of radiance 1. Every
 /// sample of a lossless material (Lambertian, mirror metal, clear glass, which splits light
 /// between reflection and refraction) returns exactly 1; no material ever returns more than

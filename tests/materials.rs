@@ -1144,3 +1144,27 @@ fn bump_maps_are_validated() {
         "{e}"
     );
 }
+
+/// A mesh attribute's mistakes: an unknown name (the known ones listed), and a checker
+/// whose cell is one (looked up without a mesh).
+#[test]
+fn mesh_attributes_are_validated() {
+    let err = |t: &str| {
+        let src =
+            format!("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n{t}\n");
+        wgtrace::load_scene_str(&src, std::path::Path::new("bad.toml"), &Default::default())
+            .unwrap_err()
+            .to_string()
+    };
+    let e = err("a = { type = \"mesh_attribute\", name = \"vertex_normal\" }");
+    assert!(
+        e.contains("bad.toml:5:")
+            && e.contains("textures.a.name: unknown mesh attribute \"vertex_normal\" (known: vertex_color, face_color)"),
+        "{e}"
+    );
+    let e = err("a = { type = \"mesh_attribute\", name = \"face_color\" }\nc = { type = \"checker\", even = \"a\", odd = [0, 0, 0] }");
+    assert!(
+        e.contains("bad.toml:6:") && e.contains("textures.c.even: \"a\" is a mesh attribute"),
+        "{e}"
+    );
+}

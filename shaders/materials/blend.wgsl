@@ -18,7 +18,7 @@ fn blend_choice(index: u32, hit: Hit, u: f32) -> Material {
         var w = p.weight;
 #ifdef HAS_TEXTURES
         if (p.weight_texture != NO_TEXTURE) {
-            w = clamp(luminance(texture_value(p.weight_texture, hit.uv, hit.p)), 0.0, 1.0);
+            w = clamp(luminance(texture_at(p.weight_texture, hit)), 0.0, 1.0);
         }
 #endif
         if (x < w) {

@@ -14,7 +14,7 @@
 fn pbr_textures(p: PbrParams, hit: Hit) -> PbrParams {
     var q = p;
     if (p.metallic_roughness_texture != NO_TEXTURE) {
-        let mr = min(texture_value(p.metallic_roughness_texture, hit.uv, hit.p), vec3<f32>(1.0));
+        let mr = min(texture_at(p.metallic_roughness_texture, hit), vec3<f32>(1.0));
         q.alpha = max(q.alpha * mr.y * mr.y, ALPHA_SMOOTH);
         q.metallic *= mr.z;
     }
@@ -25,10 +25,10 @@ fn pbr_textures(p: PbrParams, hit: Hit) -> PbrParams {
     // the clearcoat texture's red scales the coat, its roughness texture's green the
     // coat's roughness (so alpha by its square)
     if (p.clearcoat_texture != NO_TEXTURE) {
-        q.clearcoat *= min(texture_value(p.clearcoat_texture, hit.uv, hit.p).x, 1.0);
+        q.clearcoat *= min(texture_at(p.clearcoat_texture, hit).x, 1.0);
     }
     if (p.clearcoat_roughness_texture != NO_TEXTURE) {
-        let g = min(texture_value(p.clearcoat_roughness_texture, hit.uv, hit.p).y, 1.0);
+        let g = min(texture_at(p.clearcoat_roughness_texture, hit).y, 1.0);
         q.coat_alpha = max(q.coat_alpha * g * g, ALPHA_SMOOTH);
     }
 #ifdef HAS_NORMAL_MAP
@@ -45,7 +45,7 @@ fn pbr_textures(p: PbrParams, hit: Hit) -> PbrParams {
     // the sheen colour texture (sRGB, times the factor), clamped to 1 as a reflectance;
     // the roughness texture's alpha scales the sheen's roughness
     if (p.sheen_color_texture != NO_TEXTURE) {
-        q.sheen_color = min(texture_value(p.sheen_color_texture, hit.uv, hit.p), vec3<f32>(1.0));
+        q.sheen_color = min(texture_at(p.sheen_color_texture, hit), vec3<f32>(1.0));
     }
     if (p.sheen_roughness_texture != NO_TEXTURE) {
         let a = min(texture_alpha(p.sheen_roughness_texture, hit.uv), 1.0);

@@ -42,19 +42,26 @@ fn material_at(m: Material, hit: Hit) -> Material {
 #ifdef HAS_TEXTURES
     // the .w of each colour is a scalar of its own
     if (mat.tex_color != NO_TEXTURE) {
-        mat.color = vec4<f32>(min(texture_value(mat.tex_color, hit.uv, hit.p), vec3<f32>(1.0)), mat.color.w);
+        mat.color = vec4<f32>(min(texture_at(mat.tex_color, hit), vec3<f32>(1.0)), mat.color.w);
     }
     if (mat.tex_color2 != NO_TEXTURE) {
-        let c = texture_value(mat.tex_color2, hit.uv, hit.p);
+        let c = texture_at(mat.tex_color2, hit);
         mat.color2 = vec4<f32>(select(c, min(c, vec3<f32>(1.0)), (mat.flags & MAT_FLAG_COLOR2_CLAMPED) != 0u), mat.color2.w);
     }
     if (mat.tex_emission != NO_TEXTURE) {
-        mat.emission = vec4<f32>(texture_value(mat.tex_emission, hit.uv, hit.p), mat.emission.w);
+        mat.emission = vec4<f32>(texture_at(mat.tex_emission, hit), mat.emission.w);
     }
     mat = material_textures(mat, hit);
 #endif
 #ifdef HAS_VERTEX_COLORS
+#ifdef HAS_MESH_ATTRIBUTE
+    // a material that reads the mesh's colours itself is not also tinted by them
+    if ((mat.flags & MAT_FLAG_OWN_COLORS) == 0u) {
+        mat.color = vec4<f32>(min(mat.color.rgb * hit.color.rgb, vec3<f32>(1.0)), mat.color.w);
+    }
+#else
     mat.color = vec4<f32>(min(mat.color.rgb * hit.color.rgb, vec3<f32>(1.0)), mat.color.w);
+#endif
 #endif
 #ifdef HAS_ONE_SIDED
     // the back of a one-sided surface absorbs (it still emits as its flags say)
@@ -108,7 +115,7 @@ fn transparent_at(hit: Hit, u: f32) -> bool {
     }
 #ifdef HAS_OPACITY_TEXTURE
     if ((m.flags & MAT_FLAG_OPACITY_TEXTURE) != 0u) {
-        alpha *= luminance(texture_value(s.opacity_texture, hit.uv, hit.p));
+        alpha *= luminance(texture_at(s.opacity_texture, hit));
     }
 #endif
 #endif

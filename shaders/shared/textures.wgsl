@@ -202,6 +202,18 @@ fn texture_value(index: u32, uv: vec4<f32>, p: vec3<f32>) -> vec3<f32> {
 #endif
 }
 
+// The colour of texture `index` at a hit: texture_value at its uv and point, or for a
+// mesh attribute (HAS_MESH_ATTRIBUTE) the hit's own colour, its mesh's vertex or face
+// colours (1 where it has none).
+fn texture_at(index: u32, hit: Hit) -> vec3<f32> {
+#ifdef HAS_MESH_ATTRIBUTE
+    if (textures[index].tag == TEX_MESH_ATTRIBUTE) {
+        return hit.color.rgb;
+    }
+#endif
+    return texture_value(index, hit.uv, hit.p);
+}
+
 #ifdef HAS_NORMAL_MAP
 // The shading normal that tangent-space normal map `index` gives a hit: normalize(t x +
 // b y + ns z) over the frame of the interpolated tangent, made orthogonal to ns (b = sign

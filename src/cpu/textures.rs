@@ -7,7 +7,7 @@ use super::bsdf::luminance;
 use super::types::{xyz, Hit};
 use crate::scene::records::{
     Texture, NO_TEXTURE, TEX_CHECKER, TEX_FLAG_NEAREST, TEX_FLAG_SOLID, TEX_FLAG_SRGB, TEX_IMAGE,
-    TEX_MODE_MASK, TEX_NOISE, TEX_WRAP_T_SHIFT,
+    TEX_MESH_ATTRIBUTE, TEX_MODE_MASK, TEX_NOISE, TEX_WRAP_T_SHIFT,
 };
 
 /// A texture coordinate folded into [0, 1] by the wrap mode (0 repeat, 1 clamp, 2 mirror).
@@ -178,6 +178,15 @@ pub fn texture_value(b: &Bindings, index: u32, uv: Vec4, p: Vec3) -> Vec3 {
         return xyz(if odd { tex.color1 } else { tex.color0 });
     }
     texture_leaf(b, cell, uv, p)
+}
+
+/// The colour of texture `index` at a hit (textures.wgsl's `texture_at`): `texture_value`,
+/// or for a mesh attribute the hit's own colour.
+pub fn texture_at(b: &Bindings, index: u32, hit: &Hit) -> Vec3 {
+    if b.textures[index as usize].tag == TEX_MESH_ATTRIBUTE {
+        return hit.color.truncate();
+    }
+    texture_value(b, index, hit.uv, hit.p)
 }
 
 /// The shading normal that tangent-space normal map `index` gives a hit (textures.wgsl's

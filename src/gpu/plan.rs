@@ -106,6 +106,8 @@ pub enum Feature {
     OneSided,
     /// Bump maps: the hit's uv derivatives and the height's slopes.
     Bump,
+    /// `mesh_attribute` textures: the hit's colour as a texture.
+    MeshAttribute,
 }
 
 /// The features before the materials' in define order.
@@ -122,7 +124,7 @@ const GEOMETRY: [Feature; 9] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 30] = [
+const SHADING: [Feature; 31] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -153,6 +155,7 @@ const SHADING: [Feature; 30] = [
     Feature::GlassMicrofacets,
     Feature::OneSided,
     Feature::Bump,
+    Feature::MeshAttribute,
 ];
 
 impl Feature {
@@ -207,6 +210,7 @@ impl Feature {
             Feature::GlassMicrofacets => "HAS_GLASS_MICROFACETS",
             Feature::OneSided => "HAS_ONE_SIDED",
             Feature::Bump => "HAS_BUMP",
+            Feature::MeshAttribute => "HAS_MESH_ATTRIBUTE",
         }
     }
 
@@ -380,6 +384,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .iter()
                 .any(|m| m.flags & r::MAT_FLAG_BUMP != 0),
         )
+        .with(Feature::MeshAttribute, texture(r::TEX_MESH_ATTRIBUTE))
         .with(Feature::Clearcoat, clearcoat)
         .with(Feature::Sheen, sheen)
         .with(Feature::PbrLayers, clearcoat || sheen)
@@ -467,9 +472,9 @@ impl ShaderSpec {
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
     /// compile of the full shader took minutes longer). The materials added after pbr
     /// (conductor, thin_dielectric, plastic, blend), the pixel filters, projectors, opacity
-    /// textures, Beckmann or anisotropic glass, one-sided materials and bump maps too: the full shader of every other
+    /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps and mesh attributes too: the full shader of every other
     /// scene stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 21] = [
+    pub const OPTIONAL_IN_FULL: [Feature; 22] = [
         Feature::Aovs,
         Feature::Alpha,
         Feature::NormalMap,
@@ -491,6 +496,7 @@ impl ShaderSpec {
         Feature::GlassMicrofacets,
         Feature::OneSided,
         Feature::Bump,
+        Feature::MeshAttribute,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):

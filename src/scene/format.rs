@@ -335,7 +335,18 @@ pub enum TextureDesc {
         #[serde(default = "white")]
         color: [f32; 3],
     },
+    /// A mesh's own colours at the hit (Mitsuba's `mesh_attribute`): `vertex_color`, its
+    /// vertex colours interpolated, or `face_color`, its faces' colours (a PLY file's face
+    /// `red`, `green`, `blue`); white where the surface has none. A material that reads one
+    /// is not also tinted by the vertex colours.
+    #[serde(rename = "mesh_attribute")]
+    MeshAttribute {
+        name: String,
+    },
 }
+
+/// The names a `mesh_attribute` texture may take.
+pub const MESH_ATTRIBUTES: [&str; 2] = ["vertex_color", "face_color"];
 
 fn ten() -> f32 {
     10.0

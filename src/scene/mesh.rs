@@ -216,10 +216,19 @@ const PLY_UV: [[&str; 4]; 2] = [
 ];
 
 /// A PLY `face` element: its vertex indices (`vertex_indices` or `vertex_index`, a list of
-/// any integer type).
-#[derive(Default)]
+/// any integer type), and its colour (`red`, `green`, `blue`, `alpha`, as a vertex's).
 struct PlyFace {
     indices: Vec<i64>,
+    c: [f64; 4],
+}
+
+impl Default for PlyFace {
+    fn default() -> Self {
+        PlyFace {
+            indices: Vec::new(),
+            c: [1.0; 4],
+        }
+    }
 }
 
 impl PropertyAccess for PlyFace {
@@ -228,6 +237,18 @@ impl PropertyAccess for PlyFace {
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        if let Some(k) = ["red", "green", "blue", "alpha"]
+            .iter()
+            .position(|&c| c == name)
+        {
+            return match ply_unit(&property) {
+                Some(v) => {
+                    self.c[k] = v;
+                    PropertyAccessResult::Set
+                }
+                None => PropertyAccessResult::Ignored,
+            };
+        }
         if name != "vertex_indices" && name != "vertex_index" {
             return PropertyAccessResult::Ignored;
         }
@@ -402,7 +423,42 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
                 .push([f[0] as u32, f[j] as u32, f[j + 1] as u32]);
         }
     }
+    // face colours, where there are no vertex colours: each triangle gets corners of its
+    // own, of its face's colour (Mitsuba's `face_color`), so that the colour is constant
+    // over it as the renderer interpolates corners
+    if !colors && declares("face", &["red", "green", "blue"]) {
+        let face_of: Vec<usize> = faces
+            .iter()
+            .enumerate()
+            .flat_map(|(k, f)| std::iter::repeat_n(k, f.indices.len().saturating_sub(2)))
+            .collect();
+        mesh = unwelded(&mesh, |t| display_color(faces[face_of[t]].c));
+    }
     Ok(mesh)
+}
+
+/// The mesh with three corners of its own per triangle (positions, normals and uvs copied),
+/// each triangle's corners coloured `color(triangle)`.
+fn unwelded(mesh: &MeshData, color: impl Fn(usize) -> Vec4) -> MeshData {
+    fn copy<T: Copy>(v: &[T], triangles: &[[u32; 3]]) -> Vec<T> {
+        if v.is_empty() {
+            Vec::new()
+        } else {
+            triangles.iter().flatten().map(|&i| v[i as usize]).collect()
+        }
+    }
+    let t = &mesh.triangles;
+    MeshData {
+        positions: copy(&mesh.positions, t),
+        normals: copy(&mesh.normals, t),
+        uvs: copy(&mesh.uvs, t),
+        uvs1: copy(&mesh.uvs1, t),
+        colors: (0..t.len()).flat_map(|k| [color(k); 3]).collect(),
+        triangles: (0..t.len() as u32)
+            .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+            .collect(),
+        ..Default::default()
+    }
 }
 
 /// What every mesh file must give: faces, within the caps, indices inside the vertex list,

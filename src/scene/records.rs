@@ -127,6 +127,9 @@ shared_constants! {
     /// Material flag: the surface view's `normal_texture` is a bump map (a height, times
     /// `normal_scale`), not a tangent-space normal map.
     MAT_FLAG_BUMP: u32 = 1024;
+    /// Material flag: it reads a mesh's colours through a `mesh_attribute` texture, so
+    /// `material_at` does not also multiply its colour by them.
+    MAT_FLAG_OWN_COLORS: u32 = 2048;
     /// The tag `material_at` gives the back of a one-sided surface: no type has it, so
     /// the dispatch's default absorbs, with no BSDF and no density.
     MAT_BLACK: u32 = u32::MAX;
@@ -136,6 +139,8 @@ shared_constants! {
     TEX_CHECKER: u32 = 1;
     TEX_IMAGE: u32 = 2;
     TEX_NOISE: u32 = 3;
+    /// A mesh's colours at the hit (`mesh_attribute`): `texture_at` reads the hit's.
+    TEX_MESH_ATTRIBUTE: u32 = 4;
     /// Checker flag: cells in space (x, y, z) rather than in uv.
     TEX_FLAG_SOLID: u32 = 4;
     /// Image textures: the wrap mode along u in `flags & 3`, along v in

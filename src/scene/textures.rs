@@ -359,6 +359,11 @@ pub fn texture_records(
                     ..Default::default()
                 }
             }
+            TextureDesc::MeshAttribute { .. } => Texture {
+                tag: records::TEX_MESH_ATTRIBUTE,
+                color0: [1.0; 4],
+                ..Default::default()
+            },
             TextureDesc::Noise { scale, kind, color } => Texture {
                 tag: records::TEX_NOISE,
                 flags: match kind {

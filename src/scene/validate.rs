@@ -7,7 +7,7 @@ use toml::Spanned;
 
 use super::format::{
     CameraDesc, FilterKind, LightDesc, ObjectDesc, Projection, RenderDesc, SceneFile, TextureDesc,
-    TransformDesc,
+    TransformDesc, MESH_ATTRIBUTES,
 };
 use super::materials::common::ColorDesc;
 use super::materials::{blend, MaterialDesc};
@@ -44,6 +44,12 @@ pub fn validate(file: &SceneFile, src: &str, overridden: &[&str]) -> Vec<Problem
                 )
             })
             .collect(),
+        attributes: file
+            .textures
+            .iter()
+            .filter(|(_, t)| matches!(t.get_ref(), TextureDesc::MeshAttribute { .. }))
+            .map(|(name, _)| name.clone())
+            .collect(),
     };
     v.render(&file.render);
     v.camera(&file.camera);
@@ -76,6 +82,8 @@ struct Validator<'a> {
     problems: Vec<Problem>,
     /// Texture names, and whether each is a checker.
     textures: Vec<(String, bool)>,
+    /// The names of the `mesh_attribute` textures.
+    attributes: Vec<String>,
 }
 
 impl Validator<'_> {
@@ -280,6 +288,9 @@ impl Validator<'_> {
                         {
                             self.push(at, &ckey, format!("\"{child}\" is a checker; a checker's cells must be colours or other textures"));
                         }
+                        if self.attributes.iter().any(|n| n == child) {
+                            self.push(at, &ckey, format!("\"{child}\" is a mesh attribute; a checker's cells are looked up without a mesh"));
+                        }
                     }
                 }
                 self.positive(&format!("{key}.scale"), *scale, at);
@@ -319,6 +330,18 @@ impl Validator<'_> {
                             "replaces offset, rotation and scale: give one or the others".into(),
                         );
                     }
+                }
+            }
+            TextureDesc::MeshAttribute { name } => {
+                if !MESH_ATTRIBUTES.contains(&name.as_str()) {
+                    self.push(
+                        at,
+                        &format!("{key}.name"),
+                        format!(
+                            "unknown mesh attribute \"{name}\" (known: {})",
+                            MESH_ATTRIBUTES.join(", ")
+                        ),
+                    );
                 }
             }
             TextureDesc::Noise { scale, color, .. } => {
@@ -526,6 +549,16 @@ impl Validator<'_> {
                     );
                 }
                 self.color(&format!("{key}.irradiance"), irradiance, false, at);
+                if let Some(t) = irradiance
+                    .texture()
+                    .filter(|t| self.attributes.iter().any(|n| n == t))
+                {
+                    self.push(
+                        at,
+                        &format!("{key}.irradiance"),
+                        format!("\"{t}\" is a mesh attribute; a projector's image has no mesh"),
+                    );
+                }
                 if !(*scale >= 0.0 && scale.is_finite()) {
                     self.push(
                         at,

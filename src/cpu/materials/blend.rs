@@ -3,7 +3,7 @@
 
 use crate::cpu::bindings::Bindings;
 use crate::cpu::bsdf::{luminance, Shading};
-use crate::cpu::textures::texture_value;
+use crate::cpu::textures::texture_at;
 use crate::cpu::types::Hit;
 use crate::scene::materials::blend::{Params, MAX_BLEND_DEPTH};
 use crate::scene::materials::MaterialKind;
@@ -22,7 +22,7 @@ pub fn choice(b: &Bindings, index: u32, hit: &Hit, u: f32) -> Material {
         let p = Params::read(&m);
         let mut w = p.weight;
         if p.weight_texture != NO_TEXTURE {
-            w = luminance(texture_value(b, p.weight_texture, hit.uv, hit.p)).clamp(0.0, 1.0);
+            w = luminance(texture_at(b, p.weight_texture, hit)).clamp(0.0, 1.0);
         }
         if x < w {
             x /= w;

@@ -19,14 +19,15 @@ use glam::Vec3;
 
 use super::bindings::Bindings;
 use super::bsdf::{luminance, mirrored, Scatter, Shading, ABSORBED};
-use super::textures::{bump_normal, map_normal, texture_alpha, texture_value};
+use super::textures::{bump_normal, map_normal, texture_alpha, texture_at};
 use super::types::{Hit, Ray};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::{for_each_material, MaterialKind};
 use crate::scene::records::{
     Material, MAT_BLACK, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_ANISOTROPIC,
     MAT_FLAG_BUMP, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_ONE_SIDED,
-    MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, NO_TEXTURE, SHADING_LIFT,
+    MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
+    NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -105,13 +106,13 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     }
     // the .w of each colour is a scalar of its own
     if mat.tex_color != NO_TEXTURE {
-        mat.color = texture_value(b, mat.tex_color, hit.uv, hit.p)
+        mat.color = texture_at(b, mat.tex_color, hit)
             .min(Vec3::ONE)
             .extend(mat.color[3])
             .to_array();
     }
     if mat.tex_color2 != NO_TEXTURE {
-        let c = texture_value(b, mat.tex_color2, hit.uv, hit.p);
+        let c = texture_at(b, mat.tex_color2, hit);
         let c = if mat.flags & MAT_FLAG_COLOR2_CLAMPED != 0 {
             c.min(Vec3::ONE)
         } else {
@@ -120,13 +121,16 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
         mat.color2 = c.extend(mat.color2[3]).to_array();
     }
     if mat.tex_emission != NO_TEXTURE {
-        mat.emission = texture_value(b, mat.tex_emission, hit.uv, hit.p)
+        mat.emission = texture_at(b, mat.tex_emission, hit)
             .extend(mat.emission[3])
             .to_array();
     }
     let mut mat = material_textures(b, &mat, hit);
-    let c = (Vec3::from_slice(&mat.color[..3]) * hit.color.truncate()).min(Vec3::ONE);
-    mat.color = c.extend(mat.color[3]).to_array();
+    // the vertex colours tint the colour, unless the material reads them itself
+    if mat.flags & MAT_FLAG_OWN_COLORS == 0 {
+        let c = (Vec3::from_slice(&mat.color[..3]) * hit.color.truncate()).min(Vec3::ONE);
+        mat.color = c.extend(mat.color[3]).to_array();
+    }
     // the back of a one-sided surface absorbs (it still emits as its flags say)
     if mat.flags & MAT_FLAG_ONE_SIDED != 0 && !hit.front_face {
         mat.tag = MAT_BLACK;
@@ -164,7 +168,7 @@ pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
         alpha *= texture_alpha(b, m.tex_color, hit.uv);
     }
     if m.flags & MAT_FLAG_OPACITY_TEXTURE != 0 {
-        alpha *= luminance(texture_value(b, s.opacity_texture, hit.uv, hit.p));
+        alpha *= luminance(texture_at(b, s.opacity_texture, hit));
     }
     if m.flags & MAT_FLAG_ALPHA_MASK != 0 {
         return alpha < s.alpha_cutoff;

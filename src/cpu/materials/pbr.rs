@@ -8,7 +8,7 @@ use crate::cpu::bsdf::{
     Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
 use crate::cpu::sampling::{sample_cosine_hemisphere, PI};
-use crate::cpu::textures::{map_normal, texture_alpha, texture_value};
+use crate::cpu::textures::{map_normal, texture_alpha, texture_at};
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::pbr::{sheen_albedo_table, Params};
 use crate::scene::records::{NO_TEXTURE, SHEEN_ALPHA_MIN, SHEEN_TABLE_SIZE};
@@ -200,12 +200,10 @@ impl Shading for Params {
     fn textures(&self, b: &Bindings, hit: &Hit) -> Self {
         let mut q = *self;
         if self.clearcoat_texture != NO_TEXTURE {
-            q.clearcoat *= texture_value(b, self.clearcoat_texture, hit.uv, hit.p)
-                .x
-                .min(1.0);
+            q.clearcoat *= texture_at(b, self.clearcoat_texture, hit).x.min(1.0);
         }
         if self.clearcoat_roughness_texture != NO_TEXTURE {
-            let g = texture_value(b, self.clearcoat_roughness_texture, hit.uv, hit.p)
+            let g = texture_at(b, self.clearcoat_roughness_texture, hit)
                 .y
                 .min(1.0);
             q.coat_alpha = (q.coat_alpha * g * g).max(ALPHA_SMOOTH);
@@ -218,16 +216,14 @@ impl Shading for Params {
             q.coat_normal = hit.ns;
         }
         if self.sheen_color_texture != NO_TEXTURE {
-            q.sheen_color =
-                texture_value(b, self.sheen_color_texture, hit.uv, hit.p).min(Vec3::ONE);
+            q.sheen_color = texture_at(b, self.sheen_color_texture, hit).min(Vec3::ONE);
         }
         if self.sheen_roughness_texture != NO_TEXTURE {
             let a = texture_alpha(b, self.sheen_roughness_texture, hit.uv).min(1.0);
             q.sheen_alpha = (q.sheen_alpha * a * a).max(SHEEN_ALPHA_MIN);
         }
         if self.metallic_roughness_texture != NO_TEXTURE {
-            let mr =
-                texture_value(b, self.metallic_roughness_texture, hit.uv, hit.p).min(Vec3::ONE);
+            let mr = texture_at(b, self.metallic_roughness_texture, hit).min(Vec3::ONE);
             q.alpha = (q.alpha * mr.y * mr.y).max(ALPHA_SMOOTH);
             q.metallic *= mr.z;
         }
