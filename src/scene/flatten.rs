@@ -12,7 +12,7 @@ use super::format::{
 };
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
-use super::materials::{blend, pbr, plastic, MaterialDesc, MaterialKind};
+use super::materials::{blend, mark_own_colors, pbr, plastic, MaterialDesc, MaterialKind};
 use super::mesh::MeshData;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
@@ -539,27 +539,12 @@ pub fn flatten(
         .map(|m| m.1.record(&texture_names))
         .collect();
     // a material that reads a mesh attribute is not also tinted by the vertex colours
-    let attribute = |t: u32| {
-        textures
-            .get(t as usize)
-            .is_some_and(|r| r.tag == records::TEX_MESH_ATTRIBUTE)
-    };
     for m in &mut materials {
-        let places = [
-            m.tex_color,
-            m.tex_color2,
-            m.tex_emission,
-            m.tex_data0,
-            m.tex_data1,
-            m.tex_data2,
-            m.tex_data3,
-            m.tex_data4,
-            m.tex_data5,
-        ];
-        let opacity = m.flags & records::MAT_FLAG_OPACITY_TEXTURE != 0 && attribute(m.tex_opacity);
-        if opacity || places.into_iter().any(attribute) {
-            m.flags |= records::MAT_FLAG_OWN_COLORS;
-        }
+        mark_own_colors(m, |t| {
+            textures
+                .get(t as usize)
+                .is_some_and(|r| r.tag == records::TEX_MESH_ATTRIBUTE)
+        });
     }
     // each blend's parts, by their places in the list
     for (i, m) in material_list.iter().enumerate() {

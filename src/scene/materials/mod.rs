@@ -27,7 +27,8 @@ use serde::Deserialize;
 
 use crate::scene::records::{
     Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_BUMP, MAT_FLAG_DELTA, MAT_FLAG_NEE,
-    MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
+    MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_TRANSMITS,
+    MAT_FLAG_TWO_SIDED,
 };
 use common::{Check, Lobes, Model, OpacityDesc, Surface, TextureNames, View};
 
@@ -242,6 +243,27 @@ impl MaterialDesc {
         }
         surface.write(&mut record);
         record
+    }
+}
+
+/// Marks a material that reads a mesh attribute (`is_attribute` of a texture index) in any
+/// of its texture places, so that `material_at` does not also tint it by the vertex colours
+/// (`MAT_FLAG_OWN_COLORS`). The opacity texture counts where the flags say it is one.
+pub fn mark_own_colors(m: &mut Material, is_attribute: impl Fn(u32) -> bool) {
+    let places = [
+        m.tex_color,
+        m.tex_color2,
+        m.tex_emission,
+        m.tex_data0,
+        m.tex_data1,
+        m.tex_data2,
+        m.tex_data3,
+        m.tex_data4,
+        m.tex_data5,
+    ];
+    let opacity = m.flags & MAT_FLAG_OPACITY_TEXTURE != 0 && is_attribute(m.tex_opacity);
+    if opacity || places.into_iter().any(is_attribute) {
+        m.flags |= MAT_FLAG_OWN_COLORS;
     }
 }
 
