@@ -519,7 +519,8 @@ irradiance = [2, 2, 2]
 }
 
 /// Bump maps on every shape (sphere, triangles of a mesh with uvs, plane, box, cylinder,
-/// disk, and a transformed sphere), with an image and with noise for heights, render
+/// disk through a blend of two bumped parts, and a transformed sphere), with an image and
+/// with noise for heights, render
 /// alike on the GPU and the CPU: no tile's mean outside the z-test's bound, and the
 /// pixels within what the spot check allows.
 #[test]
@@ -555,6 +556,7 @@ noise = { type = "noise", scale = 4 }
 a = { type = "lambertian", albedo = [0.8, 0.6, 0.4], bump = "bumps", bump_scale = 0.05 }
 b = { type = "conductor", material = "Cu", roughness = 0.3, bump = "noise", bump_scale = 0.3 }
 c = { type = "plastic", albedo = [0.2, 0.4, 0.8], bump = "bumps", bump_scale = 0.02 }
+d = { type = "blend", first = "c", second = "a", weight = 0.5 }
 [[objects]]
 type = "plane"
 point = [0, -1, 0]
@@ -592,7 +594,7 @@ type = "disk"
 center = [-3, 1.8, -2]
 normal = [0, 0.5, 1]
 radius = 0.8
-material = "c"
+material = "d"
 "#;
     let s = wgtrace::load_scene_str(src, &dir.join("shapes.toml"), &Default::default())
         .unwrap_or_else(|e| panic!("{e}"));

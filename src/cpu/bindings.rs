@@ -21,6 +21,9 @@ pub struct Bindings<'a> {
     /// A material has alpha (mask or blend): rays pass through transparent surfaces (the
     /// shader's HAS_ALPHA).
     pub has_alpha: bool,
+    /// A material has a bump map: hits carry their uv derivatives (the shader's HAS_BUMP,
+    /// which computes them for every hit, so that a blend's bumped part has them too).
+    pub has_bump: bool,
 }
 
 impl<'a> Bindings<'a> {
@@ -35,6 +38,10 @@ impl<'a> Bindings<'a> {
             textures: &scene.textures,
             texels: &scene.texels,
             tables: &scene.tables,
+            has_bump: scene
+                .materials
+                .iter()
+                .any(|m| m.flags & crate::scene::records::MAT_FLAG_BUMP != 0),
             has_alpha: scene.materials.iter().any(|m| {
                 m.flags
                     & (crate::scene::records::MAT_FLAG_ALPHA_MASK

@@ -7,10 +7,10 @@ use super::bindings::Bindings;
 use super::sampling::{max_abs, onb_tangents, PI};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
-    BvhNode, Primitive, ATTRIBUTE_ENTRIES, BVH_NODE_BITS, BVH_SLAB_ERROR, BVH_STACK_SIZE,
-    MAT_FLAG_BUMP, PRIM_BOX, PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS,
-    PRIM_FLAG_COLORS, PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS, PRIM_FLAG_TRANSFORM,
-    PRIM_FLAG_UV1, PRIM_PLANE, PRIM_SPHERE, PRIM_TRIANGLE, TANGENT_ENTRIES, UV1_ENTRIES,
+    BvhNode, Primitive, ATTRIBUTE_ENTRIES, BVH_NODE_BITS, BVH_SLAB_ERROR, BVH_STACK_SIZE, PRIM_BOX,
+    PRIM_CYLINDER, PRIM_DISK, PRIM_FLAG_ATTRIBUTES, PRIM_FLAG_CAPS, PRIM_FLAG_COLORS,
+    PRIM_FLAG_SHADING_NORMALS, PRIM_FLAG_TANGENTS, PRIM_FLAG_TRANSFORM, PRIM_FLAG_UV1, PRIM_PLANE,
+    PRIM_SPHERE, PRIM_TRIANGLE, TANGENT_ENTRIES, UV1_ENTRIES,
 };
 
 /// Sphere, numerically stable form (Ray Tracing Gems, chapter 7). `ray.dir` is unit length.
@@ -798,8 +798,9 @@ pub fn surface_uv_derivatives(
 /// Shading record of a candidate hit, in world space.
 pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
     let prim = &b.primitives[cand.prim as usize];
-    // the uv derivatives, where a bump map needs them
-    let bumped = b.materials[prim.material as usize].flags & MAT_FLAG_BUMP != 0;
+    // the uv derivatives, where a bump map may need them (as HAS_BUMP: every hit, since
+    // a blend's part may be the bumped one)
+    let bumped = b.has_bump;
     let mut dp = [Vec3::ZERO; 2];
     let s = if prim.flags & PRIM_FLAG_TRANSFORM != 0 {
         let r = ray_to_object(b, prim.data, ray);

@@ -177,17 +177,8 @@ impl PropertyAccess for PlyVertex {
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        if let Some(k) = ["red", "green", "blue", "alpha"]
-            .iter()
-            .position(|&c| c == name)
-        {
-            return match ply_unit(&property) {
-                Some(v) => {
-                    self.c[k] = v;
-                    PropertyAccessResult::Set
-                }
-                None => PropertyAccessResult::Ignored,
-            };
+        if let Some(result) = ply_color(name, &property, &mut self.c) {
+            return result;
         }
         let Some(value) = ply_scalar(&property) else {
             return PropertyAccessResult::Ignored;
@@ -207,6 +198,21 @@ impl PropertyAccess for PlyVertex {
         *slot = value;
         PropertyAccessResult::Set
     }
+}
+
+/// A colour property (`red`, `green`, `blue`, `alpha`) of a PLY vertex or face into `c`
+/// (`ply_unit`'s scaling); None for any other property.
+fn ply_color(name: &str, property: &Property, c: &mut [f64; 4]) -> Option<PropertyAccessResult> {
+    let k = ["red", "green", "blue", "alpha"]
+        .iter()
+        .position(|&n| n == name)?;
+    Some(match ply_unit(property) {
+        Some(v) => {
+            c[k] = v;
+            PropertyAccessResult::Set
+        }
+        None => PropertyAccessResult::Ignored,
+    })
 }
 
 /// The names PLY writers give the texture coordinates u and v.
@@ -237,17 +243,8 @@ impl PropertyAccess for PlyFace {
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
-        if let Some(k) = ["red", "green", "blue", "alpha"]
-            .iter()
-            .position(|&c| c == name)
-        {
-            return match ply_unit(&property) {
-                Some(v) => {
-                    self.c[k] = v;
-                    PropertyAccessResult::Set
-                }
-                None => PropertyAccessResult::Ignored,
-            };
+        if let Some(result) = ply_color(name, &property, &mut self.c) {
+            return result;
         }
         if name != "vertex_indices" && name != "vertex_index" {
             return PropertyAccessResult::Ignored;

@@ -534,6 +534,7 @@ material_view! {
         /// Cut out below this alpha (`MAT_FLAG_ALPHA_MASK`).
         alpha_cutoff: f32 = emission.w,
         /// A tangent-space normal map (linear, +y along v), its x and y scaled by
+        /// `normal_scale`; with `MAT_FLAG_BUMP`, a bump map's heights, times
         /// `normal_scale`.
         normal_texture: u32 = tex_normal,
         normal_scale: f32 = color2.w,
