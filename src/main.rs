@@ -210,6 +210,11 @@ struct RenderArgs {
     /// file, else Mitsuba 3's defaults).
     #[arg(long, value_enum)]
     filter: Option<FilterKind>,
+    /// Compensate every microfacet lobe for the energy it loses to multiple scattering
+    /// (Kulla and Conty 2017; sets [render] energy_compensation, which a material's own
+    /// key overrides). Off by default, as in Mitsuba and glTF.
+    #[arg(long)]
+    energy_compensation: bool,
     /// Stop after as many passes as fit in this many seconds, then write the image. Without
     /// --spp the scene's spp no longer caps the passes (except for hammersley and jittered,
     /// whose points depend on it).
@@ -682,6 +687,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         filter: args.filter,
         background: args.background,
         camera: args.camera.clone(),
+        energy_compensation: args.energy_compensation,
     };
     let tuning = args.tune.unwrap_or_default();
     if tuning.lane_stats && matches!(args.backend, BackendArg::Cpu) {

@@ -128,6 +128,16 @@ pub const ENTRIES: &[Entry] = &[
         "Plastics: smooth, GGX, Beckmann; linear and nonlinear; a thin-glass window",
     ),
     entry(
+        "principled",
+        "scenes/principled.toml",
+        "Principled (Mitsuba's): metallic, roughness, spec_trans, sheen, clearcoat, anisotropic; 0 to 1",
+    ),
+    entry(
+        "energy",
+        "scenes/energy.toml",
+        "Energy compensation off and on: gold and a white glTF material, roughness 0.25 to 1",
+    ),
+    entry(
         "materials",
         "scenes/materials.toml",
         "Every material side by side",

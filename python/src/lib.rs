@@ -620,7 +620,7 @@ impl Sums {
 /// Loads a scene file: TOML, or a glTF 2.0 file (.gltf, .glb) on its own. The keywords are
 /// the command line's overrides.
 #[pyfunction]
-#[pyo3(signature = (path, *, width=None, height=None, spp=None, max_depth=None, seed=None, sampler=None, light_sampling=None, filter=None, background=None, camera=None))]
+#[pyo3(signature = (path, *, width=None, height=None, spp=None, max_depth=None, seed=None, sampler=None, light_sampling=None, filter=None, background=None, camera=None, energy_compensation=None))]
 #[allow(clippy::too_many_arguments)]
 fn load<'py>(
     py: Python<'py>,
@@ -635,6 +635,7 @@ fn load<'py>(
     filter: Option<&Bound<'py, PyAny>>,
     background: Option<&Bound<'py, PyAny>>,
     camera: Option<&Bound<'py, PyAny>>,
+    energy_compensation: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Scene> {
     let path: PathBuf = arg("path", "a path (str or os.PathLike)", Some(path))?
         .ok_or_else(|| PyTypeError::new_err("path: expected a path, got None"))?;
@@ -656,6 +657,8 @@ fn load<'py>(
             arg("background", "three numbers (r, g, b)", background)?,
         )?,
         camera: arg("camera", "a camera's name (str)", camera)?,
+        energy_compensation: arg::<bool>("energy_compensation", "a bool", energy_compensation)?
+            .unwrap_or(false),
     };
     let scene = py
         .detach(|| wgtrace::load_scene(&path, &overrides))

@@ -6,14 +6,25 @@
 // Probability of sampling the specular lobe: its share by Fresnel at the view angle and the
 // lobes' colours, kept in [0.1, 0.9] when both lobes reflect. It depends on wo only, so
 // the mixture's pdf is exact.
+// With energy compensation the cosine lobe samples the compensation's lobe too, weighted
+// by what the GGX lobe loses.
 fn microfacet_spec_prob(p: MicrofacetParams, cos_o: f32) -> f32 {
     let f = schlick(cos_o, p.ior);
-    return lobe_prob(luminance(p.specular) * f, luminance(p.diffuse) * (1.0 - f));
+    var wd = luminance(p.diffuse) * (1.0 - f);
+#ifdef HAS_ENERGY_COMPENSATION
+    if ((p.flags & MAT_FLAG_ENERGY) != 0u && p.alpha >= ALPHA_SMOOTH) {
+        wd += luminance(p.specular) * ms_loss(MS_GGX_CORRELATED, p.alpha, cos_o);
+    }
+#endif
+    return lobe_prob(luminance(p.specular) * f, wd);
 }
 
 // Cook-Torrance BSDF x cos(theta_i), for unit wo and wi about the unit normal n on wo's side:
 // ks D G2 F / (4 cos_o) + kd (1 - F(cos_i)) (1 - F(cos_o)) cos_i / pi. G2 is Smith's
-// height-correlated masking-shadowing, F Schlick's from the ior. The diffuse base gets the
+// height-correlated masking-shadowing, F Schlick's from the ior. With energy
+// compensation, Kulla and Conty's lobe for the GGX lobe's multiple scattering, and the
+// base weighted by what the compensated lobe leaves of both directions (ms_under)
+// instead of by the Fresnel of both. The diffuse base gets the
 // light the Fresnel of both directions lets through, which keeps the sum reciprocal and
 // within energy conservation (the white furnace test checks it). The mirror lobe, when
 // smooth, is a delta and left out.
@@ -31,6 +42,17 @@ fn microfacet_eval(p: MicrofacetParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
     }
     let h = normalize(wo + wi);
     let spec = ggx_d(dot(n, h), alpha) * smith_g2(cos_o, cos_i, alpha) * schlick(dot(wi, h), ior) / (4.0 * cos_o);
+#ifdef HAS_ENERGY_COMPENSATION
+    // compensated: the lobe's multiple scattering, and the base under what the whole
+    // lobe reflects (ks times Schlick's from F0 to 1)
+    if ((p.flags & MAT_FLAG_ENERGY) != 0u) {
+        let r = (1.0 - ior) / (1.0 + ior);
+        let f0 = p.specular * (r * r);
+        let under = ms_under(MS_GGX_CORRELATED, alpha, cos_o, cos_i, f0, p.specular);
+        let ms = ms_lobe(MS_GGX_CORRELATED, alpha, cos_o, cos_i, f0 + (p.specular - f0) / 21.0);
+        return p.specular * spec + ms + p.diffuse * under * (cos_i / PI);
+    }
+#endif
     return p.specular * spec + p.diffuse * diff;
 }
 

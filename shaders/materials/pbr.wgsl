@@ -77,6 +77,10 @@ fn pbr_metal_fresnel(p: PbrParams, c: f32) -> vec3<f32> {
 // reflects up to 1.026 of a white furnace near roughness 0 (seen at 60 degrees); the
 // base here gets what the Fresnel of both directions lets through, as the microfacet
 // material's does: reciprocal and within energy conservation (tests/materials.rs).
+// With energy compensation (MAT_FLAG_ENERGY), Kulla and Conty's lobe for the GGX lobe's
+// multiple scattering, coloured by the mix of the two Fresnels' averages, and the base
+// weighted by what the compensated dielectric lobe leaves of both directions: a white
+// base under glTF's default specular then reflects all that arrives.
 fn pbr_base_eval(p: PbrParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let cos_o = dot(n, wo);
     let cos_i = dot(n, wi);
@@ -87,10 +91,26 @@ fn pbr_base_eval(p: PbrParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> ve
     let h = normalize(wo + wi);
     let vh = dot(wo, h);
     let spec = ggx_d(dot(n, h), alpha) * smith_g2(cos_o, cos_i, alpha) / (4.0 * cos_o);
-    let through = (vec3<f32>(1.0) - pbr_dielectric_fresnel(p, cos_i)) * (vec3<f32>(1.0) - pbr_dielectric_fresnel(p, cos_o));
-    let dielectric = through * p.base_color * (cos_i / PI) + pbr_dielectric_fresnel(p, vh) * spec;
+    var through = (vec3<f32>(1.0) - pbr_dielectric_fresnel(p, cos_i)) * (vec3<f32>(1.0) - pbr_dielectric_fresnel(p, cos_o));
     let metallic = p.metallic;
-    return dielectric * (1.0 - metallic) + pbr_metal_fresnel(p, vh) * spec * metallic;
+#ifdef HAS_ENERGY_COMPENSATION
+    var ms = vec3<f32>(0.0);
+    // compensated: both lobes' multiple scattering, and the base under what the
+    // compensated dielectric lobe reflects (ms_under) instead of under its Fresnel
+    if ((p.flags & MAT_FLAG_ENERGY) != 0u) {
+        let f0 = pbr_dielectric_fresnel(p, 1.0);
+        let f90 = vec3<f32>(p.specular);
+        through = ms_under(MS_GGX_CORRELATED, alpha, cos_o, cos_i, f0, f90);
+        let f_avg = mix(f0 + (f90 - f0) / 21.0, p.base_color + (vec3<f32>(1.0) - p.base_color) / 21.0, metallic);
+        ms = ms_lobe(MS_GGX_CORRELATED, alpha, cos_o, cos_i, f_avg);
+    }
+#endif
+    let dielectric = through * p.base_color * (cos_i / PI) + pbr_dielectric_fresnel(p, vh) * spec;
+    var f = dielectric * (1.0 - metallic) + pbr_metal_fresnel(p, vh) * spec * metallic;
+#ifdef HAS_ENERGY_COMPENSATION
+    f += ms;
+#endif
+    return f;
 }
 
 // Probability of sampling the GGX lobe: its share at the view angle (both Fresnels at
@@ -99,7 +119,13 @@ fn pbr_spec_prob(p: PbrParams, cos_o: f32) -> f32 {
     let fd = pbr_dielectric_fresnel(p, cos_o);
     let metallic = p.metallic;
     let ws = luminance(fd * (1.0 - metallic) + pbr_metal_fresnel(p, cos_o) * metallic);
-    let wd = (1.0 - p.metallic) * luminance((vec3<f32>(1.0) - fd) * p.base_color);
+    var wd = (1.0 - p.metallic) * luminance((vec3<f32>(1.0) - fd) * p.base_color);
+#ifdef HAS_ENERGY_COMPENSATION
+    // the cosine lobe samples the compensation's lobe too
+    if ((p.flags & MAT_FLAG_ENERGY) != 0u) {
+        wd += ms_loss(MS_GGX_CORRELATED, p.alpha, cos_o);
+    }
+#endif
     return lobe_prob(ws, wd);
 }
 

@@ -1,6 +1,7 @@
 // What scattering returns, and the pieces several materials share: mirror directions,
 // Fresnel, the GGX distribution, Smith's masking, the visible-normal sampler and the
 // two-lobe mixture of a GGX and a cosine lobe.
+#import shared/bindings
 #import shared/sampling
 #import shared/types
 
@@ -358,3 +359,106 @@ fn tangent_frame(n: vec3<f32>, tangent: vec3<f32>) -> array<vec3<f32>, 2> {
     }
     return onb_tangents(n);
 }
+
+#ifdef HAS_ENERGY_COMPENSATION
+// Multiple-scattering energy compensation (Kulla and Conty 2017): the lobe
+// F_ms (1 - E(cos_o)) (1 - E(cos_i)) / (pi (1 - E_avg)) that gives a microfacet lobe back
+// what it loses between its microfacets (scene::microfacet_albedo has the formulas and the
+// tables' layout). Compiled for scenes with a compensated material only.
+
+// Float i of the albedo tables (from params.ms_tables).
+fn ms_float(i: u32) -> f32 {
+    let j = params.ms_tables * 4u + i;
+    return tables[j >> 2u][j & 3u];
+}
+
+// The first float of a variant's (MS_GGX_CORRELATED, ...) table t: 0 E1 (F = 1), 1 E5
+// (Schlick's weight (1 - wo . h)^5 for F).
+fn ms_offset(variant: u32, t: u32) -> u32 {
+    let block = MS_TABLE_SIZE * MS_TABLE_SIZE + MS_TABLE_SIZE;
+    return (2u * variant + t) * block;
+}
+
+// The isotropic alpha whose tables stand for an anisotropic lobe's: the mean of the two
+// (a white lobe of alphas 0.16 and 1 compensated at their geometric mean reflects 0.74 of
+// a white furnace head-on, at their root mean square 1.03).
+fn ms_alpha(alpha_u: f32, alpha_v: f32) -> f32 {
+    return 0.5 * (alpha_u + alpha_v);
+}
+
+// A table's albedo at cosine c and alpha, bilinear in sqrt(c) and sqrt(alpha).
+fn ms_albedo(offset: u32, c: f32, alpha: f32) -> f32 {
+    let last = f32(MS_TABLE_SIZE - 1u);
+    let x = sqrt(clamp(c, 0.0, 1.0)) * last;
+    let y = sqrt(clamp(alpha, 0.0, 1.0)) * last;
+    let x0 = min(u32(x), MS_TABLE_SIZE - 2u);
+    let y0 = min(u32(y), MS_TABLE_SIZE - 2u);
+    let i = offset + y0 * MS_TABLE_SIZE + x0;
+    let j = i + MS_TABLE_SIZE;
+    let fx = x - f32(x0);
+    return mix(mix(ms_float(i), ms_float(i + 1u), fx), mix(ms_float(j), ms_float(j + 1u), fx), y - f32(y0));
+}
+
+// A table's average 2 int E(mu) mu dmu at alpha.
+fn ms_average(offset: u32, alpha: f32) -> f32 {
+    let last = f32(MS_TABLE_SIZE - 1u);
+    let y = sqrt(clamp(alpha, 0.0, 1.0)) * last;
+    let y0 = min(u32(y), MS_TABLE_SIZE - 2u);
+    let i = offset + MS_TABLE_SIZE * MS_TABLE_SIZE + y0;
+    return mix(ms_float(i), ms_float(i + 1u), y - f32(y0));
+}
+
+// The compensation's colour F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)) of a lobe
+// whose Fresnel averages f_avg.
+fn ms_fresnel(f_avg: vec3<f32>, e_avg: f32) -> vec3<f32> {
+    return f_avg * f_avg * e_avg / (vec3<f32>(1.0) - f_avg * (1.0 - e_avg));
+}
+
+// The compensation lobe x cos_i of a lobe of `variant` and alpha whose Fresnel averages
+// f_avg; 0 where the lobe loses nothing (a mirror).
+fn ms_lobe(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f_avg: vec3<f32>) -> vec3<f32> {
+    let o = ms_offset(variant, 0u);
+    let e_avg = ms_average(o, alpha);
+    if (cos_o <= 0.0 || cos_i <= 0.0 || e_avg >= 1.0) {
+        return vec3<f32>(0.0);
+    }
+    let k = (1.0 - ms_albedo(o, cos_o, alpha)) * (1.0 - ms_albedo(o, cos_i, alpha)) / (PI * (1.0 - e_avg));
+    return ms_fresnel(f_avg, e_avg) * (k * cos_i);
+}
+
+// What a white lobe of `variant` and alpha loses seen at cos_o, 1 - E1(cos_o): the
+// probability with which a material samples its compensation lobe (by the cosine).
+fn ms_loss(variant: u32, alpha: f32, cos_o: f32) -> f32 {
+    return clamp(1.0 - ms_albedo(ms_offset(variant, 0u), cos_o, alpha), 0.0, 0.9);
+}
+
+// The directional albedo at cos_o of a lobe of `variant` and alpha with Schlick's
+// Fresnel from f0 to f90, its compensation lobe included: f0 E1 + (f90 - f0) E5 + F_ms
+// (1 - E1); and (its .w) the same averaged over cosines, for the lobe's luminance.
+fn ms_schlick_albedo(variant: u32, alpha: f32, c: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
+    let o1 = ms_offset(variant, 0u);
+    let o5 = ms_offset(variant, 1u);
+    let e1 = ms_albedo(o1, c, alpha);
+    let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, ms_average(o1, alpha));
+    return f0 * e1 + (f90 - f0) * ms_albedo(o5, c, alpha) + f_ms * (1.0 - e1);
+}
+
+// ms_schlick_albedo averaged over cosines (2 int E mu dmu).
+fn ms_schlick_average(variant: u32, alpha: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
+    let o1 = ms_offset(variant, 0u);
+    let e1 = ms_average(o1, alpha);
+    let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, e1);
+    return f0 * e1 + (f90 - f0) * ms_average(ms_offset(variant, 1u), alpha) + f_ms * (1.0 - e1);
+}
+
+// The share of a layer under a compensated Schlick lobe between wo and wi: what the lobe
+// (and its compensation) leaves of both directions, (1 - E_s(cos_o)) (1 - E_s(cos_i)) /
+// (1 - E_s avg) (Kulla and Conty's albedo scaling: reciprocal, and a white layer under a
+// white lobe reflects all that arrives).
+fn ms_under(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
+    let avg = ms_schlick_average(variant, alpha, f0, f90);
+    let o = vec3<f32>(1.0) - ms_schlick_albedo(variant, alpha, cos_o, f0, f90);
+    let i = vec3<f32>(1.0) - ms_schlick_albedo(variant, alpha, cos_i, f0, f90);
+    return select(o * i / (vec3<f32>(1.0) - avg), vec3<f32>(0.0), avg >= vec3<f32>(1.0));
+}
+#endif

@@ -174,7 +174,8 @@ struct Params {
     orthographic: u32,
     // FILTER_*: the pixel filter a sample's position in the pixel follows
     pixel_filter: u32,
-    pad1: u32,
+    // the first tables entry of the microfacet albedo tables (energy compensation)
+    ms_tables: u32,
     // the filter's radius (pixels), a Gaussian's standard deviation, its value at the
     // radius (subtracted) and its 1D integral over [-radius, radius]
     filter_shape: vec4<f32>,

@@ -7,6 +7,7 @@ use glam::Vec3;
 use super::bindings::Bindings;
 use super::sampling::{erf_approx, erfinv_approx, onb_tangents, sample_cosine_hemisphere, PI};
 use super::types::{Hit, Ray};
+use crate::scene::records::MS_TABLE_SIZE;
 
 pub use crate::scene::records::ALPHA_SMOOTH;
 
@@ -407,4 +408,101 @@ pub fn tangent_frame(n: Vec3, tangent: Vec3) -> [Vec3; 2] {
         return [tu, n.cross(tu)];
     }
     onb_tangents(n)
+}
+
+// ------------------------------------------- multiple-scattering energy compensation
+
+/// Float i of the albedo tables (`scene::microfacet_albedo`, which the GPU reads from
+/// `tables` at `Params::ms_tables`).
+pub fn ms_float(i: u32) -> f32 {
+    crate::scene::microfacet_albedo::tables()[i as usize]
+}
+
+/// The first float of a variant's table t (0: E1, 1: E5).
+pub fn ms_offset(variant: u32, t: u32) -> u32 {
+    let block = MS_TABLE_SIZE * MS_TABLE_SIZE + MS_TABLE_SIZE;
+    (2 * variant + t) * block
+}
+
+fn mix(a: f32, b: f32, t: f32) -> f32 {
+    a + (b - a) * t
+}
+
+/// The isotropic alpha whose tables stand for an anisotropic lobe's: the mean of the two.
+pub fn ms_alpha(alpha_u: f32, alpha_v: f32) -> f32 {
+    0.5 * (alpha_u + alpha_v)
+}
+
+/// A table's albedo at cosine c and alpha, bilinear in sqrt(c) and sqrt(alpha).
+pub fn ms_albedo(offset: u32, c: f32, alpha: f32) -> f32 {
+    let last = (MS_TABLE_SIZE - 1) as f32;
+    let x = c.clamp(0.0, 1.0).sqrt() * last;
+    let y = alpha.clamp(0.0, 1.0).sqrt() * last;
+    let x0 = (x as u32).min(MS_TABLE_SIZE - 2);
+    let y0 = (y as u32).min(MS_TABLE_SIZE - 2);
+    let i = offset + y0 * MS_TABLE_SIZE + x0;
+    let j = i + MS_TABLE_SIZE;
+    let fx = x - x0 as f32;
+    mix(
+        mix(ms_float(i), ms_float(i + 1), fx),
+        mix(ms_float(j), ms_float(j + 1), fx),
+        y - y0 as f32,
+    )
+}
+
+/// A table's average 2 int E(mu) mu dmu at alpha.
+pub fn ms_average(offset: u32, alpha: f32) -> f32 {
+    let last = (MS_TABLE_SIZE - 1) as f32;
+    let y = alpha.clamp(0.0, 1.0).sqrt() * last;
+    let y0 = (y as u32).min(MS_TABLE_SIZE - 2);
+    let i = offset + MS_TABLE_SIZE * MS_TABLE_SIZE + y0;
+    mix(ms_float(i), ms_float(i + 1), y - y0 as f32)
+}
+
+/// F_ms = F_avg^2 E_avg / (1 - F_avg (1 - E_avg)).
+pub fn ms_fresnel(f_avg: Vec3, e_avg: f32) -> Vec3 {
+    f_avg * f_avg * e_avg / (Vec3::ONE - f_avg * (1.0 - e_avg))
+}
+
+/// The compensation lobe x cos_i.
+pub fn ms_lobe(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f_avg: Vec3) -> Vec3 {
+    let o = ms_offset(variant, 0);
+    let e_avg = ms_average(o, alpha);
+    if cos_o <= 0.0 || cos_i <= 0.0 || e_avg >= 1.0 {
+        return Vec3::ZERO;
+    }
+    let k = (1.0 - ms_albedo(o, cos_o, alpha)) * (1.0 - ms_albedo(o, cos_i, alpha))
+        / (PI * (1.0 - e_avg));
+    ms_fresnel(f_avg, e_avg) * (k * cos_i)
+}
+
+/// 1 - E1(cos_o), at most 0.9: the probability of sampling the compensation lobe.
+pub fn ms_loss(variant: u32, alpha: f32, cos_o: f32) -> f32 {
+    (1.0 - ms_albedo(ms_offset(variant, 0), cos_o, alpha)).clamp(0.0, 0.9)
+}
+
+/// The albedo at c of a compensated Schlick lobe from f0 to f90.
+pub fn ms_schlick_albedo(variant: u32, alpha: f32, c: f32, f0: Vec3, f90: Vec3) -> Vec3 {
+    let o1 = ms_offset(variant, 0);
+    let o5 = ms_offset(variant, 1);
+    let e1 = ms_albedo(o1, c, alpha);
+    let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, ms_average(o1, alpha));
+    f0 * e1 + (f90 - f0) * ms_albedo(o5, c, alpha) + f_ms * (1.0 - e1)
+}
+
+/// `ms_schlick_albedo` averaged over cosines.
+pub fn ms_schlick_average(variant: u32, alpha: f32, f0: Vec3, f90: Vec3) -> Vec3 {
+    let o1 = ms_offset(variant, 0);
+    let e1 = ms_average(o1, alpha);
+    let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, e1);
+    f0 * e1 + (f90 - f0) * ms_average(ms_offset(variant, 1), alpha) + f_ms * (1.0 - e1)
+}
+
+/// The share of a layer under a compensated Schlick lobe (albedo scaling).
+pub fn ms_under(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f0: Vec3, f90: Vec3) -> Vec3 {
+    let avg = ms_schlick_average(variant, alpha, f0, f90);
+    let o = Vec3::ONE - ms_schlick_albedo(variant, alpha, cos_o, f0, f90);
+    let i = Vec3::ONE - ms_schlick_albedo(variant, alpha, cos_i, f0, f90);
+    let v = o * i / (Vec3::ONE - avg);
+    Vec3::select(avg.cmpge(Vec3::ONE), Vec3::ZERO, v)
 }

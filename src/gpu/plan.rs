@@ -108,6 +108,8 @@ pub enum Feature {
     Bump,
     /// `mesh_attribute` textures: the hit's colour as a texture.
     MeshAttribute,
+    /// Energy compensation of microfacet lobes (`MAT_FLAG_ENERGY`): the albedo tables.
+    EnergyCompensation,
 }
 
 /// The features before the materials' in define order.
@@ -124,7 +126,7 @@ const GEOMETRY: [Feature; 9] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 31] = [
+const SHADING: [Feature; 32] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -156,6 +158,7 @@ const SHADING: [Feature; 31] = [
     Feature::OneSided,
     Feature::Bump,
     Feature::MeshAttribute,
+    Feature::EnergyCompensation,
 ];
 
 impl Feature {
@@ -211,6 +214,7 @@ impl Feature {
             Feature::OneSided => "HAS_ONE_SIDED",
             Feature::Bump => "HAS_BUMP",
             Feature::MeshAttribute => "HAS_MESH_ATTRIBUTE",
+            Feature::EnergyCompensation => "HAS_ENERGY_COMPENSATION",
         }
     }
 
@@ -221,10 +225,11 @@ impl Feature {
             .to_ascii_lowercase()
     }
 
-    /// Its bit in a [`FeatureSet`]: the others' order, the materials' from 32 on by tag.
+    /// Its bit in a [`FeatureSet`]: the others' order, the materials' from
+    /// `MATERIAL_BITS` on by tag.
     fn bit(self) -> u32 {
         match self {
-            Feature::Material(kind) => 40 + kind.tag(),
+            Feature::Material(kind) => MATERIAL_BITS + kind.tag(),
             f => GEOMETRY
                 .iter()
                 .chain(&SHADING)
@@ -233,6 +238,13 @@ impl Feature {
         }
     }
 }
+
+/// The first bit of the materials in a [`FeatureSet`], after every other feature's.
+const MATERIAL_BITS: u32 = 48;
+
+// the other features' bits stay under the materials', and the materials' in a u64
+const _: () = assert!(GEOMETRY.len() + SHADING.len() <= MATERIAL_BITS as usize);
+const _: () = assert!(MATERIAL_BITS as usize + MaterialKind::ALL.len() <= 64);
 
 /// A set of [`Feature`]s.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -385,6 +397,13 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .any(|m| m.flags & r::MAT_FLAG_BUMP != 0),
         )
         .with(Feature::MeshAttribute, texture(r::TEX_MESH_ATTRIBUTE))
+        .with(
+            Feature::EnergyCompensation,
+            scene
+                .materials
+                .iter()
+                .any(|m| m.flags & r::MAT_FLAG_ENERGY != 0),
+        )
         .with(Feature::Clearcoat, clearcoat)
         .with(Feature::Sheen, sheen)
         .with(Feature::PbrLayers, clearcoat || sheen)
@@ -471,10 +490,10 @@ impl ShaderSpec {
     /// every glass hit; shading normals a second eval and pdf to every light sample;
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
     /// compile of the full shader took minutes longer). The materials added after pbr
-    /// (conductor, thin_dielectric, plastic, blend), the pixel filters, projectors, opacity
-    /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps and mesh attributes too: the full shader of every other
+    /// (conductor, thin_dielectric, plastic, blend, principled), the pixel filters, projectors, opacity
+    /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps, mesh attributes and energy compensation too: the full shader of every other
     /// scene stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 22] = [
+    pub const OPTIONAL_IN_FULL: [Feature; 24] = [
         Feature::Aovs,
         Feature::Alpha,
         Feature::NormalMap,
@@ -489,6 +508,7 @@ impl ShaderSpec {
         Feature::Material(MaterialKind::ThinDielectric),
         Feature::Material(MaterialKind::Plastic),
         Feature::Material(MaterialKind::Blend),
+        Feature::Material(MaterialKind::Principled),
         Feature::Beckmann,
         Feature::PixelFilter,
         Feature::Projector,
@@ -497,6 +517,7 @@ impl ShaderSpec {
         Feature::OneSided,
         Feature::Bump,
         Feature::MeshAttribute,
+        Feature::EnergyCompensation,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):
@@ -608,14 +629,24 @@ impl ShaderSpec {
                         && f(Feature::ImageTexture)
                 }
                 // the tables by noise look-ups, by the background's distribution when
-                // lights are sampled, by pbr's sheen (its albedo table) and by plastics
-                // (a rough coating's transmittance)
+                // lights are sampled, by pbr's sheen (its albedo table), by plastics
+                // (a rough coating's transmittance) and by the materials that energy
+                // compensation applies to (the microfacet albedo tables)
                 Slot::Tables => {
                     let env = f(Feature::EnvMap);
                     (f(Feature::Textures) || env) && f(Feature::NoiseTexture)
                         || env && (f(Feature::Mis) || f(Feature::Mixture))
                         || f(Feature::Sheen) && f(Feature::Material(MaterialKind::Pbr))
                         || f(Feature::Material(MaterialKind::Plastic))
+                        || f(Feature::EnergyCompensation)
+                            && [
+                                MaterialKind::Conductor,
+                                MaterialKind::Microfacet,
+                                MaterialKind::Pbr,
+                                MaterialKind::Principled,
+                            ]
+                            .iter()
+                            .any(|&k| f(Feature::Material(k)))
                 }
             })
             .collect()

@@ -83,6 +83,8 @@ pub struct FlatScene {
     /// The Perlin tables (at `Texture::offset`) and the image background's sampling
     /// distribution (at `EnvironmentMap::cdf`), four f32 scalars to an entry.
     pub tables: Vec<[f32; 4]>,
+    /// The first `tables` entry of the microfacet albedo tables (0 without any).
+    pub ms_tables: u32,
     /// Whether renders accumulate the AOVs (albedo, normal, depth, position; `crate::aov`)
     /// beside the colour. Not part of the scene file: a render asks for them.
     pub aovs: bool,
@@ -171,6 +173,7 @@ impl FlatScene {
             rr_depth: self.rr_depth,
             orthographic: c.orthographic as u32,
             pixel_filter: self.filter.kind.record(),
+            ms_tables: self.ms_tables,
             filter_shape: self.filter.shape(),
             ..Default::default()
         }

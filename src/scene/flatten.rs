@@ -14,6 +14,7 @@ use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
 use super::materials::{blend, mark_own_colors, pbr, plastic, MaterialDesc, MaterialKind};
 use super::mesh::MeshData;
+use super::microfacet_albedo;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
 use super::textures::{texture_records, ImageData, TextureData};
@@ -568,6 +569,23 @@ pub fn flatten(
             pbr::point_at_sheen_table(m, offset);
         }
     }
+    // energy compensation: [render]'s choice for the materials without their own, and
+    // the microfacet albedo tables once for all
+    for (m, (_, desc)) in materials.iter_mut().zip(&material_list) {
+        if desc.compensated(file.render.energy_compensation) {
+            m.flags |= records::MAT_FLAG_ENERGY;
+        }
+    }
+    let ms_tables = if materials
+        .iter()
+        .any(|m| m.flags & records::MAT_FLAG_ENERGY != 0)
+    {
+        let offset = tables.len() as u32;
+        tables.extend(microfacet_albedo::table_entries());
+        offset
+    } else {
+        0
+    };
     // each rough plastic's transmittance table
     for m in materials
         .iter_mut()
@@ -666,6 +684,7 @@ pub fn flatten(
         textures,
         texels,
         tables,
+        ms_tables,
     })
 }
 

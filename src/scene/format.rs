@@ -50,6 +50,9 @@ pub struct RenderDesc {
     pub filter_radius: Option<f32>,
     /// The Gaussian's standard deviation in pixels (default 0.5, Mitsuba's and pbrt's).
     pub filter_stddev: Option<f32>,
+    /// Compensate every microfacet lobe for the energy it loses to multiple scattering
+    /// (Kulla and Conty), but where a material's own `energy_compensation` says otherwise.
+    pub energy_compensation: bool,
 }
 
 /// `[render] filter` (and `--filter`): how a pixel weighs the image plane around it. Each
@@ -227,6 +230,7 @@ impl Default for RenderDesc {
             filter: FilterKind::default(),
             filter_radius: None,
             filter_stddev: None,
+            energy_compensation: false,
         }
     }
 }

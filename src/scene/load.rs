@@ -40,6 +40,8 @@ pub struct Overrides {
     pub background: Option<[f32; 3]>,
     /// A glTF file's camera by its name or its node's (default: the first).
     pub camera: Option<String>,
+    /// Energy compensation of every microfacet lobe (`[render] energy_compensation`).
+    pub energy_compensation: bool,
 }
 
 /// Whether `path` names a glTF file (`.gltf`, `.glb`, any case).
@@ -460,6 +462,7 @@ fn apply_overrides(file: &mut SceneFile, o: &Overrides) -> Vec<&'static str> {
     r.sampler = o.sampler.unwrap_or(r.sampler);
     r.light_sampling = o.light_sampling.unwrap_or(r.light_sampling);
     r.filter = o.filter.unwrap_or(r.filter);
+    r.energy_compensation |= o.energy_compensation;
     if let Some(c) = o.background {
         file.background = BackgroundDesc {
             color: Some(c),

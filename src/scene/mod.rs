@@ -17,6 +17,7 @@ pub mod load;
 pub mod materials;
 pub mod mesh;
 pub mod metals;
+pub mod microfacet_albedo;
 pub mod mtl;
 pub mod records;
 pub mod shapes;

@@ -130,6 +130,9 @@ shared_constants! {
     /// Material flag: it reads a mesh's colours through a `mesh_attribute` texture, so
     /// `material_at` does not also multiply its colour by them.
     MAT_FLAG_OWN_COLORS: u32 = 2048;
+    /// Material flag: its microfacet lobes are compensated for the energy they lose to
+    /// multiple scattering (`energy_compensation`; the tables at `Params::ms_tables`).
+    MAT_FLAG_ENERGY: u32 = 4096;
     /// The tag `material_at` gives the back of a one-sided surface: no type has it, so
     /// the dispatch's default absorbs, with no BSDF and no density.
     MAT_BLACK: u32 = u32::MAX;
@@ -254,6 +257,15 @@ shared_constants! {
     /// Cosines of a rough plastic's transmittance table (`plastic::transmittance_table`),
     /// from 0 to 1.
     PLASTIC_TABLE_SIZE: u32 = 64;
+    /// Roughnesses and cosines of the microfacet albedo tables
+    /// (`scene::microfacet_albedo`), each from 0 to 1.
+    MS_TABLE_SIZE: u32 = 32;
+    /// The microfacet albedo tables' variants (`microfacet_albedo::Variant`): GGX with
+    /// Smith's height-correlated masking, GGX with the separable one, Beckmann with the
+    /// separable one.
+    MS_GGX_CORRELATED: u32 = 0;
+    MS_GGX_SEPARABLE: u32 = 1;
+    MS_BECKMANN_SEPARABLE: u32 = 2;
     /// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
     /// (v0, v1, v2, 0).
     ATTRIBUTE_ENTRIES: u32 = 4;
@@ -523,7 +535,9 @@ pub struct Params {
     pub orthographic: u32,
     /// `FILTER_*`: the pixel filter a sample's position in the pixel follows.
     pub pixel_filter: u32,
-    pub pad1: u32,
+    /// The first `tables` entry of the microfacet albedo tables that energy compensation
+    /// reads (`scene::microfacet_albedo`); 0 without any.
+    pub ms_tables: u32,
     /// The filter's radius in pixels, a Gaussian's standard deviation, its value at the
     /// radius (subtracted, so it falls to 0 there) and its integral over [-radius, radius]
     /// (1D, after the subtraction); zeros for the box.
@@ -860,7 +874,7 @@ shared_record!(Params {
     num_punctual,
     orthographic,
     pixel_filter,
-    pad1,
+    ms_tables,
     filter_shape
 });
 shared_record!(KernelRay { origin, dir });

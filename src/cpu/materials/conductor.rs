@@ -4,10 +4,13 @@ use glam::Vec3;
 
 use crate::cpu::bsdf::{
     density_sample, fresnel_conductor, mf_d, mf_g1, mf_pdf_visible, mf_sample_visible,
-    mirror_scatter, tangent_frame, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    mirror_scatter, ms_alpha, ms_lobe, ms_loss, tangent_frame, Microfacet, Scatter, Shading,
+    ABSORBED, ALPHA_SMOOTH,
 };
+use crate::cpu::sampling::{sample_cosine_hemisphere, PI};
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::conductor::Params;
+use crate::scene::records::{MAT_FLAG_ENERGY, MS_BECKMANN_SEPARABLE, MS_GGX_SEPARABLE};
 
 /// Its microfacet distribution.
 pub fn microfacet(p: &Params) -> Microfacet {
@@ -16,6 +19,33 @@ pub fn microfacet(p: &Params) -> Microfacet {
         alpha_v: p.alpha_v,
         beckmann: p.beckmann > 0.5,
     }
+}
+
+/// The table variant of its compensation.
+fn variant(p: &Params) -> u32 {
+    if p.beckmann > 0.5 {
+        MS_BECKMANN_SEPARABLE
+    } else {
+        MS_GGX_SEPARABLE
+    }
+}
+
+/// The probability of sampling the energy compensation's lobe (0 without it).
+pub fn ms_prob(p: &Params, cos_o: f32) -> f32 {
+    if p.flags & MAT_FLAG_ENERGY != 0 {
+        ms_loss(variant(p), ms_alpha(p.alpha_u, p.alpha_v), cos_o)
+    } else {
+        0.0
+    }
+}
+
+/// The compensation lobe x cos_i (0 without it).
+pub fn ms(p: &Params, cos_o: f32, cos_i: f32) -> Vec3 {
+    if p.flags & MAT_FLAG_ENERGY == 0 {
+        return Vec3::ZERO;
+    }
+    let alpha = ms_alpha(p.alpha_u, p.alpha_v);
+    ms_lobe(variant(p), alpha, cos_o, cos_i, p.specular * p.fresnel_avg)
 }
 
 /// wo and wi in the frame of the tangent about n, and their half vector.
@@ -41,6 +71,7 @@ impl Shading for Params {
         self.specular
             * fresnel_conductor(lo.dot(h), self.eta, self.k)
             * (mf_d(&m, h) * g / (4.0 * cos_o))
+            + ms(self, cos_o, cos_i)
     }
 
     /// D(h) G1(wo) / (4 cos_o).
@@ -53,7 +84,9 @@ impl Shading for Params {
         let m = microfacet(self);
         let (lo, li) = local(self, n, wo, wi);
         let h = (lo + li).normalize();
-        mf_pdf_visible(&m, lo, h) / (4.0 * lo.dot(h))
+        let pdf = mf_pdf_visible(&m, lo, h) / (4.0 * lo.dot(h));
+        let p_ms = ms_prob(self, cos_o);
+        (1.0 - p_ms) * pdf + p_ms * cos_i / PI
     }
 
     /// The mirror direction when smooth, else the mirror about a visible normal.
@@ -71,7 +104,13 @@ impl Shading for Params {
         }
         let tb = tangent_frame(n, self.tangent);
         let lo = Vec3::new(wo.dot(tb[0]), wo.dot(tb[1]), cos_o);
-        let h_l = mf_sample_visible(&microfacet(self), lo, u);
+        // the compensation's cosine lobe with ms_prob, u.x reused
+        let p_ms = ms_prob(self, cos_o);
+        if u[0] < p_ms {
+            let wc = sample_cosine_hemisphere(n, [u[0] / p_ms, u[1]]);
+            return density_sample(wc, self.eval(n, wo, wc), self.pdf(n, wo, wc), side, hit);
+        }
+        let h_l = mf_sample_visible(&microfacet(self), lo, [(u[0] - p_ms) / (1.0 - p_ms), u[1]]);
         let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
         let wi = (2.0 * wo.dot(h) * h - wo).normalize();
         density_sample(wi, self.eval(n, wo, wi), self.pdf(n, wo, wi), side, hit)

@@ -3,18 +3,24 @@
 use glam::Vec3;
 
 use crate::cpu::bsdf::{
-    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, over_surface, reflect_dir,
-    sample_ggx_lobes, schlick, smith_g2, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, ms_lobe, ms_loss, ms_under,
+    over_surface, reflect_dir, sample_ggx_lobes, schlick, smith_g2, Scatter, Shading, ABSORBED,
+    ALPHA_SMOOTH,
 };
 use crate::cpu::sampling::PI;
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::microfacet::Params;
+use crate::scene::records::{MAT_FLAG_ENERGY, MS_GGX_CORRELATED};
 
 /// Probability of sampling the specular lobe: its share by Fresnel at the view angle and
 /// the lobes' colours (depends on wo only, so the mixture's pdf is exact).
 pub fn spec_prob(p: &Params, cos_o: f32) -> f32 {
     let f = schlick(cos_o, p.ior);
-    lobe_prob(luminance(p.specular) * f, luminance(p.diffuse) * (1.0 - f))
+    let mut wd = luminance(p.diffuse) * (1.0 - f);
+    if p.flags & MAT_FLAG_ENERGY != 0 && p.alpha >= ALPHA_SMOOTH {
+        wd += luminance(p.specular) * ms_loss(MS_GGX_CORRELATED, p.alpha, cos_o);
+    }
+    lobe_prob(luminance(p.specular) * f, wd)
 }
 
 impl Shading for Params {
@@ -35,6 +41,19 @@ impl Shading for Params {
         let h = (wo + wi).normalize();
         let spec = ggx_d(n.dot(h), alpha) * smith_g2(cos_o, cos_i, alpha) * schlick(wi.dot(h), ior)
             / (4.0 * cos_o);
+        if self.flags & MAT_FLAG_ENERGY != 0 {
+            let r = (1.0 - ior) / (1.0 + ior);
+            let f0 = self.specular * (r * r);
+            let under = ms_under(MS_GGX_CORRELATED, alpha, cos_o, cos_i, f0, self.specular);
+            let ms = ms_lobe(
+                MS_GGX_CORRELATED,
+                alpha,
+                cos_o,
+                cos_i,
+                f0 + (self.specular - f0) / 21.0,
+            );
+            return self.specular * spec + ms + self.diffuse * under * (cos_i / PI);
+        }
         self.specular * spec + self.diffuse * diff
     }
 

@@ -13,6 +13,7 @@ pub mod metal;
 pub mod microfacet;
 pub mod pbr;
 pub mod plastic;
+pub mod principled;
 pub mod thin_dielectric;
 
 use glam::Vec3;

@@ -4,14 +4,16 @@ use glam::Vec3;
 
 use crate::cpu::bindings::Bindings;
 use crate::cpu::bsdf::{
-    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, sample_ggx_lobes, smith_g2,
-    Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, ms_lobe, ms_loss, ms_under,
+    sample_ggx_lobes, smith_g2, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
 use crate::cpu::sampling::{sample_cosine_hemisphere, PI};
 use crate::cpu::textures::{map_normal, texture_alpha, texture_at};
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::pbr::{sheen_albedo_table, Params};
-use crate::scene::records::{NO_TEXTURE, SHEEN_ALPHA_MIN, SHEEN_TABLE_SIZE};
+use crate::scene::records::{
+    MAT_FLAG_ENERGY, MS_GGX_CORRELATED, NO_TEXTURE, SHEEN_ALPHA_MIN, SHEEN_TABLE_SIZE,
+};
 
 /// Fresnel-Schlick of the dielectric layer at cos c: F0 = min(((ior - 1) / (ior + 1))^2
 /// specular colour, 1) specular, F90 = specular.
@@ -41,11 +43,22 @@ pub fn base_eval(p: &Params, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
     let h = (wo + wi).normalize();
     let vh = wo.dot(h);
     let spec = ggx_d(n.dot(h), alpha) * smith_g2(cos_o, cos_i, alpha) / (4.0 * cos_o);
-    let through =
+    let mut through =
         (Vec3::ONE - dielectric_fresnel(p, cos_i)) * (Vec3::ONE - dielectric_fresnel(p, cos_o));
-    let dielectric = through * p.base_color * (cos_i / PI) + dielectric_fresnel(p, vh) * spec;
     let metallic = p.metallic;
-    dielectric * (1.0 - metallic) + metal_fresnel(p, vh) * spec * metallic
+    let mut ms = Vec3::ZERO;
+    // compensated: both lobes' multiple scattering, and the base under what the
+    // compensated dielectric lobe reflects
+    if p.flags & MAT_FLAG_ENERGY != 0 {
+        let f0 = dielectric_fresnel(p, 1.0);
+        let f90 = Vec3::splat(p.specular);
+        through = ms_under(MS_GGX_CORRELATED, alpha, cos_o, cos_i, f0, f90);
+        let f_avg = (f0 + (f90 - f0) / 21.0)
+            .lerp(p.base_color + (Vec3::ONE - p.base_color) / 21.0, metallic);
+        ms = ms_lobe(MS_GGX_CORRELATED, alpha, cos_o, cos_i, f_avg);
+    }
+    let dielectric = through * p.base_color * (cos_i / PI) + dielectric_fresnel(p, vh) * spec;
+    dielectric * (1.0 - metallic) + metal_fresnel(p, vh) * spec * metallic + ms
 }
 
 /// The Charlie sheen distribution at cos(theta_h) = c (pbr.wgsl's `charlie_d`).
@@ -189,7 +202,11 @@ pub fn spec_prob(p: &Params, cos_o: f32) -> f32 {
     let fd = dielectric_fresnel(p, cos_o);
     let metallic = p.metallic;
     let ws = luminance(fd * (1.0 - metallic) + metal_fresnel(p, cos_o) * metallic);
-    let wd = (1.0 - p.metallic) * luminance((Vec3::ONE - fd) * p.base_color);
+    let mut wd = (1.0 - p.metallic) * luminance((Vec3::ONE - fd) * p.base_color);
+    // the cosine lobe samples the compensation's lobe too
+    if p.flags & MAT_FLAG_ENERGY != 0 {
+        wd += ms_loss(MS_GGX_CORRELATED, p.alpha, cos_o);
+    }
     lobe_prob(ws, wd)
 }
 

@@ -210,6 +210,11 @@ impl<'a> Check<'a> {
     }
 
     /// The name of a texture that exists.
+    /// The record index texture `name` will have, if it is defined.
+    pub fn texture_position(&self, name: &str) -> Option<usize> {
+        self.textures.iter().position(|n| n == name)
+    }
+
     pub fn texture(&mut self, field: &str, name: &str) {
         if !self.textures.iter().any(|n| n == name) {
             let known = if self.textures.is_empty() {
@@ -283,6 +288,11 @@ pub trait Model {
     /// Whether its back side is black (`one_sided`), for the types that only reflect.
     fn one_sided(&self) -> bool {
         false
+    }
+    /// For a type with microfacet lobes that energy compensation applies to, its own
+    /// `energy_compensation` key (None: as `[render]` says); None for the other types.
+    fn energy_compensation(&self) -> Option<Option<bool>> {
+        None
     }
 }
 

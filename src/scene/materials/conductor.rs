@@ -4,7 +4,9 @@
 //! `eta` and `k` given), tinted by `specular`; a mirror below `ALPHA_SMOOTH`, else GGX
 //! or Beckmann microfacets (`distribution`) of alpha = `roughness`^2 (or `roughness_u`
 //! along the tangent and `roughness_v` along the bitangent), sampled by their visible normals,
-//! with Smith's separable masking-shadowing G1(wo) G1(wi). Shading:
+//! with Smith's separable masking-shadowing G1(wo) G1(wi); with `energy_compensation`,
+//! Kulla and Conty's lobe for what the microfacets scatter more than once
+//! (`scene::microfacet_albedo`), coloured by the Fresnel's average. Shading:
 //! `shaders/materials/conductor.wgsl`, CPU twin `cpu/materials/conductor.rs`.
 
 use serde::Deserialize;
@@ -14,6 +16,7 @@ use super::common::{
     Roughness, TextureNames,
 };
 use crate::scene::metals::{metal, METALS};
+use crate::scene::microfacet_albedo;
 use crate::scene::records::{Material, MAT_FLAG_ANISOTROPIC};
 
 /// Its entry in the scene format.
@@ -52,6 +55,9 @@ pub struct Desc {
     /// reflects as the front does.
     #[serde(default)]
     pub one_sided: bool,
+    /// Give the rough lobe back the energy it loses to multiple scattering (Kulla and
+    /// Conty); default: `[render] energy_compensation`.
+    pub energy_compensation: Option<bool>,
 }
 
 material_view! {
@@ -71,6 +77,11 @@ material_view! {
         /// The hit's tangent, which `material_at` writes for an anisotropic one
         /// (`MAT_FLAG_ANISOTROPIC`); zero elsewhere (the normal's own frame).
         tangent: rgb = normal2,
+        /// The Fresnel reflectance's average over the hemisphere, 2 int F(mu) mu dmu,
+        /// per channel (the colour of the energy compensation).
+        fresnel_avg: rgb = scalars2,
+        /// The record's flags (`MAT_FLAG_ENERGY`: compensated).
+        flags: u32 = flags,
     }
 }
 
@@ -166,6 +177,10 @@ impl Model for Desc {
         !self.roughness().smooth() && self.roughness().anisotropic()
     }
 
+    fn energy_compensation(&self) -> Option<Option<bool>> {
+        Some(self.energy_compensation)
+    }
+
     fn pack(&self, t: &TextureNames, record: &mut Material) {
         let (specular, specular_texture) = t.color(&self.specular);
         let (eta, k) = self.index();
@@ -179,6 +194,8 @@ impl Model for Desc {
             alpha_v,
             beckmann: self.distribution.code(),
             tangent: glam::Vec3::ZERO,
+            fresnel_avg: microfacet_albedo::conductor_average(eta, k).into(),
+            flags: record.flags,
         }
         .write(record);
         if self.anisotropic() {

@@ -37,6 +37,10 @@ pub struct Desc {
     /// reflects as the front does.
     #[serde(default)]
     pub one_sided: bool,
+    /// Give the GGX lobe back the energy it loses to multiple scattering, and the base
+    /// what the compensated lobe leaves (Kulla and Conty); default: `[render]
+    /// energy_compensation`.
+    pub energy_compensation: Option<bool>,
 }
 
 material_view! {
@@ -52,6 +56,8 @@ material_view! {
         /// `MAT_FLAG_COLOR2_CLAMPED`).
         specular: rgb = color2,
         specular_texture: u32 = tex_color2,
+        /// The record's flags (`MAT_FLAG_ENERGY`: compensated).
+        flags: u32 = flags,
     }
 }
 
@@ -90,6 +96,10 @@ impl Model for Desc {
         self.one_sided
     }
 
+    fn energy_compensation(&self) -> Option<Option<bool>> {
+        Some(self.energy_compensation)
+    }
+
     fn lobes(&self) -> Lobes {
         Lobes {
             density: true,
@@ -108,6 +118,7 @@ impl Model for Desc {
             ior: self.ior,
             specular,
             specular_texture,
+            flags: record.flags,
         }
         .write(record);
         // the specular colour is a reflectance: a texture may not push it past 1

@@ -21,12 +21,13 @@ pub mod metal;
 pub mod microfacet;
 pub mod pbr;
 pub mod plastic;
+pub mod principled;
 pub mod thin_dielectric;
 
 use serde::Deserialize;
 
 use crate::scene::records::{
-    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_BUMP, MAT_FLAG_DELTA, MAT_FLAG_NEE,
+    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_BUMP, MAT_FLAG_DELTA, MAT_FLAG_ENERGY, MAT_FLAG_NEE,
     MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_TRANSMITS,
     MAT_FLAG_TWO_SIDED,
 };
@@ -59,6 +60,8 @@ macro_rules! for_each_material {
             Plastic = 8, plastic, "HAS_PLASTIC";
             /// Two materials mixed by a weight.
             Blend = 9, blend, "HAS_BLEND";
+            /// The Disney principled BSDF, as Mitsuba 3 defines it.
+            Principled = 10, principled, "HAS_PRINCIPLED";
         }
     };
 }
@@ -184,6 +187,16 @@ impl MaterialDesc {
         c.problems()
     }
 
+    /// Whether its microfacet lobes are compensated for multiple scattering: its own
+    /// `energy_compensation` key, else `render_default` (`[render]
+    /// energy_compensation`); never for a type without such lobes.
+    pub fn compensated(&self, render_default: bool) -> bool {
+        match self.model().energy_compensation() {
+            Some(own) => own.unwrap_or(render_default),
+            None => false,
+        }
+    }
+
     /// Whether it emits light: a texture or a colour above 0 (a record's `emits`).
     pub fn emits(&self) -> bool {
         self.model().emission().0.is_bright()
@@ -213,6 +226,7 @@ impl MaterialDesc {
         };
         let flag = |on: bool, f: u32| if on { f } else { 0 };
         record.flags = flag(two_sided, MAT_FLAG_TWO_SIDED)
+            | flag(self.compensated(false), MAT_FLAG_ENERGY)
             | flag(model.one_sided(), MAT_FLAG_ONE_SIDED)
             | flag(lobes.density, MAT_FLAG_NEE)
             | flag(lobes.delta, MAT_FLAG_DELTA)
@@ -262,7 +276,12 @@ pub fn mark_own_colors(m: &mut Material, is_attribute: impl Fn(u32) -> bool) {
         m.tex_data5,
     ];
     let opacity = m.flags & MAT_FLAG_OPACITY_TEXTURE != 0 && is_attribute(m.tex_opacity);
-    if opacity || places.into_iter().any(is_attribute) {
+    // a principled material packs two scalars' textures a word
+    let scalars = m.tag == MaterialKind::Principled.tag()
+        && principled::scalar_textures(m)
+            .into_iter()
+            .any(&is_attribute);
+    if opacity || scalars || places.into_iter().any(&is_attribute) {
         m.flags |= MAT_FLAG_OWN_COLORS;
     }
 }

@@ -98,6 +98,11 @@ pub struct Desc {
     /// A texture whose alpha channel multiplies `sheen_roughness`.
     #[serde(default)]
     pub sheen_roughness_texture: Option<String>,
+    /// Give the GGX lobe back the energy it loses to multiple scattering, and the base
+    /// what the compensated lobe leaves (Kulla and Conty); default: `[render]
+    /// energy_compensation` (off, as glTF has none).
+    #[serde(default)]
+    pub energy_compensation: Option<bool>,
 }
 
 fn half() -> f32 {
@@ -142,6 +147,7 @@ impl Default for Desc {
             sheen_color: ColorDesc::default(),
             sheen_roughness: 0.0,
             sheen_roughness_texture: None,
+            energy_compensation: None,
         }
     }
 }
@@ -192,6 +198,8 @@ material_view! {
         sheen_roughness_texture: u32 = tex_data5,
         /// The first `tables` entry of the sheen's albedo table (`place_sheen_table`).
         sheen_table: u32 = table,
+        /// The record's flags (`MAT_FLAG_ENERGY`: compensated).
+        flags: u32 = flags,
     }
 }
 
@@ -386,6 +394,7 @@ impl Model for Desc {
             sheen_roughness_texture: t.optional(self.sheen_roughness_texture.as_deref()),
             // placed by place_sheen_table
             sheen_table: 0,
+            flags: record.flags,
         }
         .write(record);
         let mut surface = Surface::read(record);
@@ -405,6 +414,10 @@ impl Model for Desc {
         self.normal_map
             .as_deref()
             .or(self.clearcoat_normal_map.as_deref())
+    }
+
+    fn energy_compensation(&self) -> Option<Option<bool>> {
+        Some(self.energy_compensation)
     }
 }
 
