@@ -59,6 +59,12 @@ fn principled_fresnel(c: f32, e: f32) -> f32 {
     return select(fresnel_dielectric(c, sqrt(max(0.0, 1.0 - sin2_t)), eta), 1.0, sin2_t >= 1.0);
 }
 
+// base_color's hue: over its luminance (white where it is black).
+fn principled_tint(base: vec3<f32>) -> vec3<f32> {
+    let lum = luminance(base);
+    return select(vec3<f32>(1.0), base / lum, lum > 0.0);
+}
+
 // The main lobes' GGX: alpha = max(0.001, roughness^2), stretched by anisotropic.
 fn principled_microfacet(p: PrincipledParams) -> Microfacet {
     let r2 = p.roughness * p.roughness;
@@ -117,10 +123,8 @@ fn principled_ms_prob(p: PrincipledParams, outside: bool, cos_o: f32) -> f32 {
 // average: the dielectric's exact one, Schlick's of the metal and of the tint.
 fn principled_ms(p: PrincipledParams, cos_o: f32, cos_i: f32) -> vec3<f32> {
     let m = principled_microfacet(p);
-    let lum = luminance(p.base_color);
-    let tint = select(vec3<f32>(1.0), p.base_color / lum, lum > 0.0);
     let r = (p.eta - 1.0) / (p.eta + 1.0);
-    let r0 = tint * (r * r);
+    let r0 = principled_tint(p.base_color) * (r * r);
     let f_avg = vec3<f32>((1.0 - p.metallic) * (1.0 - p.spec_tint) * p.fresnel_avg)
         + p.metallic * (p.base_color + (vec3<f32>(1.0) - p.base_color) / 21.0)
         + (1.0 - p.metallic) * p.spec_tint * (r0 + (vec3<f32>(1.0) - r0) / 21.0);
@@ -174,8 +178,7 @@ fn principled_eval(p: PrincipledParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
     }
     var value = vec3<f32>(0.0);
     if (f > 0.0) {
-        let lum = luminance(p.base_color);
-        let tint = select(vec3<f32>(1.0), p.base_color / lum, lum > 0.0);
+        let tint = principled_tint(p.base_color);
         let r = (p.eta - 1.0) / (p.eta + 1.0);
         let fp = vec3<f32>((1.0 - p.metallic) * (1.0 - p.spec_tint) * f)
             + p.metallic * principled_schlick(p.base_color, oh, p.eta)
@@ -198,9 +201,7 @@ fn principled_eval(p: PrincipledParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
         let f_ss = 1.25 * (fss * (1.0 / (cos_o + cos_i) - 0.5) + 0.5);
         value += p.base_color * (brdf * cos_i / PI * mix(f_diff + f_retro, f_ss, p.flatness));
         if (p.sheen > 0.0) {
-            let lum = luminance(p.base_color);
-            let tint = select(vec3<f32>(1.0), p.base_color / lum, lum > 0.0);
-            let sheen = mix(vec3<f32>(1.0), tint, p.sheen_tint);
+            let sheen = mix(vec3<f32>(1.0), principled_tint(p.base_color), p.sheen_tint);
             value += sheen * (p.sheen * (1.0 - p.metallic) * principled_schlick_weight(ih) * cos_i);
         }
     }

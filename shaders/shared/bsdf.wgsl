@@ -432,9 +432,9 @@ fn ms_loss(variant: u32, alpha: f32, cos_o: f32) -> f32 {
     return clamp(1.0 - ms_albedo(ms_offset(variant, 0u), cos_o, alpha), 0.0, 0.9);
 }
 
-// The directional albedo at cos_o of a lobe of `variant` and alpha with Schlick's
+// The directional albedo at cosine c of a lobe of `variant` and alpha with Schlick's
 // Fresnel from f0 to f90, its compensation lobe included: f0 E1 + (f90 - f0) E5 + F_ms
-// (1 - E1); and (its .w) the same averaged over cosines, for the lobe's luminance.
+// (1 - E1).
 fn ms_schlick_albedo(variant: u32, alpha: f32, c: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
     let o1 = ms_offset(variant, 0u);
     let o5 = ms_offset(variant, 1u);

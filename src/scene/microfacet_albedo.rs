@@ -62,7 +62,7 @@ fn lambda(beckmann: bool, c: f64, alpha: f64) -> f64 {
     }
     if beckmann {
         let a = 1.0 / (alpha * tan2.sqrt());
-        let erf = libm_erf(a);
+        let erf = erf(a);
         (0.5 * (erf - 1.0) + (-a * a).exp() / (a * std::f64::consts::PI.sqrt() * 2.0)).max(0.0)
     } else {
         0.5 * ((1.0 + alpha * alpha * tan2).sqrt() - 1.0)
@@ -71,9 +71,9 @@ fn lambda(beckmann: bool, c: f64, alpha: f64) -> f64 {
 
 /// The error function (Abramowitz and Stegun 7.1.26 is too coarse for a table: this is
 /// its series and continued fraction, to 1e-14).
-fn libm_erf(x: f64) -> f64 {
+fn erf(x: f64) -> f64 {
     if x < 0.0 {
-        return -libm_erf(-x);
+        return -erf(-x);
     }
     if x < 3.0 {
         // the Maclaurin series

@@ -160,7 +160,8 @@ pub fn local(p: &Params, n: Vec3, wo: Vec3, wi: Vec3, e: f32) -> [Vec3; 3] {
     [lo, li, if h.z >= 0.0 { h } else { -h }]
 }
 
-fn tint(base: Vec3) -> Vec3 {
+/// base_color's hue: over its luminance (white where it is black).
+pub fn tint(base: Vec3) -> Vec3 {
     let lum = luminance(base);
     if lum > 0.0 {
         base / lum
