@@ -1804,32 +1804,46 @@ material = "lamp"
 }
 
 /// The issue's white glTF sphere (a white base under glTF's default specular, F90 = 1,
-/// roughness 1) in a white furnace, one bounce: without energy compensation it reads less
-/// than the background (its lobe loses what scatters between microfacets, most at the
-/// rim); with `--energy-compensation` (the override of `[render] energy_compensation`) it
-/// vanishes into the background within 4 standard errors and 0.5%, on both backends. A
-/// material's own `energy_compensation = false` keeps it off under the override.
+/// roughness 1), clear rough glass (GGX roughness 1, ior 1.5) and a white rough plastic
+/// (roughness 0.8), side by side in a white furnace: without energy compensation they
+/// read less than the background (their lobes lose what scatters between microfacets,
+/// most at the rim, and glass loses it at every crossing); with `--energy-compensation`
+/// (the override of `[render] energy_compensation`) they vanish into the background
+/// within 4 standard errors and 0.5%, on both backends. A material's own
+/// `energy_compensation = false` keeps it off under the override.
 #[test]
 fn energy_compensation_makes_a_white_sphere_vanish_in_a_white_furnace() {
     let src = r#"
 [render]
-width = 32
-height = 32
+width = 48
+height = 16
 spp = 64
-max_depth = 2
+max_depth = 64
 [camera]
-look_from = [0, 0, 2.4]
+look_from = [0, 0, 5]
 look_at = [0, 0, 0]
-vfov = 60
+vfov = 24
 [background]
 color = [1, 1, 1]
 [materials]
 white = { type = "pbr", base_color = [1, 1, 1], metallic = 0, roughness = 1 OWN }
+glass = { type = "dielectric", ior = 1.5, roughness = 1 OWN }
+plastic = { type = "plastic", albedo = [1, 1, 1], roughness = 0.8 OWN }
+[[objects]]
+type = "sphere"
+center = [-2.1, 0, 0]
+radius = 1
+material = "white"
 [[objects]]
 type = "sphere"
 center = [0, 0, 0]
 radius = 1
-material = "white"
+material = "glass"
+[[objects]]
+type = "sphere"
+center = [2.1, 0, 0]
+radius = 1
+material = "plastic"
 "#;
     let load = |own: &str, on: bool| {
         let o = Overrides {

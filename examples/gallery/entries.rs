@@ -135,7 +135,7 @@ pub const ENTRIES: &[Entry] = &[
     entry(
         "energy",
         "scenes/energy.toml",
-        "Energy compensation off and on: gold and a white glTF material, roughness 0.25 to 1",
+        "Energy compensation off and on: gold, a white glTF material, rough glass, a plastic; roughness 0.25 to 1",
     ),
     entry(
         "materials",

@@ -134,40 +134,117 @@ fn dielectric_rough_lobes(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: 
     return vec2<f32>(eta * eta * (1.0 - f) * d * g2 * jacobian / cos_o, (1.0 - p_r) * visible * jacobian);
 }
 
+// Rough glass's lobes x |cos(theta_i)| toward wi and the pdf of dielectric_rough_scatter's
+// directions: dielectric_rough_lobes, and with energy compensation its lobe
+// (dielectric_ms_lobes) beside them.
+fn dielectric_lobes(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec2<f32> {
+    let lobes = dielectric_rough_lobes(p, n, wo, wi, eta);
+#ifdef HAS_ENERGY_COMPENSATION
+    if (dielectric_compensated(p)) {
+        let ms = dielectric_ms_lobes(p, n, wo, wi, eta);
+        return vec2<f32>(lobes.x + ms.x, mix(lobes.y, ms.y, dielectric_ms_probs(p, dot(n, wo), eta).x));
+    }
+#endif
+    return lobes;
+}
+
+#ifdef HAS_ENERGY_COMPENSATION
+// Whether rough glass gives back what its microfacets lose to multiple scattering
+// (MAT_FLAG_ENERGY).
+fn dielectric_compensated(p: DielectricParams) -> bool {
+    return (p.flags & MAT_FLAG_ENERGY) != 0u;
+}
+
+// The dielectric tables' variant of rough glass (height-correlated masking).
+fn dielectric_ms_variant(p: DielectricParams) -> u32 {
+    return select(MS_DIELECTRIC_GGX_CORRELATED, MS_DIELECTRIC_BECKMANN_CORRELATED, p.beckmann > 0.5);
+}
+
+// (the probability of sampling the compensation seen at cos_o, what it transmits of it)
+// with eta = eta_o / eta_i: what the side loses, 1 - E(cos_o) (at most 0.9), and the
+// side's b (ms_dielectric_split).
+fn dielectric_ms_probs(p: DielectricParams, cos_o: f32, eta: f32) -> vec2<f32> {
+    let v = dielectric_ms_variant(p);
+    let ior = max(eta, 1.0 / eta);
+    let side = select(1u, 0u, eta < 1.0);
+    let alpha = ms_alpha(p.alpha, p.alpha_v);
+    let loss = clamp(1.0 - ms_dielectric_albedo(v, ior, side, cos_o, alpha), 0.0, 0.9);
+    let split = ms_dielectric_split(v, ior, alpha);
+    return vec2<f32>(loss, select(split.x, split.y, side == 1u));
+}
+
+// The compensation x |cos(theta_i)| for radiance (ms_dielectric_lobe, times eta^2 where
+// it transmits) and the density of its sampling: a cosine lobe on wo's side with 1 - b,
+// on the other with b.
+fn dielectric_ms_lobes(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> vec2<f32> {
+    let cos_o = dot(n, wo);
+    let cos_i = dot(n, wi);
+    let side = select(1u, 0u, eta < 1.0);
+    let f = ms_dielectric_lobe(dielectric_ms_variant(p), max(eta, 1.0 / eta), ms_alpha(p.alpha, p.alpha_v), side, cos_o, cos_i);
+    let b = dielectric_ms_probs(p, cos_o, eta).y;
+    let transmits = cos_i < 0.0;
+    return vec2<f32>(f * select(1.0, eta * eta, transmits), select(1.0 - b, b, transmits) * abs(cos_i) / PI);
+}
+#endif
+
 // Rough glass: a visible normal h seen from wo (Heitz 2018), then the mirror direction
 // about it (with probability dielectric_reflect_prob, u.x reused) or the refraction
-// through it (the mirror direction where h reflects totally); weight = BSDF x cos / pdf
-// (dielectric_rough_lobes) times the tint (and absorption) in `weight`. A direction on
-// the wrong side of the geometric surface is absorbed. Without absorption it has a
-// density, which next-event estimation weighs (dielectric_eval, dielectric_pdf);
-// absorbing rough glass is sampled as a delta (scene::materials::dielectric::has_density
-// says why).
-fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, weight: vec3<f32>, u: vec2<f32>) -> Scatter {
+// through it (the mirror direction where h reflects totally); with energy compensation,
+// first its lobe with dielectric_ms_probs (a cosine direction, mirrored through the
+// surface where it transmits). Weight = BSDF x cos / pdf (dielectric_lobes) times the
+// tint (and absorption) in `weight`. A direction on the wrong side of the geometric
+// surface is absorbed. Without absorption it has a density, which next-event estimation
+// weighs (dielectric_eval, dielectric_pdf); absorbing rough glass is sampled as a delta
+// (scene::materials::dielectric::has_density says why).
+fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, weight: vec3<f32>, u0: vec2<f32>) -> Scatter {
     let wo = -ray.dir;
     let cos_o = dot(n, wo);
     if (cos_o <= 0.0) {
         return absorbed();
     }
-    let p_r = dielectric_reflect_prob(cos_o, eta);
-    let chose_reflection = u.x < p_r;
-    let uh = vec2<f32>(select((u.x - p_r) / (1.0 - p_r), u.x / p_r, chose_reflection), u.y);
-    var tb = onb_tangents(n);
-    var h_l = sample_ggx_vndf(vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o), p.alpha, uh);
-#ifdef HAS_GLASS_MICROFACETS
-    if (dielectric_general(p)) {
-        tb = tangent_frame(n, p.tangent);
-        h_l = mf_sample_visible(dielectric_microfacet(p), vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o), uh);
+    var u = u0;
+    var wi = vec3<f32>(0.0);
+    var is_reflection = true;
+    var sampled = false;
+#ifdef HAS_ENERGY_COMPENSATION
+    if (dielectric_compensated(p)) {
+        let ms = dielectric_ms_probs(p, cos_o, eta);
+        if (u.x < ms.x) {
+            let v = u.x / ms.x;
+            is_reflection = v >= ms.y;
+            let w = select(v / ms.y, (v - ms.y) / (1.0 - ms.y), is_reflection);
+            wi = sample_cosine_hemisphere(n, vec2<f32>(w, u.y));
+            if (!is_reflection) {
+                wi = wi - 2.0 * dot(wi, n) * n;
+            }
+            sampled = true;
+        } else {
+            u.x = (u.x - ms.x) / (1.0 - ms.x);
+        }
     }
 #endif
-    let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
-    let oh = dot(wo, h);
-    let sin2_t = eta * eta * max(0.0, 1.0 - oh * oh);
-    let cos_t = sqrt(max(0.0, 1.0 - sin2_t));
-    let is_reflection = chose_reflection || sin2_t >= 1.0;
-    let wi = select(normalize(-eta * wo + (eta * oh - cos_t) * h), normalize(2.0 * oh * h - wo), is_reflection);
+    if (!sampled) {
+        let p_r = dielectric_reflect_prob(cos_o, eta);
+        let chose_reflection = u.x < p_r;
+        let uh = vec2<f32>(select((u.x - p_r) / (1.0 - p_r), u.x / p_r, chose_reflection), u.y);
+        var tb = onb_tangents(n);
+        var h_l = sample_ggx_vndf(vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o), p.alpha, uh);
+#ifdef HAS_GLASS_MICROFACETS
+        if (dielectric_general(p)) {
+            tb = tangent_frame(n, p.tangent);
+            h_l = mf_sample_visible(dielectric_microfacet(p), vec3<f32>(dot(wo, tb[0]), dot(wo, tb[1]), cos_o), uh);
+        }
+#endif
+        let h = h_l.x * tb[0] + h_l.y * tb[1] + h_l.z * n;
+        let oh = dot(wo, h);
+        let sin2_t = eta * eta * max(0.0, 1.0 - oh * oh);
+        let cos_t = sqrt(max(0.0, 1.0 - sin2_t));
+        is_reflection = chose_reflection || sin2_t >= 1.0;
+        wi = select(normalize(-eta * wo + (eta * oh - cos_t) * h), normalize(2.0 * oh * h - wo), is_reflection);
+    }
     let side = select(-1.0, 1.0, hit.front_face);
     let above = side * dot(wi, hit.ng) > 0.0;
-    let lobes = dielectric_rough_lobes(p, n, wo, wi, eta);
+    let lobes = dielectric_lobes(p, n, wo, wi, eta);
     if (!(lobes.y > 0.0) || above != is_reflection) {
         return absorbed();
     }
@@ -188,12 +265,12 @@ fn dielectric_eta(p: DielectricParams) -> f32 {
 #endif
 
 // Rough glass without absorption: tint x BSDF x |cos(theta_i)| toward wi, reflected or
-// transmitted (dielectric_rough_lobes), n on wo's side; 0 for the deltas (smooth glass,
+// transmitted (dielectric_lobes), n on wo's side; 0 for the deltas (smooth glass,
 // absorbing rough glass).
 fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 #ifdef HAS_ROUGH_DIELECTRIC
     if (dielectric_has_density(p)) {
-        return p.tint * dielectric_rough_lobes(p, n, wo, wi, dielectric_eta(p)).x;
+        return p.tint * dielectric_lobes(p, n, wo, wi, dielectric_eta(p)).x;
     }
 #endif
     return vec3<f32>(0.0);
@@ -204,7 +281,7 @@ fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f3
 fn dielectric_pdf(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
 #ifdef HAS_ROUGH_DIELECTRIC
     if (dielectric_has_density(p)) {
-        return dielectric_rough_lobes(p, n, wo, wi, dielectric_eta(p)).y;
+        return dielectric_lobes(p, n, wo, wi, dielectric_eta(p)).y;
     }
 #endif
     return 0.0;

@@ -15,7 +15,8 @@ fn plastic_fresnel(c: f32, ior: f32) -> f32 {
 
 // The fraction of light at cosine c that the coating lets through: 1 - F when smooth,
 // else its table (PLASTIC_TABLE_SIZE cosines from 0 to 1 in tables[p.table...]), linearly
-// interpolated.
+// interpolated; a compensated coating also lets through its share b of what its
+// microfacets lose, b (1 - E(c)) (shared/bsdf.wgsl's rough dielectrics).
 fn plastic_transmittance(p: PlasticParams, c: f32) -> f32 {
     if (p.alpha < ALPHA_SMOOTH) {
         return 1.0 - plastic_fresnel(c, p.ior);
@@ -25,15 +26,44 @@ fn plastic_transmittance(p: PlasticParams, c: f32) -> f32 {
     let j = i + 1u;
     let a = tables[p.table + (i >> 2u)][i & 3u];
     let b = tables[p.table + (j >> 2u)][j & 3u];
-    return mix(a, b, x - f32(i));
+    var t = mix(a, b, x - f32(i));
+#ifdef HAS_ENERGY_COMPENSATION
+    if (plastic_compensated(p)) {
+        let v = plastic_ms_variant(p);
+        let split = ms_dielectric_split(v, p.ior, p.alpha);
+        t += split.x * max(1.0 - ms_dielectric_albedo(v, p.ior, 0u, c, p.alpha), 0.0);
+    }
+#endif
+    return t;
 }
 
 // The base's albedo as the coating's inner reflections leave it: over 1 - R_int, or
-// 1 - albedo R_int when nonlinear.
+// 1 - albedo R_int when nonlinear; a compensated coating's R_int also holds the share
+// 1 - b' of what it loses inside on average, (1 - b') (1 - E'_avg).
 fn plastic_diffuse(p: PlasticParams) -> vec3<f32> {
-    let r = select(vec3<f32>(p.internal), p.diffuse * p.internal, p.nonlinear > 0.5);
+    var internal = p.internal;
+#ifdef HAS_ENERGY_COMPENSATION
+    if (plastic_compensated(p)) {
+        let split = ms_dielectric_split(plastic_ms_variant(p), p.ior, p.alpha);
+        internal += (1.0 - split.y) * split.w;
+    }
+#endif
+    let r = select(vec3<f32>(internal), p.diffuse * internal, p.nonlinear > 0.5);
     return p.diffuse / (vec3<f32>(1.0) - r);
 }
+
+#ifdef HAS_ENERGY_COMPENSATION
+// Whether the coating gives back what its microfacets lose to multiple scattering:
+// rough, of ior above 1, with MAT_FLAG_ENERGY.
+fn plastic_compensated(p: PlasticParams) -> bool {
+    return (p.flags & MAT_FLAG_ENERGY) != 0u && p.alpha >= ALPHA_SMOOTH && p.ior > 1.0;
+}
+
+// The dielectric tables' variant of the coating (separable masking).
+fn plastic_ms_variant(p: PlasticParams) -> u32 {
+    return select(MS_DIELECTRIC_GGX_SEPARABLE, MS_DIELECTRIC_BECKMANN_SEPARABLE, p.beckmann > 0.5);
+}
+#endif
 
 // The probability of sampling the coating seen at cos_o: its reflected share weighed by
 // spec_weight against the base's, as Mitsuba's plastics choose.
@@ -46,7 +76,9 @@ fn plastic_spec_prob(p: PlasticParams, cos_o: f32) -> f32 {
 
 // BSDF x cos: the base, diffuse T(cos_o) T(cos_i) cos_i / (pi ior^2), plus a rough
 // coating's specular F(wo . h) D(h) G1(wo) G1(wi) / (4 cos_o) (a smooth one's mirror is a
-// delta, left out).
+// delta, left out), and a compensated coating's reflected share of its microfacets'
+// multiple scattering (ms_dielectric_lobe), tinted as the specular. (Its sampling needs
+// nothing new: the base's cosine lobe covers it.)
 fn plastic_eval(p: PlasticParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     let cos_o = dot(n, wo);
     let cos_i = dot(n, wi);
@@ -63,7 +95,13 @@ fn plastic_eval(p: PlasticParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) ->
     let li = vec3<f32>(dot(wi, tb[0]), dot(wi, tb[1]), cos_i);
     let h = normalize(lo + li);
     let g = mf_g1(m, lo, h) * mf_g1(m, li, h);
-    return p.specular * (plastic_fresnel(dot(lo, h), p.ior) * mf_d(m, h) * g / (4.0 * cos_o)) + base;
+    var spec = plastic_fresnel(dot(lo, h), p.ior) * mf_d(m, h) * g / (4.0 * cos_o);
+#ifdef HAS_ENERGY_COMPENSATION
+    if (plastic_compensated(p)) {
+        spec += ms_dielectric_lobe(plastic_ms_variant(p), p.ior, p.alpha, 0u, cos_o, cos_i);
+    }
+#endif
+    return p.specular * spec + base;
 }
 
 // The pdf of plastic_scatter's directions: the coating's visible normals through the

@@ -461,4 +461,72 @@ fn ms_under(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f0: vec3<f32>, f90
     let i = vec3<f32>(1.0) - ms_schlick_albedo(variant, alpha, cos_i, f0, f90);
     return select(o * i / (vec3<f32>(1.0) - avg), vec3<f32>(0.0), avg >= vec3<f32>(1.0));
 }
+// ----- rough dielectrics (after the reflecting variants: scene::microfacet_albedo's
+// dielectric tables). A dielectric boundary's multiple scattering sends what a side loses,
+// 1 - E(cos_o) of E its total albedo in energy (reflection and transmission), both ways:
+// a diffuse-like reflection (1 - b) (1 - E(cos_o)) (1 - E(cos_i)) / (pi (1 - E_avg)) on
+// the same side, and a transmission b (1 - E(cos_o)) (1 - E'(cos_i)) / (pi (1 - E'_avg))
+// into the other (E' its tables), so that every direction of either side keeps all its
+// energy. b = 1 - F_avg seen from the lower index, and seen from the higher its
+// reciprocal b (1 - E_avg) / (ior^2 (1 - E'_avg)) (what radiance's reciprocity across
+// the boundary asks), the lower side's lowered where that would pass 1.
+
+// Where an index ratio ior >= 1 lands on the tables' axis (indices 1 + (max - 1) t^2):
+// (the lower table, the fraction toward the next).
+fn ms_ior_position(ior: f32) -> vec2<f32> {
+    let t = sqrt(clamp((ior - 1.0) / (MS_IOR_MAX - 1.0), 0.0, 1.0)) * f32(MS_IORS - 1u);
+    let k = min(floor(t), f32(MS_IORS - 2u));
+    return vec2<f32>(k, t - k);
+}
+
+// The first float of a dielectric variant's (MS_DIELECTRIC_GGX_CORRELATED, ...) table of
+// index k and side (0: the lower index's, 1: the higher's); side 2 of the last index is
+// the Fresnel averages.
+fn ms_dielectric_offset(variant: u32, k: u32, side: u32) -> u32 {
+    let block = MS_TABLE_SIZE * MS_TABLE_SIZE + MS_TABLE_SIZE;
+    return 6u * block + variant * (MS_IORS * 2u * block + MS_IORS) + (2u * k + side) * block;
+}
+
+// The total albedo at cosine c and alpha seen from `side` of a boundary of index ratio
+// ior >= 1 (linear between the tables' indices).
+fn ms_dielectric_albedo(variant: u32, ior: f32, side: u32, c: f32, alpha: f32) -> f32 {
+    let t = ms_ior_position(ior);
+    let k = u32(t.x);
+    let a = ms_albedo(ms_dielectric_offset(variant, k, side), c, alpha);
+    return mix(a, ms_albedo(ms_dielectric_offset(variant, k + 1u, side), c, alpha), t.y);
+}
+
+// (the shares b transmitted from the lower index's side and from the higher's, what the
+// two sides lose on average, 1 - E_avg and 1 - E'_avg), for index ratio ior >= 1.
+fn ms_dielectric_split(variant: u32, ior: f32, alpha: f32) -> vec4<f32> {
+    let t = ms_ior_position(ior);
+    let k = u32(t.x);
+    let l_low = 1.0 - mix(ms_average(ms_dielectric_offset(variant, k, 0u), alpha), ms_average(ms_dielectric_offset(variant, k + 1u, 0u), alpha), t.y);
+    let l_high = 1.0 - mix(ms_average(ms_dielectric_offset(variant, k, 1u), alpha), ms_average(ms_dielectric_offset(variant, k + 1u, 1u), alpha), t.y);
+    let f = ms_dielectric_offset(variant, MS_IORS, 0u) + k;
+    let ior2 = ior * ior;
+    var b_low = 1.0 - mix(ms_float(f), ms_float(f + 1u), t.y);
+    if (l_low > 0.0) {
+        b_low = min(b_low, ior2 * l_high / l_low);
+    }
+    let b_high = select(0.0, b_low * l_low / (ior2 * l_high), l_high > 0.0);
+    return vec4<f32>(b_low, b_high, max(l_low, 0.0), max(l_high, 0.0));
+}
+
+// The compensation x |cos_i| in energy (a transmission's radiance factor eta^2 left to
+// the caller) between wo at cos_o > 0 on `side` of a boundary of index ratio ior >= 1
+// and wi at cos_i (negative: transmitted to the other side).
+fn ms_dielectric_lobe(variant: u32, ior: f32, alpha: f32, side: u32, cos_o: f32, cos_i: f32) -> f32 {
+    let s = ms_dielectric_split(variant, ior, alpha);
+    let side_i = select(1u - side, side, cos_i > 0.0);
+    let avg = select(s.z, s.w, side_i == 1u);
+    if (cos_o <= 0.0 || cos_i == 0.0 || avg <= 0.0) {
+        return 0.0;
+    }
+    let b = select(s.x, s.y, side == 1u);
+    let share = select(b, 1.0 - b, cos_i > 0.0);
+    let loss_o = max(1.0 - ms_dielectric_albedo(variant, ior, side, cos_o, alpha), 0.0);
+    let loss_i = max(1.0 - ms_dielectric_albedo(variant, ior, side_i, abs(cos_i), alpha), 0.0);
+    return share * loss_o * loss_i / (PI * avg) * abs(cos_i);
+}
 #endif

@@ -7,7 +7,7 @@ use glam::Vec3;
 use super::bindings::Bindings;
 use super::sampling::{erf_approx, erfinv_approx, onb_tangents, sample_cosine_hemisphere, PI};
 use super::types::{Hit, Ray};
-use crate::scene::records::MS_TABLE_SIZE;
+use crate::scene::records::{MS_IORS, MS_IOR_MAX, MS_TABLE_SIZE};
 
 pub use crate::scene::records::ALPHA_SMOOTH;
 
@@ -415,7 +415,16 @@ pub fn tangent_frame(n: Vec3, tangent: Vec3) -> [Vec3; 2] {
 /// Float i of the albedo tables (`scene::microfacet_albedo`, which the GPU reads from
 /// `tables` at `Params::ms_tables`).
 pub fn ms_float(i: u32) -> f32 {
-    crate::scene::microfacet_albedo::tables()[i as usize]
+    use crate::scene::microfacet_albedo::{self as ma, DielectricVariant};
+    let i = i as usize;
+    if i < 3 * ma::BLOCK {
+        return ma::tables()[i];
+    }
+    let (v, j) = (
+        (i - 3 * ma::BLOCK) / ma::DIELECTRIC_BLOCK,
+        (i - 3 * ma::BLOCK) % ma::DIELECTRIC_BLOCK,
+    );
+    ma::dielectric_block(DielectricVariant::ALL[v])[j]
 }
 
 /// The first float of a variant's table t (0: E1, 1: E5).
@@ -505,4 +514,78 @@ pub fn ms_under(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f0: Vec3, f90:
     let i = Vec3::ONE - ms_schlick_albedo(variant, alpha, cos_i, f0, f90);
     let v = o * i / (Vec3::ONE - avg);
     Vec3::select(avg.cmpge(Vec3::ONE), Vec3::ZERO, v)
+}
+
+// ----- rough dielectrics (shared/bsdf.wgsl has the formulas)
+
+/// Where an index ratio ior >= 1 lands on the tables' axis: (lower table, fraction).
+pub fn ms_ior_position(ior: f32) -> (u32, f32) {
+    let t = ((ior - 1.0) / (MS_IOR_MAX - 1.0)).clamp(0.0, 1.0).sqrt() * (MS_IORS - 1) as f32;
+    let k = t.floor().min((MS_IORS - 2) as f32);
+    (k as u32, t - k)
+}
+
+/// The first float of a dielectric variant's table of index k and side.
+pub fn ms_dielectric_offset(variant: u32, k: u32, side: u32) -> u32 {
+    let block = MS_TABLE_SIZE * MS_TABLE_SIZE + MS_TABLE_SIZE;
+    6 * block + variant * (MS_IORS * 2 * block + MS_IORS) + (2 * k + side) * block
+}
+
+/// The total albedo at cosine c and alpha seen from `side` of index ratio ior >= 1.
+pub fn ms_dielectric_albedo(variant: u32, ior: f32, side: u32, c: f32, alpha: f32) -> f32 {
+    let (k, t) = ms_ior_position(ior);
+    let a = ms_albedo(ms_dielectric_offset(variant, k, side), c, alpha);
+    mix(
+        a,
+        ms_albedo(ms_dielectric_offset(variant, k + 1, side), c, alpha),
+        t,
+    )
+}
+
+/// (b from the lower side, b from the higher, 1 - E_avg of each).
+pub fn ms_dielectric_split(variant: u32, ior: f32, alpha: f32) -> [f32; 4] {
+    let (k, t) = ms_ior_position(ior);
+    let avg = |side| {
+        mix(
+            ms_average(ms_dielectric_offset(variant, k, side), alpha),
+            ms_average(ms_dielectric_offset(variant, k + 1, side), alpha),
+            t,
+        )
+    };
+    let (l_low, l_high) = (1.0 - avg(0), 1.0 - avg(1));
+    let f = ms_dielectric_offset(variant, MS_IORS, 0) + k;
+    let ior2 = ior * ior;
+    let mut b_low = 1.0 - mix(ms_float(f), ms_float(f + 1), t);
+    if l_low > 0.0 {
+        b_low = b_low.min(ior2 * l_high / l_low);
+    }
+    let b_high = if l_high > 0.0 {
+        b_low * l_low / (ior2 * l_high)
+    } else {
+        0.0
+    };
+    [b_low, b_high, l_low.max(0.0), l_high.max(0.0)]
+}
+
+/// The compensation x |cos_i| in energy between wo at cos_o on `side` and wi at cos_i
+/// (negative: transmitted).
+pub fn ms_dielectric_lobe(
+    variant: u32,
+    ior: f32,
+    alpha: f32,
+    side: u32,
+    cos_o: f32,
+    cos_i: f32,
+) -> f32 {
+    let s = ms_dielectric_split(variant, ior, alpha);
+    let side_i = if cos_i > 0.0 { side } else { 1 - side };
+    let avg = if side_i == 1 { s[3] } else { s[2] };
+    if cos_o <= 0.0 || cos_i == 0.0 || avg <= 0.0 {
+        return 0.0;
+    }
+    let b = if side == 1 { s[1] } else { s[0] };
+    let share = if cos_i > 0.0 { 1.0 - b } else { b };
+    let loss_o = (1.0 - ms_dielectric_albedo(variant, ior, side, cos_o, alpha)).max(0.0);
+    let loss_i = (1.0 - ms_dielectric_albedo(variant, ior, side_i, cos_i.abs(), alpha)).max(0.0);
+    share * loss_o * loss_i / (PI * avg) * cos_i.abs()
 }

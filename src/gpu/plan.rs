@@ -641,6 +641,7 @@ impl ShaderSpec {
                         || f(Feature::EnergyCompensation)
                             && [
                                 MaterialKind::Conductor,
+                                MaterialKind::Dielectric,
                                 MaterialKind::Microfacet,
                                 MaterialKind::Pbr,
                                 MaterialKind::Principled,

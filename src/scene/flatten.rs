@@ -12,7 +12,9 @@ use super::format::{
 };
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
-use super::materials::{blend, mark_own_colors, pbr, plastic, MaterialDesc, MaterialKind};
+use super::materials::{
+    blend, dielectric, mark_own_colors, pbr, plastic, MaterialDesc, MaterialKind,
+};
 use super::mesh::MeshData;
 use super::microfacet_albedo;
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
@@ -581,7 +583,18 @@ pub fn flatten(
         .any(|m| m.flags & records::MAT_FLAG_ENERGY != 0)
     {
         let offset = tables.len() as u32;
-        tables.extend(microfacet_albedo::table_entries());
+        let mut dielectric = [false; 4];
+        for m in &materials {
+            let variant = match MaterialKind::from_tag(m.tag) {
+                Some(MaterialKind::Dielectric) => dielectric::ms_variant(m),
+                Some(MaterialKind::Plastic) => plastic::ms_variant(m),
+                _ => None,
+            };
+            if let Some(v) = variant {
+                dielectric[v as usize] = true;
+            }
+        }
+        tables.extend(microfacet_albedo::table_entries(dielectric));
         offset
     } else {
         0

@@ -266,6 +266,17 @@ shared_constants! {
     MS_GGX_CORRELATED: u32 = 0;
     MS_GGX_SEPARABLE: u32 = 1;
     MS_BECKMANN_SEPARABLE: u32 = 2;
+    /// The dielectric albedo tables' variants (`microfacet_albedo::DielectricVariant`,
+    /// after the three above): GGX and Beckmann with the height-correlated masking
+    /// (rough glass), GGX and Beckmann with the separable one (plastic's coating).
+    MS_DIELECTRIC_GGX_CORRELATED: u32 = 0;
+    MS_DIELECTRIC_BECKMANN_CORRELATED: u32 = 1;
+    MS_DIELECTRIC_GGX_SEPARABLE: u32 = 2;
+    MS_DIELECTRIC_BECKMANN_SEPARABLE: u32 = 3;
+    /// Indices of refraction of the dielectric albedo tables, evenly from 1 to
+    /// MS_IOR_MAX (a higher one is read at MS_IOR_MAX).
+    MS_IORS: u32 = 16;
+    MS_IOR_MAX: f32 = 3.0;
     /// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
     /// (v0, v1, v2, 0).
     ATTRIBUTE_ENTRIES: u32 = 4;

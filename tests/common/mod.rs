@@ -372,6 +372,18 @@ pub const MATERIALS: &[TestMaterial] = &[
         false,
     ),
     row(
+        "dielectric rough 0.8 compensated",
+        "type = \"dielectric\"\nior = 1.5\nroughness = 0.8\nenergy_compensation = true",
+        false,
+        false,
+    ),
+    row(
+        "dielectric beckmann anisotropic compensated",
+        "type = \"dielectric\"\nior = 1.33\nroughness_u = 0.9\nroughness_v = 0.6\ndistribution = \"beckmann\"\nenergy_compensation = true",
+        false,
+        false,
+    ),
+    row(
         "microfacet smooth",
         "type = \"microfacet\"\nalbedo = [1, 1, 1]\nspecular = [1, 1, 1]\nroughness = 0",
         false,
@@ -549,6 +561,18 @@ pub const MATERIALS: &[TestMaterial] = &[
     row(
         "plastic beckmann 0.6 blue",
         "type = \"plastic\"\nalbedo = [0.1, 0.2, 0.7]\nroughness = 0.6\ndistribution = \"beckmann\"",
+        false,
+        true,
+    ),
+    row(
+        "plastic ggx 1.0 white compensated",
+        "type = \"plastic\"\nalbedo = [1, 1, 1]\nroughness = 1\nenergy_compensation = true",
+        false,
+        true,
+    ),
+    row(
+        "plastic beckmann 0.7 red nonlinear compensated",
+        "type = \"plastic\"\nalbedo = [0.8, 0.2, 0.1]\nroughness = 0.7\ndistribution = \"beckmann\"\nnonlinear = true\nior = 1.7\nenergy_compensation = true",
         false,
         true,
     ),

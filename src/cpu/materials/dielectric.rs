@@ -3,12 +3,16 @@
 use glam::Vec3;
 
 use crate::cpu::bsdf::{
-    fresnel_dielectric, ggx_d, mf_d, mf_g1, mf_sample_visible, reflect_dir, sample_ggx_vndf,
-    smith_g2, smith_lambda, tangent_frame, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    fresnel_dielectric, ggx_d, mf_d, mf_g1, mf_sample_visible, ms_alpha, ms_dielectric_albedo,
+    ms_dielectric_lobe, ms_dielectric_split, reflect_dir, sample_ggx_vndf, smith_g2, smith_lambda,
+    tangent_frame, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
-use crate::cpu::sampling::onb_tangents;
+use crate::cpu::sampling::{onb_tangents, sample_cosine_hemisphere, PI};
 use crate::cpu::types::{Hit, Ray};
 use crate::scene::materials::dielectric::{self, Params};
+use crate::scene::records::{
+    MAT_FLAG_ENERGY, MS_DIELECTRIC_BECKMANN_CORRELATED, MS_DIELECTRIC_GGX_CORRELATED,
+};
 
 impl Shading for Params {
     /// Rough glass without absorption: tint x BSDF x |cos| (`rough_lobes`); 0 for the
@@ -17,14 +21,14 @@ impl Shading for Params {
         if !has_density(self) {
             return Vec3::ZERO;
         }
-        self.tint * rough_lobes(self, n, wo, wi, eta(self)).0
+        self.tint * lobes(self, n, wo, wi, eta(self)).0
     }
 
     fn pdf(&self, n: Vec3, wo: Vec3, wi: Vec3) -> f32 {
         if !has_density(self) {
             return 0.0;
         }
-        rough_lobes(self, n, wo, wi, eta(self)).1
+        lobes(self, n, wo, wi, eta(self)).1
     }
 
     /// Snell refraction (eta = 1 / ior entering, ior leaving, the normal turned toward
@@ -171,10 +175,69 @@ pub fn rough_lobes(p: &Params, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f
     )
 }
 
+/// Rough glass's lobes x |cos(theta_i)| and the pdf of `rough_scatter`'s directions:
+/// `rough_lobes`, with energy compensation its lobe (`ms_lobes`) beside them.
+pub fn lobes(p: &Params, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
+    let (f, pdf) = rough_lobes(p, n, wo, wi, eta);
+    if compensated(p) {
+        let (f_ms, pdf_ms) = ms_lobes(p, n, wo, wi, eta);
+        let p_ms = ms_probs(p, n.dot(wo), eta).0;
+        return (f + f_ms, pdf + (pdf_ms - pdf) * p_ms);
+    }
+    (f, pdf)
+}
+
+/// Whether rough glass is compensated (`MAT_FLAG_ENERGY`).
+pub fn compensated(p: &Params) -> bool {
+    p.flags & MAT_FLAG_ENERGY != 0
+}
+
+/// The dielectric tables' variant of rough glass.
+pub fn ms_variant(p: &Params) -> u32 {
+    if p.beckmann > 0.5 {
+        MS_DIELECTRIC_BECKMANN_CORRELATED
+    } else {
+        MS_DIELECTRIC_GGX_CORRELATED
+    }
+}
+
+/// (the probability of sampling the compensation at cos_o, the share it transmits).
+pub fn ms_probs(p: &Params, cos_o: f32, eta: f32) -> (f32, f32) {
+    let v = ms_variant(p);
+    let ior = eta.max(1.0 / eta);
+    let side = if eta < 1.0 { 0 } else { 1 };
+    let alpha = ms_alpha(p.alpha, p.alpha_v);
+    let loss = (1.0 - ms_dielectric_albedo(v, ior, side, cos_o, alpha)).clamp(0.0, 0.9);
+    let split = ms_dielectric_split(v, ior, alpha);
+    (loss, if side == 1 { split[1] } else { split[0] })
+}
+
+/// The compensation x |cos(theta_i)| for radiance and the density of its sampling.
+pub fn ms_lobes(p: &Params, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
+    let cos_o = n.dot(wo);
+    let cos_i = n.dot(wi);
+    let side = if eta < 1.0 { 0 } else { 1 };
+    let f = ms_dielectric_lobe(
+        ms_variant(p),
+        eta.max(1.0 / eta),
+        ms_alpha(p.alpha, p.alpha_v),
+        side,
+        cos_o,
+        cos_i,
+    );
+    let b = ms_probs(p, cos_o, eta).1;
+    let transmits = cos_i < 0.0;
+    (
+        f * if transmits { eta * eta } else { 1.0 },
+        if transmits { b } else { 1.0 - b } * cos_i.abs() / PI,
+    )
+}
+
 /// Rough glass: a visible normal, then the mirror direction about it or the refraction
-/// through it (the mirror direction where it reflects totally); weight = BSDF x cos / pdf
-/// (`rough_lobes`) times `weight`; with its pdf where it has a density (no absorption),
-/// else as a delta.
+/// through it (the mirror direction where it reflects totally); with energy
+/// compensation, first its lobe (`ms_probs`: a cosine direction, mirrored through the
+/// surface where it transmits). Weight = BSDF x cos / pdf (`lobes`) times `weight`; with
+/// its pdf where it has a density (no absorption), else as a delta.
 pub fn rough_scatter(
     p: &Params,
     ray: &Ray,
@@ -182,13 +245,62 @@ pub fn rough_scatter(
     n: Vec3,
     eta: f32,
     weight: Vec3,
-    u: [f32; 2],
+    u0: [f32; 2],
 ) -> Scatter {
     let wo = -ray.dir;
     let cos_o = n.dot(wo);
     if cos_o <= 0.0 {
         return ABSORBED;
     }
+    let mut u = u0;
+    let mut sampled = None;
+    if compensated(p) {
+        let (p_ms, b) = ms_probs(p, cos_o, eta);
+        if u[0] < p_ms {
+            let v = u[0] / p_ms;
+            let reflect = v >= b;
+            let w = if reflect { (v - b) / (1.0 - b) } else { v / b };
+            let mut wi = sample_cosine_hemisphere(n, [w, u[1]]);
+            if !reflect {
+                wi -= 2.0 * wi.dot(n) * n;
+            }
+            sampled = Some((wi, reflect));
+        } else {
+            u[0] = (u[0] - p_ms) / (1.0 - p_ms);
+        }
+    }
+    let (wi, reflect) = match sampled {
+        Some(s) => s,
+        None => sample_microfacet(p, n, wo, cos_o, eta, u),
+    };
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    let above = side * wi.dot(hit.ng) > 0.0;
+    let (f, pdf) = lobes(p, n, wo, wi, eta);
+    // written as in WGSL, so a NaN pdf takes the same branch on both backends
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
+    if !(pdf > 0.0) || above != reflect {
+        return ABSORBED;
+    }
+    let delta = !has_density(p);
+    Scatter {
+        ok: true,
+        dir: wi,
+        weight: weight * (f / pdf),
+        pdf: if delta { 0.0 } else { pdf },
+        delta,
+    }
+}
+
+/// The microfacet lobes' direction (`rough_scatter` without the compensation) and
+/// whether it reflects.
+fn sample_microfacet(
+    p: &Params,
+    n: Vec3,
+    wo: Vec3,
+    cos_o: f32,
+    eta: f32,
+    u: [f32; 2],
+) -> (Vec3, bool) {
     let p_r = reflect_prob(cos_o, eta);
     let chose_reflection = u[0] < p_r;
     let uh = [
@@ -218,22 +330,7 @@ pub fn rough_scatter(
     } else {
         (-eta * wo + (eta * oh - cos_t) * h).normalize()
     };
-    let side = if hit.front_face { 1.0 } else { -1.0 };
-    let above = side * wi.dot(hit.ng) > 0.0;
-    let (f, pdf) = rough_lobes(p, n, wo, wi, eta);
-    // written as in WGSL, so a NaN pdf takes the same branch on both backends
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(pdf > 0.0) || above != reflect {
-        return ABSORBED;
-    }
-    let delta = !has_density(p);
-    Scatter {
-        ok: true,
-        dir: wi,
-        weight: weight * (f / pdf),
-        pdf: if delta { 0.0 } else { pdf },
-        delta,
-    }
+    (wi, reflect)
 }
 
 /// eta = eta_o / eta_i at a hit (dielectric.wgsl's `dielectric_eta`).

@@ -12,10 +12,13 @@ use crate::cpu::bsdf::{
     density_sample, fresnel_dielectric, mf_d, mf_g1, mf_pdf_visible, mf_sample_visible,
     mirror_scatter, Microfacet, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
 };
+use crate::cpu::bsdf::{ms_dielectric_albedo, ms_dielectric_lobe, ms_dielectric_split};
 use crate::cpu::sampling::{onb_tangents, sample_cosine_hemisphere, PI};
 use crate::cpu::types::{Hit, Ray};
-use crate::scene::materials::plastic::{transmittance_table, Params};
-use crate::scene::records::PLASTIC_TABLE_SIZE;
+use crate::scene::materials::plastic::{self, transmittance_table, Params};
+use crate::scene::records::{
+    MS_DIELECTRIC_BECKMANN_SEPARABLE, MS_DIELECTRIC_GGX_SEPARABLE, PLASTIC_TABLE_SIZE,
+};
 
 /// The coating's exact Fresnel reflectance seen from outside at cosine c.
 pub fn fresnel(c: f32, ior: f32) -> f32 {
@@ -50,15 +53,40 @@ pub fn transmittance(p: &Params, c: f32) -> f32 {
     let x = c.clamp(0.0, 1.0) * (PLASTIC_TABLE_SIZE - 1) as f32;
     let i = (x as u32).min(PLASTIC_TABLE_SIZE - 2) as usize;
     let (a, b) = (table[i], table[i + 1]);
-    a + (b - a) * (x - i as f32)
+    let mut t = a + (b - a) * (x - i as f32);
+    if compensated(p) {
+        let v = ms_variant(p);
+        let split = ms_dielectric_split(v, p.ior, p.alpha);
+        t += split[0] * (1.0 - ms_dielectric_albedo(v, p.ior, 0, c, p.alpha)).max(0.0);
+    }
+    t
+}
+
+/// Whether the coating is compensated (plastic.wgsl's `plastic_compensated`).
+pub fn compensated(p: &Params) -> bool {
+    plastic::compensates(p)
+}
+
+/// The dielectric tables' variant of the coating.
+pub fn ms_variant(p: &Params) -> u32 {
+    if p.beckmann > 0.5 {
+        MS_DIELECTRIC_BECKMANN_SEPARABLE
+    } else {
+        MS_DIELECTRIC_GGX_SEPARABLE
+    }
 }
 
 /// The base's albedo over 1 - R_int (or 1 - albedo R_int when nonlinear).
 pub fn diffuse(p: &Params) -> Vec3 {
+    let mut internal = p.internal;
+    if compensated(p) {
+        let split = ms_dielectric_split(ms_variant(p), p.ior, p.alpha);
+        internal += (1.0 - split[1]) * split[3];
+    }
     let r = if p.nonlinear > 0.5 {
-        p.diffuse * p.internal
+        p.diffuse * internal
     } else {
-        Vec3::splat(p.internal)
+        Vec3::splat(internal)
     };
     p.diffuse / (Vec3::ONE - r)
 }
@@ -93,7 +121,7 @@ fn local(n: Vec3, wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
 }
 
 impl Shading for Params {
-    /// The base plus a rough coating's specular.
+    /// The base plus a rough coating's specular (and its compensation).
     fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
         let cos_o = n.dot(wo);
         let cos_i = n.dot(wi);
@@ -110,7 +138,11 @@ impl Shading for Params {
         let (lo, li) = local(n, wo, wi);
         let h = (lo + li).normalize();
         let g = mf_g1(&m, lo, h) * mf_g1(&m, li, h);
-        self.specular * (fresnel(lo.dot(h), self.ior) * mf_d(&m, h) * g / (4.0 * cos_o)) + base
+        let mut spec = fresnel(lo.dot(h), self.ior) * mf_d(&m, h) * g / (4.0 * cos_o);
+        if compensated(self) {
+            spec += ms_dielectric_lobe(ms_variant(self), self.ior, self.alpha, 0, cos_o, cos_i);
+        }
+        self.specular * spec + base
     }
 
     /// The coating's visible normals with spec_prob (when rough), else the cosine lobe.

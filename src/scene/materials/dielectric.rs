@@ -16,7 +16,10 @@ use super::common::{
 };
 use crate::scene::gltf::error::{GltfError, Result};
 use crate::scene::gltf::reader::{self, MaterialReader};
-use crate::scene::records::{Material, ALPHA_SMOOTH, MAT_FLAG_ANISOTROPIC};
+use crate::scene::records::{
+    Material, ALPHA_SMOOTH, MAT_FLAG_ANISOTROPIC, MAT_FLAG_ENERGY,
+    MS_DIELECTRIC_BECKMANN_CORRELATED, MS_DIELECTRIC_GGX_CORRELATED,
+};
 
 /// Its entry in the scene format.
 #[derive(Debug, Clone, Deserialize)]
@@ -48,6 +51,10 @@ pub struct Desc {
     pub bump: Option<String>,
     #[serde(default = "one")]
     pub bump_scale: f32,
+    /// Give rough glass back the energy its microfacets lose to multiple scattering,
+    /// reflected and transmitted (Kulla and Conty); default: `[render]
+    /// energy_compensation`.
+    pub energy_compensation: Option<bool>,
 }
 
 material_view! {
@@ -72,6 +79,8 @@ material_view! {
         tangent: rgb = normal2,
         /// At a hit: 1 on the back face (inside), else 0 (`material_at`).
         back_face: f32 = normal2.w,
+        /// The record's flags (`MAT_FLAG_ENERGY`: compensated).
+        flags: u32 = flags,
     }
 }
 
@@ -102,6 +111,19 @@ pub fn is_rough(m: &Material) -> bool {
 pub fn is_general(m: &Material) -> bool {
     let p = Params::read(m);
     is_rough(m) && (p.beckmann > 0.5 || p.alpha != p.alpha_v)
+}
+
+/// The dielectric albedo tables a compensated dielectric's record reads
+/// (`microfacet_albedo::DielectricVariant`): rough glass's, by its distribution.
+pub fn ms_variant(m: &Material) -> Option<u32> {
+    if !is_rough(m) || m.flags & MAT_FLAG_ENERGY == 0 {
+        return None;
+    }
+    Some(if Params::read(m).beckmann > 0.5 {
+        MS_DIELECTRIC_BECKMANN_CORRELATED
+    } else {
+        MS_DIELECTRIC_GGX_CORRELATED
+    })
 }
 
 /// Whether a dielectric's record has Beckmann microfacets (`HAS_BECKMANN`).
@@ -159,6 +181,10 @@ impl Model for Desc {
         u != v
     }
 
+    fn energy_compensation(&self) -> Option<Option<bool>> {
+        Some(self.energy_compensation)
+    }
+
     fn lobes(&self) -> Lobes {
         let density = has_density(self.alpha(), self.absorption);
         Lobes {
@@ -181,6 +207,7 @@ impl Model for Desc {
             beckmann: self.distribution.code(),
             tangent: glam::Vec3::ZERO,
             back_face: 0.0,
+            flags: record.flags,
         }
         .write(record);
         if self.anisotropic() {
@@ -273,6 +300,7 @@ pub fn from_gltf(
         opacity: None,
         bump: None,
         bump_scale: 1.0,
+        energy_compensation: None,
     })
 }
 
@@ -303,6 +331,7 @@ pub fn from_mtl(m: &tobj::Material) -> std::result::Result<Desc, String> {
         opacity: None,
         bump: None,
         bump_scale: 1.0,
+        energy_compensation: None,
     })
 }
 

@@ -21,7 +21,10 @@ use super::common::{
     material_view, one, white_color, Check, ColorDesc, Distribution, Lobes, Model, OpacityDesc,
     TextureNames,
 };
-use crate::scene::records::{Material, ALPHA_SMOOTH, MAT_FLAG_COLOR2_CLAMPED, PLASTIC_TABLE_SIZE};
+use crate::scene::records::{
+    Material, ALPHA_SMOOTH, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_ENERGY,
+    MS_DIELECTRIC_BECKMANN_SEPARABLE, MS_DIELECTRIC_GGX_SEPARABLE, PLASTIC_TABLE_SIZE,
+};
 
 /// Mitsuba's default diffuse reflectance of a plastic.
 fn half_grey() -> ColorDesc {
@@ -71,6 +74,10 @@ pub struct Desc {
     /// reflects as the front does.
     #[serde(default)]
     pub one_sided: bool,
+    /// Give a rough coating back the energy its microfacets lose to multiple
+    /// scattering, reflected by the coating and let through to the base (Kulla and
+    /// Conty); default: `[render] energy_compensation`.
+    pub energy_compensation: Option<bool>,
 }
 
 material_view! {
@@ -97,6 +104,8 @@ material_view! {
         /// A rough coating's transmittance table: its first `tables` entry (placed by
         /// the flattener).
         table: u32 = table,
+        /// The record's flags (`MAT_FLAG_ENERGY`: compensated).
+        flags: u32 = flags,
     }
 }
 
@@ -133,6 +142,10 @@ impl Model for Desc {
         self.one_sided
     }
 
+    fn energy_compensation(&self) -> Option<Option<bool>> {
+        Some(self.energy_compensation)
+    }
+
     fn lobes(&self) -> Lobes {
         Lobes {
             density: true,
@@ -159,6 +172,7 @@ impl Model for Desc {
             nonlinear: if self.nonlinear { 1.0 } else { 0.0 },
             spec_weight: if s + d > 0.0 { s / (s + d) } else { 0.0 },
             table: 0,
+            flags: record.flags,
         }
         .write(record);
         record.flags |= MAT_FLAG_COLOR2_CLAMPED;
@@ -168,6 +182,31 @@ impl Model for Desc {
 /// Whether a plastic's record has a rough coating, which reads a transmittance table.
 pub fn is_rough(m: &Material) -> bool {
     Params::read(m).alpha >= ALPHA_SMOOTH
+}
+
+/// Whether a plastic's record is compensated for its coating's multiple scattering: a
+/// rough coating of ior above 1 with `MAT_FLAG_ENERGY` (plastic.wgsl's
+/// `plastic_compensated`).
+pub fn is_compensated(m: &Material) -> bool {
+    compensates(&Params::read(m))
+}
+
+/// `is_compensated` of a record's view.
+pub fn compensates(p: &Params) -> bool {
+    p.flags & MAT_FLAG_ENERGY != 0 && p.alpha >= ALPHA_SMOOTH && p.ior > 1.0
+}
+
+/// The dielectric albedo tables a compensated plastic's record reads
+/// (`microfacet_albedo::DielectricVariant`: the separable masking's, by distribution).
+pub fn ms_variant(m: &Material) -> Option<u32> {
+    if !is_compensated(m) {
+        return None;
+    }
+    Some(if Params::read(m).beckmann > 0.5 {
+        MS_DIELECTRIC_BECKMANN_SEPARABLE
+    } else {
+        MS_DIELECTRIC_GGX_SEPARABLE
+    })
 }
 
 /// Whether a rough plastic's record has Beckmann microfacets (`HAS_BECKMANN`).
