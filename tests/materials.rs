@@ -74,13 +74,25 @@ fn lobes(m: &Material) -> (bool, bool) {
 /// finite and not negative.
 fn directional_albedo(m: &Material, theta: f32, seed: u32) -> (f64, f64) {
     let (_, ray, hit) = view(theta);
+    sampled_mean(m, &ray, &hit, seed, |s| s.weight.x as f64)
+}
+
+/// The mean of `weight` over 40,000 of the material's samples toward `ray` at `hit` (0
+/// where absorbed), and its standard error; every weight finite and never negative.
+fn sampled_mean(
+    m: &Material,
+    ray: &Ray,
+    hit: &Hit,
+    seed: u32,
+    weight: impl Fn(&wgtrace::cpu::bsdf::Scatter) -> f64,
+) -> (f64, f64) {
     let mut rng = seed;
     let n = 40_000;
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     for _ in 0..n {
         let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
-        let s = scatter(m, &ray, &hit, u);
-        let w = if s.ok { s.weight.x as f64 } else { 0.0 };
+        let s = scatter(m, ray, hit, u);
+        let w = if s.ok { weight(&s) } else { 0.0 };
         assert!(w.is_finite() && w >= 0.0, "{w}");
         sum += w;
         sum2 += w * w;
@@ -1375,25 +1387,14 @@ fn glass_energy(keys: &str, ior: f32, theta: f32, entering: bool, seed: u32) -> 
     let wo = if entering { wo_up } else { -wo_up };
     let (ray, hit) = hit_at_origin(-wo, wo);
     let eta = if entering { 1.0 / ior } else { ior };
-    let mut rng = seed;
-    let n = 40_000;
-    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-    for _ in 0..n {
-        let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
-        let s = scatter(&m, &ray, &hit, u);
-        let mut w = if s.ok { s.weight.x as f64 } else { 0.0 };
-        if s.ok && (s.dir.z > 0.0) != (wo.z > 0.0) {
-            w /= (eta * eta) as f64;
+    sampled_mean(&m, &ray, &hit, seed, |s| {
+        let w = s.weight.x as f64;
+        if (s.dir.z > 0.0) != (wo.z > 0.0) {
+            w / (eta * eta) as f64
+        } else {
+            w
         }
-        assert!(w.is_finite() && w >= 0.0, "{w}");
-        sum += w;
-        sum2 += w * w;
-    }
-    let mean = sum / n as f64;
-    (
-        mean,
-        ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt(),
-    )
+    })
 }
 
 /// Energy compensation of rough dielectrics: rough glass keeps all the energy that

@@ -130,16 +130,20 @@ fn lambda(beckmann: bool, c: f64, alpha: f64) -> f64 {
     lambda_with(beckmann, c, alpha, erf)
 }
 
-/// `lambda` with Abramowitz and Stegun's 7.1.26 for the error function (error under
-/// 1.5e-7, five times faster: enough for the dielectric tables' 32 x 32 strata).
+/// `lambda` with `erf_approx` (five times faster: enough for the dielectric tables' 32 x
+/// 32 strata).
 fn lambda_fast(beckmann: bool, c: f64, alpha: f64) -> f64 {
-    lambda_with(beckmann, c, alpha, |x| {
-        let t = 1.0 / (1.0 + 0.3275911 * x);
-        let poly = t
-            * (0.254829592
-                + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
-        1.0 - poly * (-x * x).exp()
-    })
+    lambda_with(beckmann, c, alpha, erf_approx)
+}
+
+/// The error function by Abramowitz and Stegun's 7.1.26 (error under 1.5e-7).
+pub fn erf_approx(x: f64) -> f64 {
+    let a = x.abs();
+    let t = 1.0 / (1.0 + 0.3275911 * a);
+    let poly = t
+        * (0.254829592
+            + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
+    (1.0 - poly * (-a * a).exp()).copysign(x)
 }
 
 fn lambda_with(beckmann: bool, c: f64, alpha: f64, erf: impl Fn(f64) -> f64) -> f64 {

@@ -21,6 +21,7 @@ use super::common::{
     material_view, one, white_color, Check, ColorDesc, Distribution, Lobes, Model, OpacityDesc,
     TextureNames,
 };
+use crate::scene::microfacet_albedo::erf_approx;
 use crate::scene::records::{
     Material, ALPHA_SMOOTH, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_ENERGY,
     MS_DIELECTRIC_BECKMANN_SEPARABLE, MS_DIELECTRIC_GGX_SEPARABLE, PLASTIC_TABLE_SIZE,
@@ -244,16 +245,6 @@ fn fresnel(c: f64, eta: f64) -> f64 {
     0.5 * (a * a + b * b)
 }
 
-/// The error function (Abramowitz and Stegun 7.1.26, error under 1.5e-7).
-fn erf(x: f64) -> f64 {
-    let a = x.abs();
-    let t = 1.0 / (1.0 + 0.3275911 * a);
-    let poly = t
-        * (0.254829592
-            + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429))));
-    (1.0 - poly * (-a * a).exp()).copysign(x)
-}
-
 /// Smith's G1 of direction v (v.z > 0 the side it sees) for the isotropic distribution.
 fn g1(v: DVec3, alpha: f64, beckmann: bool) -> f64 {
     let tan2 = (v.x * v.x + v.y * v.y) / (v.z * v.z);
@@ -262,7 +253,7 @@ fn g1(v: DVec3, alpha: f64, beckmann: bool) -> f64 {
     }
     let lambda = if beckmann {
         let a = 1.0 / (alpha * tan2.sqrt());
-        0.5 * (erf(a) - 1.0) + (-a * a).exp() / (2.0 * a * PI.sqrt())
+        0.5 * (erf_approx(a) - 1.0) + (-a * a).exp() / (2.0 * a * PI.sqrt())
     } else {
         0.5 * ((1.0 + alpha * alpha * tan2).sqrt() - 1.0)
     };
