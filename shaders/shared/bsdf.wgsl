@@ -433,34 +433,48 @@ fn ms_loss(variant: u32, alpha: f32, cos_o: f32) -> f32 {
 }
 
 // The directional albedo at cosine c of a lobe of `variant` and alpha with Schlick's
+// Fresnel from f0 to f90, alone: f0 E1 + (f90 - f0) E5.
+fn ms_schlick_single(variant: u32, alpha: f32, c: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
+    return f0 * ms_albedo(ms_offset(variant, 0u), c, alpha) + (f90 - f0) * ms_albedo(ms_offset(variant, 1u), c, alpha);
+}
+
+// ms_schlick_single averaged over cosines (2 int E mu dmu).
+fn ms_schlick_single_average(variant: u32, alpha: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
+    return f0 * ms_average(ms_offset(variant, 0u), alpha) + (f90 - f0) * ms_average(ms_offset(variant, 1u), alpha);
+}
+
+// The directional albedo at cosine c of a lobe of `variant` and alpha with Schlick's
 // Fresnel from f0 to f90, its compensation lobe included: f0 E1 + (f90 - f0) E5 + F_ms
 // (1 - E1).
 fn ms_schlick_albedo(variant: u32, alpha: f32, c: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
     let o1 = ms_offset(variant, 0u);
-    let o5 = ms_offset(variant, 1u);
     let e1 = ms_albedo(o1, c, alpha);
     let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, ms_average(o1, alpha));
-    return f0 * e1 + (f90 - f0) * ms_albedo(o5, c, alpha) + f_ms * (1.0 - e1);
+    return ms_schlick_single(variant, alpha, c, f0, f90) + f_ms * (1.0 - e1);
 }
 
 // ms_schlick_albedo averaged over cosines (2 int E mu dmu).
 fn ms_schlick_average(variant: u32, alpha: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
-    let o1 = ms_offset(variant, 0u);
-    let e1 = ms_average(o1, alpha);
+    let e1 = ms_average(ms_offset(variant, 0u), alpha);
     let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, e1);
-    return f0 * e1 + (f90 - f0) * ms_average(ms_offset(variant, 1u), alpha) + f_ms * (1.0 - e1);
+    return ms_schlick_single_average(variant, alpha, f0, f90) + f_ms * (1.0 - e1);
+}
+
+// Kulla and Conty's albedo scaling of a layer under a lobe whose albedo is a_o toward wo
+// and a_i toward wi and avg on average: (1 - a_o) (1 - a_i) / (1 - avg), reciprocal, and
+// a white layer under a lobe reflects all that the lobe does not.
+fn ms_scaling(a_o: vec3<f32>, a_i: vec3<f32>, avg: vec3<f32>) -> vec3<f32> {
+    let v = (vec3<f32>(1.0) - a_o) * (vec3<f32>(1.0) - a_i) / (vec3<f32>(1.0) - avg);
+    return select(v, vec3<f32>(0.0), avg >= vec3<f32>(1.0));
 }
 
 // The share of a layer under a compensated Schlick lobe between wo and wi: what the lobe
-// (and its compensation) leaves of both directions, (1 - E_s(cos_o)) (1 - E_s(cos_i)) /
-// (1 - E_s avg) (Kulla and Conty's albedo scaling: reciprocal, and a white layer under a
-// white lobe reflects all that arrives).
+// (and its compensation) leaves of both directions (ms_scaling of ms_schlick_albedo).
 fn ms_under(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f0: vec3<f32>, f90: vec3<f32>) -> vec3<f32> {
     let avg = ms_schlick_average(variant, alpha, f0, f90);
-    let o = vec3<f32>(1.0) - ms_schlick_albedo(variant, alpha, cos_o, f0, f90);
-    let i = vec3<f32>(1.0) - ms_schlick_albedo(variant, alpha, cos_i, f0, f90);
-    return select(o * i / (vec3<f32>(1.0) - avg), vec3<f32>(0.0), avg >= vec3<f32>(1.0));
+    return ms_scaling(ms_schlick_albedo(variant, alpha, cos_o, f0, f90), ms_schlick_albedo(variant, alpha, cos_i, f0, f90), avg);
 }
+
 // ----- rough dielectrics (after the reflecting variants: scene::microfacet_albedo's
 // dielectric tables). A dielectric boundary's multiple scattering sends what a side loses,
 // 1 - E(cos_o) of E its total albedo in energy (reflection and transmission), both ways:

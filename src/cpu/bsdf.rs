@@ -490,30 +490,47 @@ pub fn ms_loss(variant: u32, alpha: f32, cos_o: f32) -> f32 {
     (1.0 - ms_albedo(ms_offset(variant, 0), cos_o, alpha)).clamp(0.0, 0.9)
 }
 
+/// The albedo at c of a Schlick lobe from f0 to f90 alone: f0 E1 + (f90 - f0) E5.
+pub fn ms_schlick_single(variant: u32, alpha: f32, c: f32, f0: Vec3, f90: Vec3) -> Vec3 {
+    f0 * ms_albedo(ms_offset(variant, 0), c, alpha)
+        + (f90 - f0) * ms_albedo(ms_offset(variant, 1), c, alpha)
+}
+
+/// `ms_schlick_single` averaged over cosines.
+pub fn ms_schlick_single_average(variant: u32, alpha: f32, f0: Vec3, f90: Vec3) -> Vec3 {
+    f0 * ms_average(ms_offset(variant, 0), alpha)
+        + (f90 - f0) * ms_average(ms_offset(variant, 1), alpha)
+}
+
 /// The albedo at c of a compensated Schlick lobe from f0 to f90.
 pub fn ms_schlick_albedo(variant: u32, alpha: f32, c: f32, f0: Vec3, f90: Vec3) -> Vec3 {
     let o1 = ms_offset(variant, 0);
-    let o5 = ms_offset(variant, 1);
     let e1 = ms_albedo(o1, c, alpha);
     let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, ms_average(o1, alpha));
-    f0 * e1 + (f90 - f0) * ms_albedo(o5, c, alpha) + f_ms * (1.0 - e1)
+    ms_schlick_single(variant, alpha, c, f0, f90) + f_ms * (1.0 - e1)
 }
 
 /// `ms_schlick_albedo` averaged over cosines.
 pub fn ms_schlick_average(variant: u32, alpha: f32, f0: Vec3, f90: Vec3) -> Vec3 {
-    let o1 = ms_offset(variant, 0);
-    let e1 = ms_average(o1, alpha);
+    let e1 = ms_average(ms_offset(variant, 0), alpha);
     let f_ms = ms_fresnel(f0 + (f90 - f0) / 21.0, e1);
-    f0 * e1 + (f90 - f0) * ms_average(ms_offset(variant, 1), alpha) + f_ms * (1.0 - e1)
+    ms_schlick_single_average(variant, alpha, f0, f90) + f_ms * (1.0 - e1)
+}
+
+/// Kulla and Conty's albedo scaling: (1 - a_o) (1 - a_i) / (1 - avg).
+pub fn ms_scaling(a_o: Vec3, a_i: Vec3, avg: Vec3) -> Vec3 {
+    let v = (Vec3::ONE - a_o) * (Vec3::ONE - a_i) / (Vec3::ONE - avg);
+    Vec3::select(avg.cmpge(Vec3::ONE), Vec3::ZERO, v)
 }
 
 /// The share of a layer under a compensated Schlick lobe (albedo scaling).
 pub fn ms_under(variant: u32, alpha: f32, cos_o: f32, cos_i: f32, f0: Vec3, f90: Vec3) -> Vec3 {
     let avg = ms_schlick_average(variant, alpha, f0, f90);
-    let o = Vec3::ONE - ms_schlick_albedo(variant, alpha, cos_o, f0, f90);
-    let i = Vec3::ONE - ms_schlick_albedo(variant, alpha, cos_i, f0, f90);
-    let v = o * i / (Vec3::ONE - avg);
-    Vec3::select(avg.cmpge(Vec3::ONE), Vec3::ZERO, v)
+    ms_scaling(
+        ms_schlick_albedo(variant, alpha, cos_o, f0, f90),
+        ms_schlick_albedo(variant, alpha, cos_i, f0, f90),
+        avg,
+    )
 }
 
 // ----- rough dielectrics (shared/bsdf.wgsl has the formulas)

@@ -649,6 +649,12 @@ pub const MATERIALS: &[TestMaterial] = &[
         true,
     ),
     row(
+        "pbr clearcoat over white compensated",
+        "type = \"pbr\"\nbase_color = [1, 1, 1]\nmetallic = 0\nroughness = 0.8\nclearcoat = 1\nclearcoat_roughness = 0.9\nenergy_compensation = true",
+        false,
+        true,
+    ),
+    row(
         "principled metal compensated",
         "type = \"principled\"\nbase_color = [0.9, 0.8, 0.7]\nmetallic = 1\nroughness = 0.8\nenergy_compensation = true",
         false,

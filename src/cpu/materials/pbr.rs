@@ -4,8 +4,9 @@ use glam::Vec3;
 
 use crate::cpu::bindings::Bindings;
 use crate::cpu::bsdf::{
-    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, ms_lobe, ms_loss, ms_under,
-    sample_ggx_lobes, smith_g2, Scatter, Shading, ABSORBED, ALPHA_SMOOTH,
+    density_sample, ggx_d, ggx_lobes_pdf, lobe_prob, luminance, ms_lobe, ms_loss, ms_scaling,
+    ms_schlick_single, ms_schlick_single_average, ms_under, sample_ggx_lobes, smith_g2, Scatter,
+    Shading, ABSORBED, ALPHA_SMOOTH,
 };
 use crate::cpu::sampling::{sample_cosine_hemisphere, PI};
 use crate::cpu::textures::{map_normal, texture_alpha, texture_at};
@@ -154,7 +155,18 @@ pub fn coat_over(p: &Params, n: Vec3, wo: Vec3, wi: Vec3, under: Vec3) -> Vec3 {
     let cos_o = nc.dot(wo);
     let cos_i = nc.dot(wi);
     let cc = p.clearcoat;
-    let mut f = under * ((1.0 - cc * coat_fresnel(cos_o)) * (1.0 - cc * coat_fresnel(cos_i)));
+    let mut through =
+        Vec3::splat((1.0 - cc * coat_fresnel(cos_o)) * (1.0 - cc * coat_fresnel(cos_i)));
+    if p.flags & MAT_FLAG_ENERGY != 0 {
+        let (f0, f90) = (Vec3::splat(0.04 * cc), Vec3::splat(cc));
+        let (a, v) = (p.coat_alpha, MS_GGX_CORRELATED);
+        through = ms_scaling(
+            ms_schlick_single(v, a, cos_o, f0, f90),
+            ms_schlick_single(v, a, cos_i, f0, f90),
+            ms_schlick_single_average(v, a, f0, f90),
+        );
+    }
+    let mut f = under * through;
     if cos_o > 0.0 && cos_i > 0.0 {
         let h = (wo + wi).normalize();
         let a = p.coat_alpha;
