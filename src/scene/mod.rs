@@ -18,6 +18,7 @@ pub mod materials;
 pub mod mesh;
 pub mod metals;
 pub mod microfacet_albedo;
+pub mod mitsuba;
 pub mod mtl;
 pub mod records;
 pub mod shapes;
