@@ -1316,6 +1316,21 @@ fn principled_materials_are_validated() {
     wgtrace::load_scene_str(ok, std::path::Path::new("ok.toml"), &Default::default()).unwrap();
 }
 
+/// (view, directional albedo without compensation, with it, the latter's standard
+/// error) of the material `keys` from every view.
+fn albedo_without_and_with_compensation(keys: &str) -> Vec<(f32, f64, f64, f64)> {
+    let plain = material(keys);
+    let compensated = material(&format!("{keys}\nenergy_compensation = true"));
+    VIEWS
+        .iter()
+        .map(|&theta| {
+            let (before, _) = directional_albedo(&plain, theta, 29);
+            let (after, sigma) = directional_albedo(&compensated, theta, 31);
+            (theta, before, after, sigma)
+        })
+        .collect()
+}
+
 /// Multiple-scattering energy compensation (Kulla and Conty): white rough lobes reflect
 /// all the light that arrives, from every view, within 2% (the albedo tables' 32 x 32
 /// cells and their interpolation), where without it they lose up to 91% of it. Among them
@@ -1367,12 +1382,8 @@ fn energy_compensation_gives_white_rough_lobes_back_their_energy() {
             0.98,
         ),
     ] {
-        let plain = material(keys);
-        let compensated = material(&format!("{keys}\nenergy_compensation = true"));
         let mut report = String::new();
-        for theta in VIEWS {
-            let (before, _) = directional_albedo(&plain, theta, 29);
-            let (after, sigma) = directional_albedo(&compensated, theta, 31);
+        for (theta, before, after, sigma) in albedo_without_and_with_compensation(keys) {
             report += &format!(" {theta}: {before:.3} -> {after:.3};");
             assert!(
                 after <= 1.02 + 4.0 * sigma && after >= lowest - 4.0 * sigma && after >= before,
@@ -1481,12 +1492,8 @@ fn energy_compensation_gives_rough_glass_and_plastic_back_their_energy() {
         "type = \"plastic\"\nalbedo = [1, 1, 1]\nroughness = 0.8\ndistribution = \"beckmann\"",
         "type = \"plastic\"\nalbedo = [1, 1, 1]\nroughness = 1\nnonlinear = true",
     ] {
-        let plain = material(keys);
-        let compensated = material(&format!("{keys}\nenergy_compensation = true"));
         let mut report = String::new();
-        for theta in VIEWS {
-            let (before, _) = directional_albedo(&plain, theta, 29);
-            let (after, sigma) = directional_albedo(&compensated, theta, 31);
+        for (theta, before, after, sigma) in albedo_without_and_with_compensation(keys) {
             report += &format!(" {theta}: {before:.3} -> {after:.3};");
             assert!(
                 after <= 1.02 + 4.0 * sigma

@@ -273,8 +273,9 @@ shared_constants! {
     MS_DIELECTRIC_BECKMANN_CORRELATED: u32 = 1;
     MS_DIELECTRIC_GGX_SEPARABLE: u32 = 2;
     MS_DIELECTRIC_BECKMANN_SEPARABLE: u32 = 3;
-    /// Indices of refraction of the dielectric albedo tables, evenly from 1 to
-    /// MS_IOR_MAX (a higher one is read at MS_IOR_MAX).
+    /// Indices of refraction of the dielectric albedo tables, from 1 to MS_IOR_MAX
+    /// spaced quadratically, closer toward 1 (`microfacet_albedo::table_ior`; a higher
+    /// one is read at MS_IOR_MAX).
     MS_IORS: u32 = 16;
     MS_IOR_MAX: f32 = 3.0;
     /// `shape_data` entries of one triangle's attributes: (n0, u0), (n1, u1), (n2, u2),
