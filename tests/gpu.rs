@@ -1519,6 +1519,63 @@ material = "light"
     }
 }
 
+/// Masks decide independently of each other: two sheets of opacity 0.5 one behind the
+/// other pass a quarter of the rays, 0.25 of an emitter behind them (a Bernoulli mean, to 5
+/// standard errors), on both backends. Each surface along a ray draws its own uniform
+/// number; the golden-ratio shift of one number they once shared passed 0.118.
+#[test]
+fn stacked_masks_pass_the_product_of_their_transparencies() {
+    let src = r#"
+[render]
+width = 8
+height = 4
+spp = 512
+max_depth = 1
+
+[camera]
+projection = "orthographic"
+height = 4
+look_from = [0, 0, 3]
+look_at = [0, 0, 0]
+
+[materials]
+light = { type = "emissive", radiance = [1, 1, 1] }
+veil = { type = "lambertian", albedo = [0, 0, 0], opacity = 0.5 }
+
+[[objects]]
+type = "polygon"
+vertices = [[-10, -10, -1], [10, -10, -1], [10, 10, -1], [-10, 10, -1]]
+material = "light"
+
+[[objects]]
+type = "polygon"
+vertices = [[-10, -10, 0.5], [10, -10, 0.5], [10, 10, 0.5], [-10, 10, 0.5]]
+material = "veil"
+
+[[objects]]
+type = "polygon"
+vertices = [[-10, -10, 0], [10, -10, 0], [10, 10, 0], [-10, 10, 0]]
+material = "veil"
+"#;
+    let scene = scene_from_str(src);
+    for (name, render) in [
+        (
+            "gpu",
+            render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
+        ),
+        ("cpu", render_cpu),
+    ] {
+        let img = render(&scene);
+        let n = (32 * 512) as f64;
+        let mean = (0..32).map(|i| img.mean(i)[0] as f64).sum::<f64>() / 32.0;
+        let se = (0.25f64 * 0.75 / n).sqrt();
+        assert!(
+            (mean - 0.25).abs() <= 5.0 * se,
+            "{name}: two veils pass {mean} (0.25 +- {se})"
+        );
+    }
+}
+
 /// An opacity mask on any material, on both backends. Before an emitter of radiance 1, seen
 /// by an orthographic camera at max_depth 1 (a pixel a unit): a black Lambertian sheet of
 /// opacity 0.3 shows 0.7 (a Bernoulli mean, to 5 standard errors); a black conductor

@@ -177,10 +177,14 @@ pub fn transparent_at(b: &Bindings, hit: &Hit, u: f32) -> bool {
     u >= alpha
 }
 
-/// The uniform number of the k-th surface a ray meets (materials.wgsl's `alpha_u`).
+/// The uniform number of the k-th surface a ray meets (materials.wgsl's `alpha_u`): u for
+/// the first, then u's bits hashed with k, independent from surface to surface.
 pub fn alpha_u(u: f32, k: u32) -> f32 {
-    let x = u + k as f32 * 0.618034;
-    x - x.floor()
+    if k == 0 {
+        return u;
+    }
+    let h = super::rng::pcg4d([u.to_bits(), k, 0x2545f491, 0x9e3779b9]);
+    super::rng::u32_to_unit_float(h[0])
 }
 
 /// The hit with its shading normal bent where the viewer's mirror direction about it
