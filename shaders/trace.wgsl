@@ -228,6 +228,9 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
             le *= power_heuristic((*path).prev_pdf, light_pdf(params.env_light, (*path).prev_p, (*path).prev_p, (*path).ray.dir));
         }
 #endif
+        if (params.hide_emitters != 0u && (*path).depth == 0u) {
+            le = vec3<f32>(0.0);
+        }
         (*path).radiance += (*path).throughput * le;
         return false;
     }
@@ -271,6 +274,9 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
         le *= power_heuristic((*path).prev_pdf, light_pdf(light - 1u, (*path).prev_p, hit.p, (*path).ray.dir));
     }
 #endif
+    if (params.hide_emitters != 0u && (*path).depth == 0u) {
+        le = vec3<f32>(0.0);
+    }
     (*path).radiance += (*path).throughput * le;
     if ((*path).depth + 1u >= params.max_depth) {
         return false;

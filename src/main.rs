@@ -41,7 +41,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Render a scene file to an image.
-    Render(RenderArgs),
+    Render(Box<RenderArgs>),
     /// Measure how error falls with samples and seconds, per sampler and light-sampling
     /// strategy, against a reference; writes results.csv, report.md and plots.
     Converge(ConvergeArgs),
@@ -58,6 +58,18 @@ enum Command {
         /// Scene files: TOML, or glTF 2.0 files (.gltf, .glb) on their own.
         #[arg(required = true)]
         scenes: Vec<PathBuf>,
+    },
+    /// Write a Mitsuba 3 scene file (.xml) as wgtrace's TOML scene format, to read and edit
+    /// what the import makes of it; `wgtrace render` reads the .xml file the same way.
+    Convert {
+        /// The Mitsuba 3 scene file.
+        scene: PathBuf,
+        /// The TOML file to write (default: the scene's name with .toml, beside it).
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// A `<default>` replaced, as Mitsuba's -D (repeatable).
+        #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+        define: Vec<(String, String)>,
     },
     /// List the Vulkan adapters wgtrace can see, in the order `--adapter` counts them.
     Info,
@@ -193,6 +205,9 @@ struct RenderArgs {
     /// without one, a view that frames the scene).
     #[arg(long, value_name = "NAME")]
     camera: Option<String>,
+    /// A Mitsuba scene file's `<default>` replaced, as Mitsuba's -D (repeatable).
+    #[arg(short = 'D', value_name = "NAME=VALUE", value_parser = parse_define)]
+    define: Vec<(String, String)>,
     /// A uniform background of this radiance (replaces the scene's [background], and the
     /// studio environment of a glTF file without punctual lights; 0,0,0 for none).
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
@@ -289,6 +304,52 @@ fn tune_help() -> String {
     s
 }
 
+fn parse_define(s: &str) -> Result<(String, String), String> {
+    match s.split_once('=') {
+        Some((name, value)) if !name.trim().is_empty() => {
+            Ok((name.trim().to_string(), value.to_string()))
+        }
+        _ => Err(format!("must be NAME=VALUE, got {s}")),
+    }
+}
+
+/// `wgtrace convert`: a Mitsuba scene file as TOML, checked by loading it as it was written.
+fn convert(
+    scene: &Path,
+    output: Option<PathBuf>,
+    defines: &[(String, String)],
+) -> anyhow::Result<()> {
+    if !wgtrace::scene::load::is_mitsuba(scene) {
+        anyhow::bail!(
+            "{}: convert reads Mitsuba 3 scene files (.xml)",
+            scene.display()
+        );
+    }
+    let output = output.unwrap_or_else(|| scene.with_extension("toml"));
+    if output == scene {
+        anyhow::bail!(
+            "{}: the output would overwrite the scene file",
+            output.display()
+        );
+    }
+    let base = output.parent().unwrap_or(Path::new(""));
+    let converted = wgtrace::scene::load::convert_mitsuba(scene, defines, base)?;
+    for n in &converted.notes {
+        eprintln!("note: {n}");
+    }
+    std::fs::write(&output, &converted.toml)
+        .map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", output.display()))?;
+    // what was written must load: its values checked, its files read
+    wgtrace::scene::load(
+        &output,
+        &Overrides::default(),
+        wgtrace::Tuning::default().build(),
+    )
+    .map_err(|e| anyhow::anyhow!("the converted scene does not load:\n{e}"))?;
+    println!("{} -> {}", scene.display(), output.display());
+    Ok(())
+}
+
 fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
     let parts: Vec<f32> = s
         .split(',')
@@ -322,10 +383,15 @@ fn main() -> ExitCode {
         })
     });
     let result = match cli.command {
-        Command::Render(args) => render(args),
+        Command::Render(args) => render(*args),
         Command::Converge(args) => converge(args),
         Command::Features { scene } => features(&scene),
         Command::Validate { scenes } => validate(&scenes),
+        Command::Convert {
+            scene,
+            output,
+            define,
+        } => convert(&scene, output, &define),
         Command::Info => info(),
         Command::Check { adapter, tune } => check(adapter.as_deref(), tune.unwrap_or_default()),
         Command::Merge {
@@ -688,6 +754,7 @@ fn render(args: RenderArgs) -> anyhow::Result<()> {
         background: args.background,
         camera: args.camera.clone(),
         energy_compensation: args.energy_compensation,
+        defines: args.define.clone(),
     };
     let tuning = args.tune.unwrap_or_default();
     if tuning.lane_stats && matches!(args.backend, BackendArg::Cpu) {

@@ -520,6 +520,7 @@ fn overrides_replace_render_settings_and_are_validated() {
         background: Some([0.5, 0.25, 0.125]),
         camera: None,
         energy_compensation: false,
+        defines: Vec::new(),
     };
     let s = wgtrace::load_scene_str(POLYGON_SCENE, Path::new("p.toml"), &o).unwrap();
     assert_eq!(s.background, [0.5, 0.25, 0.125]);

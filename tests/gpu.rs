@@ -1519,6 +1519,67 @@ material = "light"
     }
 }
 
+/// `hide_emitters`: camera rays see neither an emitter nor the background, which still
+/// light what the camera sees. An emitting quad of radiance 2 before a background of 0.5,
+/// and a white Lambertian quad lit by both: with the flag the emitter and the sky read 0
+/// exactly, the lit quad as without it (the same random numbers, so the same value).
+#[test]
+fn hidden_emitters_light_the_scene_but_are_not_seen() {
+    let src = |hide: bool| {
+        format!(
+            r#"
+[render]
+width = 8
+height = 4
+spp = 16
+max_depth = 3
+hide_emitters = {hide}
+
+[camera]
+projection = "orthographic"
+height = 4
+look_from = [0, 0, 3]
+look_at = [0, 0, 0]
+
+[background]
+color = [0.5, 0.5, 0.5]
+
+[materials]
+light = {{ type = "emissive", radiance = [2, 2, 2], two_sided = true }}
+white = {{ type = "lambertian", albedo = [0.8, 0.8, 0.8] }}
+
+[[objects]]
+type = "polygon"
+vertices = [[-4, 0, 0], [-1, 0, 0], [-1, 2, 0], [-4, 2, 0]]
+material = "light"
+
+[[objects]]
+type = "polygon"
+vertices = [[0, -2, 0], [4, -2, 0], [4, 2, 0], [0, 2, 0]]
+material = "white"
+"#
+        )
+    };
+    let (shown, hidden) = (scene_from_str(&src(false)), scene_from_str(&src(true)));
+    for (name, render) in [
+        (
+            "gpu",
+            render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
+        ),
+        ("cpu", render_cpu),
+    ] {
+        let (a, b) = (render(&shown), render(&hidden));
+        // pixel (1, 0): the emitter; (1, 3): the sky; (6, 1): the lit quad
+        assert_eq!(a.mean(1), [2.0; 3], "{name}");
+        assert_eq!(b.mean(1), [0.0; 3], "{name}");
+        assert_eq!(a.mean(3 * 8 + 1), [0.5; 3], "{name}");
+        assert_eq!(b.mean(3 * 8 + 1), [0.0; 3], "{name}");
+        let lit = a.mean(8 + 6);
+        assert!(lit[0] > 0.1, "{name}: {lit:?}");
+        assert_eq!(b.mean(8 + 6), lit, "{name}");
+    }
+}
+
 /// Masks decide independently of each other: two sheets of opacity 0.5 one behind the
 /// other pass a quarter of the rays, 0.25 of an emitter behind them (a Bernoulli mean, to 5
 /// standard errors), on both backends. Each surface along a ray draws its own uniform

@@ -406,7 +406,8 @@ const FUZZ_TOKENS: &[&str] = &[
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
 
-    /// Broken files give an error naming the file and a line (never a panic).
+    /// Broken files give an error naming the file and a line (never a panic); files that
+    /// parse are mapped onto the scene format and loaded, without a panic either.
     #[test]
     fn the_reader_never_panics_on_broken_files(
         edits in proptest::collection::vec((any::<proptest::sample::Index>(), 0..FUZZ_TOKENS.len(), any::<bool>()), 1..6)
@@ -427,8 +428,21 @@ proptest! {
                 text.insert_str(i, FUZZ_TOKENS[token]);
             }
         }
-        if let Err(e) = parse(&text) {
-            prop_assert!(e.pos.line >= 1 && e.to_string().starts_with("test.xml:"), "{}", e);
+        match parse(&text) {
+            Err(e) => {
+                prop_assert!(e.pos.line >= 1 && e.to_string().starts_with("test.xml:"), "{}", e);
+            }
+            // what parses goes on through the mapping onto the scene format, and what
+            // that makes through the scene checks: each stage an error or a scene
+            Ok(tree) => {
+                if let Ok(imported) = wgtrace::scene::mitsuba::import(&tree, Path::new("")) {
+                    let _ = wgtrace::load_scene_str(
+                        &imported.toml,
+                        Path::new("test.toml"),
+                        &Default::default(),
+                    );
+                }
+            }
         }
     }
 }

@@ -351,6 +351,7 @@ fn transform_order_is_scale_rotate_xyz_translate() {
         scale: Some(ScaleDesc::Axes([2.0, 1.0, 1.0])),
         rotate: [90.0, 0.0, 0.0],
         translate: [0.0, 0.0, 5.0],
+        matrix: None,
     };
     let m = transform_matrix(&t);
     // +Y turns to +Z about X; scale acts first, translation last

@@ -152,6 +152,77 @@ fn sobol_points_are_02_sequences_scrambled_or_not() {
     assert_ne!(sobol_owen_bits(0, 0, 0, 7), sobol_owen_bits(1, 0, 0, 7));
 }
 
+/// With samples kept on the image (`sample_border = false`, Mitsuba's film), a border
+/// pixel draws from its filter restricted to the image: the tent of radius 1 at pixel 0
+/// of 8 gives offsets in [-0.5, 1] only, with the restricted profile's mean, 1/12 over
+/// 7/8 = 0.095238 (for u spread evenly over [0, 1)); an inner pixel keeps the whole
+/// filter (mean 0); and the Gaussian of radius 2 at the last pixel of 4 stays at or under
+/// +0.5, its mean that of the half profile truncated at 0.5.
+#[test]
+fn filters_kept_on_the_image_sample_the_restricted_profile() {
+    use wgtrace::cpu::samplers::filter_offset_on_image;
+    use wgtrace::scene::format::{FilterKind, PixelFilter};
+    use wgtrace::scene::records::{FILTER_GAUSSIAN, FILTER_TENT};
+    let s = scene(1);
+    let mut p = params(&s);
+    let n = 100_000;
+    let offsets = |p: &Params, i: u32, of: u32| -> Vec<f64> {
+        (0..n)
+            .map(|k| filter_offset_on_image(p, (k as f32 + 0.5) / n as f32, i, of) as f64)
+            .collect()
+    };
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    p.pixel_filter = FILTER_TENT;
+    p.filter_shape = PixelFilter {
+        kind: FilterKind::Tent,
+        radius: 1.0,
+        stddev: 0.0,
+        inside: true,
+    }
+    .shape();
+    let edge = offsets(&p, 0, 8);
+    assert!(edge.iter().all(|&x| (-0.5..=1.0).contains(&x)));
+    assert!((mean(&edge) - 0.095238).abs() < 1e-3, "{}", mean(&edge));
+    let inner = offsets(&p, 4, 8);
+    assert!(mean(&inner).abs() < 1e-3 && inner.iter().any(|&x| x < -0.9));
+    p.pixel_filter = FILTER_GAUSSIAN;
+    p.filter_shape = PixelFilter {
+        kind: FilterKind::Gaussian,
+        radius: 2.0,
+        stddev: 0.5,
+        inside: true,
+    }
+    .shape();
+    let last = offsets(&p, 3, 4);
+    assert!(last.iter().all(|&x| (-2.0..=0.5).contains(&x)));
+    // the truncated profile's mean, by Simpson's rule in f64
+    let g = |x: f64| (-x * x / 0.5).exp() - (-8.0f64).exp();
+    let (a, b, m) = (-2.0f64, 0.5f64, 20_000);
+    let h = (b - a) / m as f64;
+    let simpson = |f: &dyn Fn(f64) -> f64| {
+        (0..=m)
+            .map(|k| {
+                let w = if k == 0 || k == m {
+                    1.0
+                } else if k % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * f(a + k as f64 * h)
+            })
+            .sum::<f64>()
+            * h
+            / 3.0
+    };
+    let want = simpson(&|x| x * g(x)) / simpson(&|x| g(x));
+    assert!(
+        (mean(&last) - want).abs() < 2e-3,
+        "{} against {want}",
+        mean(&last)
+    );
+}
+
 /// The pixel filters' samplers invert their CDFs: for u across [0, 1), the offset x the
 /// sampler returns has F(x) = u, where F is the filter's profile integrated from -radius
 /// in f64 (Simpson's rule, not the sampler's erf) and normalized; so the offsets follow
@@ -174,6 +245,7 @@ fn pixel_filters_sample_their_profiles_by_the_inverse_cdf() {
             kind,
             radius,
             stddev,
+            inside: false,
         };
         let s = scene(1);
         let mut p = params(&s);

@@ -659,6 +659,7 @@ fn load<'py>(
         camera: arg("camera", "a camera's name (str)", camera)?,
         energy_compensation: arg::<bool>("energy_compensation", "a bool", energy_compensation)?
             .unwrap_or(false),
+        defines: Vec::new(),
     };
     let scene = py
         .detach(|| wgtrace::load_scene(&path, &overrides))

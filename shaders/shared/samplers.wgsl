@@ -120,7 +120,12 @@ fn bounce_2d(pixel: u32, sample: u32, depth: u32, dim: u32) -> vec2<f32> {
 fn pixel_position(pixel: u32, sample: u32) -> vec2<f32> {
     let u = sample_2d(pixel, sample, DIM_PIXEL);
 #ifdef HAS_PIXEL_FILTER
-    return vec2<f32>(0.5 + filter_offset(u.x), 0.5 + filter_offset(u.y));
+    let x = pixel % params.width;
+    let y = pixel / params.width;
+    return vec2<f32>(
+        0.5 + filter_offset_on_image(u.x, x, params.width),
+        0.5 + filter_offset_on_image(u.y, y, params.height),
+    );
 #else
     return u;
 #endif
@@ -139,6 +144,39 @@ fn filter_offset(u: f32) -> f32 {
         return select(r * (1.0 - sqrt(2.0 - 2.0 * u)), r * (sqrt(2.0 * u) - 1.0), u < 0.5);
     }
     return gaussian_filter_offset(u);
+}
+
+// The offset along one axis for pixel i of n: with samples kept on the image
+// (filter_shape.w = 1, Mitsuba's film without sample_border), drawn from the filter
+// restricted to the image by moving u into the part of the filter's CDF over it (exact:
+// the filters are separable and the image a rectangle); else from the whole filter.
+fn filter_offset_on_image(u: f32, i: u32, n: u32) -> f32 {
+    if (params.filter_shape.w == 0.0) {
+        return filter_offset(u);
+    }
+    let a = -(f32(i) + 0.5);
+    let b = f32(n) - f32(i) - 0.5;
+    let lo = filter_cdf(a);
+    let hi = filter_cdf(b);
+    return clamp(filter_offset(lo + u * (hi - lo)), a, b);
+}
+
+// The filter's CDF along one axis at offset x: the tent's in closed form; the Gaussian's
+// from the integral of g - g(r) from 0, by symmetry.
+fn filter_cdf(x: f32) -> f32 {
+    let r = params.filter_shape.x;
+    let t = clamp(x / r, -1.0, 1.0);
+    if (params.pixel_filter == FILTER_TENT) {
+        return select(1.0 - 0.5 * (1.0 - t) * (1.0 - t), 0.5 * (1.0 + t) * (1.0 + t), t < 0.0);
+    }
+    let s = params.filter_shape.y;
+    let b = params.filter_shape.z;
+    let k = 0.70710678 / s;
+    let c = 1.25331414 * s;
+    let ax = min(abs(x), r);
+    let g = c * erf_approx(ax * k) - b * ax;
+    let total = c * erf_approx(r * k) - b * r;
+    return 0.5 + sign(x) * 0.5 * g / total;
 }
 
 // The Gaussian filter's offset at u: by symmetry the x in [0, r] where the integral of

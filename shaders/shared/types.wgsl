@@ -176,8 +176,13 @@ struct Params {
     pixel_filter: u32,
     // the first tables entry of the microfacet albedo tables (energy compensation)
     ms_tables: u32,
+    // 1: camera rays see no emitter and no background
+    hide_emitters: u32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
     // the filter's radius (pixels), a Gaussian's standard deviation, its value at the
-    // radius (subtracted) and its 1D integral over [-radius, radius]
+    // radius (subtracted), and 1 when samples stay on the image
     filter_shape: vec4<f32>,
 }
 

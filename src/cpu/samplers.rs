@@ -108,10 +108,53 @@ pub fn pixel_position(b: &Bindings, pixel: u32, sample: u32) -> [f32; 2] {
     if b.params.pixel_filter == FILTER_BOX {
         return u;
     }
+    let p = &b.params;
+    let (x, y) = (pixel % p.width, pixel / p.width);
     [
-        0.5 + filter_offset(&b.params, u[0]),
-        0.5 + filter_offset(&b.params, u[1]),
+        0.5 + filter_offset_on_image(p, u[0], x, p.width),
+        0.5 + filter_offset_on_image(p, u[1], y, p.height),
     ]
+}
+
+/// The offset along one axis for pixel i of n, kept on the image when the filter says so
+/// (samplers.wgsl's `filter_offset_on_image`).
+pub fn filter_offset_on_image(p: &Params, u: f32, i: u32, n: u32) -> f32 {
+    if p.filter_shape[3] == 0.0 {
+        return filter_offset(p, u);
+    }
+    let a = -(i as f32 + 0.5);
+    let b = n as f32 - i as f32 - 0.5;
+    let (lo, hi) = (filter_cdf(p, a), filter_cdf(p, b));
+    filter_offset(p, lo + u * (hi - lo)).clamp(a, b)
+}
+
+/// The filter's CDF along one axis (samplers.wgsl's `filter_cdf`).
+#[allow(clippy::excessive_precision)]
+pub fn filter_cdf(p: &Params, x: f32) -> f32 {
+    let r = p.filter_shape[0];
+    let t = (x / r).clamp(-1.0, 1.0);
+    if p.pixel_filter == FILTER_TENT {
+        return if t < 0.0 {
+            0.5 * (1.0 + t) * (1.0 + t)
+        } else {
+            1.0 - 0.5 * (1.0 - t) * (1.0 - t)
+        };
+    }
+    let [_, s, b, _] = p.filter_shape;
+    let k = std::f32::consts::FRAC_1_SQRT_2 / s;
+    let c = 1.25331414 * s;
+    let ax = x.abs().min(r);
+    let g = c * erf_approx(ax * k) - b * ax;
+    let total = c * erf_approx(r * k) - b * r;
+    // WGSL's sign(0) is 0
+    let sign = if x > 0.0 {
+        1.0
+    } else if x < 0.0 {
+        -1.0
+    } else {
+        0.0
+    };
+    0.5 + sign * 0.5 * g / total
 }
 
 /// Filter importance sampling: a sample's offset from its pixel's centre along one axis,

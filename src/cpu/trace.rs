@@ -277,6 +277,9 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
                 light_pdf(b, p.env_light, path.prev_p, path.prev_p, path.ray.dir),
             );
         }
+        if p.hide_emitters != 0 && path.depth == 0 {
+            le = Vec3::ZERO;
+        }
         path.radiance += path.throughput * le;
         return false;
     }
@@ -313,6 +316,9 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
             path.prev_pdf,
             light_pdf(b, light - 1, path.prev_p, hit.p, path.ray.dir),
         );
+    }
+    if p.hide_emitters != 0 && path.depth == 0 {
+        le = Vec3::ZERO;
     }
     path.radiance += path.throughput * le;
     if path.depth + 1 >= p.max_depth {

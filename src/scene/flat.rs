@@ -53,6 +53,8 @@ pub struct FlatScene {
     pub light_sampling: LightSampling,
     /// The first ray Russian roulette may stop ([`RR_DEPTH`]; 0: none).
     pub rr_depth: u32,
+    /// Camera rays see no emitter and no background (`[render] hide_emitters`).
+    pub hide_emitters: bool,
     pub primitives: Vec<Primitive>,
     pub materials: Vec<Material>,
     /// The light list: emissive primitives that can be sampled, then the image background,
@@ -174,6 +176,7 @@ impl FlatScene {
             orthographic: c.orthographic as u32,
             pixel_filter: self.filter.kind.record(),
             ms_tables: self.ms_tables,
+            hide_emitters: self.hide_emitters as u32,
             filter_shape: self.filter.shape(),
             ..Default::default()
         }

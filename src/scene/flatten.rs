@@ -23,6 +23,15 @@ use super::textures::{texture_records, ImageData, TextureData};
 
 /// Object-to-world matrix of a transform: translate * Rz * Ry * Rx * scale.
 pub fn transform_matrix(t: &TransformDesc) -> Affine3A {
+    if let Some(m) = t.matrix {
+        // row-major rows; the last is [0, 0, 0, 1] (validated)
+        return Affine3A::from_cols_array_2d(&[
+            [m[0][0], m[1][0], m[2][0]],
+            [m[0][1], m[1][1], m[2][1]],
+            [m[0][2], m[1][2], m[2][2]],
+            [m[0][3], m[1][3], m[2][3]],
+        ]);
+    }
     let s = t.scale.map_or([1.0; 3], |s| s.axes());
     let [rx, ry, rz] = t.rotate.map(f32::to_radians);
     let rotation =
@@ -71,8 +80,9 @@ impl ObjectTransform {
         ObjectTransform {
             m,
             normal_m: linear.inverse().transpose(),
-            uniform: (s[0] == s[1] && s[1] == s[2] && t.rotate == [0.0; 3]).then_some(s[0]),
-            axis_aligned: t.rotate == [0.0; 3],
+            uniform: (s[0] == s[1] && s[1] == s[2] && t.rotate == [0.0; 3] && t.matrix.is_none())
+                .then_some(s[0]),
+            axis_aligned: t.rotate == [0.0; 3] && t.matrix.is_none(),
             mirrored: linear.determinant() < 0.0,
         }
     }
@@ -673,6 +683,7 @@ pub fn flatten(
         filter: PixelFilter::of(r),
         camera: camera_frame(file, r.width as f32 / r.height as f32),
         rr_depth: if build.russian_roulette { RR_DEPTH } else { 0 },
+        hide_emitters: r.hide_emitters,
         light_sampling: r.light_sampling,
         background: bg.bottom.or(bg.color).unwrap_or([0.0; 3]),
         background_top: bg.top,

@@ -53,6 +53,14 @@ pub struct RenderDesc {
     /// Compensate every microfacet lobe for the energy it loses to multiple scattering
     /// (Kulla and Conty), but where a material's own `energy_compensation` says otherwise.
     pub energy_compensation: bool,
+    /// Whether a wide filter's samples may land outside the image (true: every pixel
+    /// weighs the filter's whole support, the border's included), or are kept on it
+    /// (false: a border pixel weighs only the part of its filter over the image, as
+    /// Mitsuba's film without `sample_border`).
+    pub sample_border: bool,
+    /// Camera rays see no emitter and no background (Mitsuba's `hide_emitters`); the
+    /// lights still light what they see.
+    pub hide_emitters: bool,
 }
 
 /// `[render] filter` (and `--filter`): how a pixel weighs the image plane around it. Each
@@ -99,6 +107,8 @@ pub struct PixelFilter {
     pub radius: f32,
     /// The Gaussian's standard deviation (0 for the others).
     pub stddev: f32,
+    /// Samples kept on the image (`[render] sample_border = false`).
+    pub inside: bool,
 }
 
 impl PixelFilter {
@@ -117,19 +127,21 @@ impl PixelFilter {
             kind: r.filter,
             radius,
             stddev,
+            inside: !r.sample_border && r.filter != FilterKind::Box,
         }
     }
 
     /// `Params::filter_shape`: radius, standard deviation, the Gaussian's value at the
-    /// radius (which it subtracts), 0; zeros for the box.
+    /// radius (which it subtracts), 1 when samples stay on the image; zeros for the box.
     pub fn shape(self) -> [f32; 4] {
+        let inside = if self.inside { 1.0 } else { 0.0 };
         match self.kind {
             FilterKind::Box => [0.0; 4],
-            FilterKind::Tent => [self.radius, 0.0, 0.0, 0.0],
+            FilterKind::Tent => [self.radius, 0.0, 0.0, inside],
             FilterKind::Gaussian => {
                 let s = self.stddev;
                 let bias = (-self.radius * self.radius / (2.0 * s * s)).exp();
-                [self.radius, s, bias, 0.0]
+                [self.radius, s, bias, inside]
             }
         }
     }
@@ -231,6 +243,8 @@ impl Default for RenderDesc {
             filter_radius: None,
             filter_stddev: None,
             energy_compensation: false,
+            sample_border: true,
+            hide_emitters: false,
         }
     }
 }
@@ -505,7 +519,7 @@ fn white() -> [f32; 3] {
 }
 
 /// `transform = { scale, rotate, translate }`: scale, then rotate about X, Y, Z (degrees),
-/// then translate, all about the origin.
+/// then translate, all about the origin; or `transform = { matrix }`.
 #[derive(Debug, Clone, Copy, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TransformDesc {
@@ -515,6 +529,10 @@ pub struct TransformDesc {
     pub rotate: [f32; 3],
     #[serde(default)]
     pub translate: [f32; 3],
+    /// Any affine map, row-major 4 x 4 with a last row of [0, 0, 0, 1] (Mitsuba's
+    /// `to_world`); instead of the others.
+    #[serde(default)]
+    pub matrix: Option<[[f32; 4]; 4]>,
 }
 
 /// A uniform scale factor or one per axis.
@@ -727,12 +745,25 @@ pub enum ObjectDesc {
         material: String,
         transform: Option<TransformDesc>,
     },
-    /// A Wavefront OBJ or PLY file, `path` relative to the scene file. Without
-    /// `material`, an OBJ file's own .mtl materials apply.
+    /// A Wavefront OBJ, PLY or Mitsuba `.serialized` file, `path` relative to the scene
+    /// file. Without `material`, an OBJ file's own .mtl materials apply.
     Mesh {
         path: String,
         material: Option<String>,
         transform: Option<TransformDesc>,
+        /// Flat shading: the file's vertex normals left out.
+        #[serde(default)]
+        face_normals: bool,
+        /// Where the file has no vertex normals, smooth ones: each vertex's the mean of
+        /// its faces' normals weighted by their angles there (Mitsuba's default).
+        #[serde(default)]
+        smooth_normals: bool,
+        /// The front side turned to the back (Mitsuba's `flip_normals`).
+        #[serde(default)]
+        flip_normals: bool,
+        /// Which mesh of a `.serialized` file (Mitsuba's `shape_index`).
+        #[serde(default)]
+        shape_index: u32,
     },
     /// A glTF 2.0 file (`.gltf` or `.glb`), `path` relative to the scene file: its first
     /// scene's meshes with their materials, and its KHR_lights_punctual lights, placed by

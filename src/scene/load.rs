@@ -18,7 +18,7 @@ use super::format::{
 };
 use super::gltf::{self, GltfError};
 use super::imported::ImportedScene;
-use super::{mesh, mtl, textures, validate};
+use super::{mesh, mitsuba, mtl, textures, validate};
 
 /// Largest scene file read (64 MiB).
 pub const MAX_SCENE_FILE_BYTES: u64 = 1 << 26;
@@ -42,6 +42,8 @@ pub struct Overrides {
     pub camera: Option<String>,
     /// Energy compensation of every microfacet lobe (`[render] energy_compensation`).
     pub energy_compensation: bool,
+    /// A Mitsuba scene file's `<default>` values replaced (`-D name=value`).
+    pub defines: Vec<(String, String)>,
 }
 
 /// Whether `path` names a glTF file (`.gltf`, `.glb`, any case).
@@ -50,10 +52,31 @@ pub fn is_gltf(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
 }
 
-/// Reads, validates and flattens a scene file: TOML, or a glTF file on its own.
+/// Whether `path` names a Mitsuba 3 scene file (`.xml`, any case).
+pub fn is_mitsuba(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("xml"))
+}
+
+/// Reads, validates and flattens a scene file: TOML, a Mitsuba 3 XML file, or a glTF file
+/// on its own.
 pub fn load(path: &Path, overrides: &Overrides, build: Build) -> Result<FlatScene, SceneError> {
     if is_gltf(path) {
         return load_gltf_scene(path, overrides, build);
+    }
+    if is_mitsuba(path) {
+        return load_mitsuba(path, overrides, build);
+    }
+    if !overrides.defines.is_empty() {
+        return Err(SceneError::Invalid {
+            path: path.to_path_buf(),
+            problems: vec![Problem::at(
+                "",
+                0,
+                "-D",
+                "sets a Mitsuba scene file's defaults; this is not one (.xml)",
+            )],
+        });
     }
     let io = |cause| SceneError::Io {
         path: path.to_path_buf(),
@@ -68,6 +91,66 @@ pub fn load(path: &Path, overrides: &Overrides, build: Build) -> Result<FlatScen
     }
     let src = std::fs::read_to_string(path).map_err(io)?;
     load_str(&src, path, overrides, build)
+}
+
+/// A Mitsuba 3 scene file mapped onto the scene format (`-D` defines applied), as the TOML
+/// text `wgtrace convert` writes; its file paths relative to `base` where they lie under
+/// it. Problems name the XML file, line and column.
+pub fn convert_mitsuba(
+    path: &Path,
+    defines: &[(String, String)],
+    base: &Path,
+) -> Result<mitsuba::Imported, SceneError> {
+    let xml = |e: mitsuba::XmlError| SceneError::Invalid {
+        path: path.to_path_buf(),
+        problems: vec![xml_problem(path, &e.pos, String::new(), e.message)],
+    };
+    let tree = mitsuba::parse_file(path, defines).map_err(xml)?;
+    mitsuba::import(&tree, base).map_err(xml)
+}
+
+/// A problem at a position in `path` or a file it includes (named in the message).
+fn xml_problem(path: &Path, pos: &mitsuba::Pos, key: String, message: String) -> Problem {
+    let message = if pos.file.as_path() == path {
+        message
+    } else {
+        format!("(in {}) {message}", pos.file.display())
+    };
+    Problem {
+        line: pos.line as usize,
+        column: pos.col as usize,
+        key,
+        message,
+    }
+}
+
+fn load_mitsuba(path: &Path, overrides: &Overrides, build: Build) -> Result<FlatScene, SceneError> {
+    let dir = path.parent().unwrap_or(Path::new(""));
+    let imported = convert_mitsuba(path, &overrides.defines, dir)?;
+    let overrides = Overrides {
+        defines: Vec::new(),
+        ..overrides.clone()
+    };
+    let mut scene = load_str(&imported.toml, path, &overrides, build).map_err(|e| match e {
+        SceneError::Invalid { path, problems } => {
+            let problems = problems
+                .into_iter()
+                .map(|p| match imported.origin(p.line) {
+                    Some(o) if p.line > 0 => xml_problem(
+                        &path,
+                        &o.pos,
+                        format!("{} (converted: {})", o.what, p.key),
+                        p.message,
+                    ),
+                    _ => p,
+                })
+                .collect();
+            SceneError::Invalid { path, problems }
+        }
+        other => other,
+    })?;
+    scene.warnings.extend(imported.notes);
+    Ok(scene)
 }
 
 /// Validates and flattens scene text; `path` names it in errors, and the files it names
@@ -319,14 +402,30 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 format!("objects[{i}].path"),
                 |p| {
                     let prefix = format!("objects[{i}]/");
-                    let g: ImportedScene = if matches!(obj.get_ref(), ObjectDesc::Gltf { .. }) {
-                        gltf::load_gltf(p, &prefix).map_err(|e| e.to_string())?
-                    } else if mesh::is_ply(p) {
-                        return Err(
-                            "a PLY file has no materials: give the object a `material`".into()
-                        );
+                    let g: ImportedScene = if let ObjectDesc::Mesh {
+                        face_normals,
+                        smooth_normals,
+                        flip_normals,
+                        ..
+                    } = obj.get_ref()
+                    {
+                        let adjust = mesh::Adjust {
+                            face_normals: *face_normals,
+                            smooth_normals: *smooth_normals,
+                            flip_normals: *flip_normals,
+                        };
+                        if mesh::is_ply(p) || mesh::is_serialized(p) {
+                            return Err("a PLY or .serialized file has no materials: give the \
+                                        object a `material`"
+                                .into());
+                        }
+                        let mut g = mtl::load_obj_scene(p, &prefix)?;
+                        for m in &mut g.meshes {
+                            mesh::adjust(m, adjust);
+                        }
+                        g
                     } else {
-                        mtl::load_obj_scene(p, &prefix)?
+                        gltf::load_gltf(p, &prefix).map_err(|e| e.to_string())?
                     };
                     count_toward(
                         &triangles,
@@ -351,13 +450,25 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
             ObjectDesc::Mesh {
                 path,
                 material: Some(material),
+                face_normals,
+                smooth_normals,
+                flip_normals,
+                shape_index,
                 ..
             } => read_relative(
                 (src, dir, path),
                 obj.span().start,
                 format!("objects[{i}].path"),
                 |p| {
-                    let mut m = mesh::load_mesh(p)?;
+                    let mut m = mesh::load_mesh_at(p, *shape_index)?;
+                    mesh::adjust(
+                        &mut m,
+                        mesh::Adjust {
+                            face_normals: *face_normals,
+                            smooth_normals: *smooth_normals,
+                            flip_normals: *flip_normals,
+                        },
+                    );
                     // a normal map or anisotropic roughness needs tangents:
                     // MikkTSpace's, over the mesh's uvs
                     let mapped = file

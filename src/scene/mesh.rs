@@ -50,6 +50,277 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, String> {
     check(mesh)
 }
 
+/// Whether `path` names a Mitsuba `.serialized` mesh file (any case).
+pub fn is_serialized(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("serialized"))
+}
+
+/// The mesh a scene asks for: mesh `shape_index` of a `.serialized` file, else the whole
+/// OBJ or PLY file.
+pub fn load_mesh_at(path: &Path, shape_index: u32) -> Result<MeshData, String> {
+    if is_serialized(path) {
+        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+        return check(read_serialized(&bytes, shape_index)?);
+    }
+    if shape_index != 0 {
+        return Err("`shape_index` applies to .serialized files only".into());
+    }
+    load_mesh(path)
+}
+
+/// How a mesh object's shading normals and front side are asked for.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Adjust {
+    /// Flat shading: the vertex normals left out (Mitsuba's `face_normals`).
+    pub face_normals: bool,
+    /// Smooth normals computed where the file has none (Mitsuba's default).
+    pub smooth_normals: bool,
+    /// The front side turned to the back: windings swapped, normals negated (Mitsuba's
+    /// `flip_normals`).
+    pub flip_normals: bool,
+}
+
+/// A mesh's normals and windings as `a` asks.
+pub fn adjust(mesh: &mut MeshData, a: Adjust) {
+    let (face_normals, flip_normals) = (a.face_normals, a.flip_normals);
+    if face_normals {
+        mesh.normals.clear();
+        mesh.tangents.clear();
+    } else if a.smooth_normals && mesh.normals.is_empty() {
+        mesh.normals = angle_weighted_normals(&mesh.positions, &mesh.triangles);
+    }
+    if flip_normals {
+        for t in &mut mesh.triangles {
+            t.swap(1, 2);
+        }
+        for n in &mut mesh.normals {
+            *n = -*n;
+        }
+        for t in &mut mesh.tangents {
+            t.swap(1, 2);
+        }
+    }
+}
+
+/// Vertex normals as the mean of the unit normals of the faces around each vertex,
+/// weighted by each face's angle at the vertex (Thürmer and Wüthrich 1998, as Mitsuba
+/// computes them); a vertex whose faces cancel keeps the first face's normal.
+pub fn angle_weighted_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut sums = vec![Vec3::ZERO; positions.len()];
+    let mut first = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let p = t.map(|i| positions[i as usize]);
+        let n = (p[1] - p[0]).cross(p[2] - p[0]);
+        let Some(n) = n.try_normalize() else {
+            continue;
+        };
+        for k in 0..3 {
+            let (a, b) = (p[(k + 1) % 3] - p[k], p[(k + 2) % 3] - p[k]);
+            let angle = a.angle_between(b);
+            let i = t[k] as usize;
+            sums[i] += n * angle;
+            if first[i] == Vec3::ZERO {
+                first[i] = n;
+            }
+        }
+    }
+    sums.iter()
+        .zip(&first)
+        .map(|(s, f)| s.try_normalize().unwrap_or(*f))
+        .collect()
+}
+
+/// Mesh `index` of a Mitsuba `.serialized` file: a little-endian header (0x041C and the
+/// version, 3 or 4), then each mesh as its own zlib stream (flags; version 4's name;
+/// vertex and triangle counts as u64; positions, then normals, uvs and colours as the
+/// flags say, in f32 or f64; u32 indices, u64 past 2^32 vertices), and at the end each
+/// mesh's offset (u64 in version 4, u32 in 3) and the mesh count (u32). Uvs are stored
+/// with v down, as Mitsuba renders them: they are read as 1 - v.
+pub fn read_serialized(bytes: &[u8], index: u32) -> Result<MeshData, String> {
+    use std::io::Read;
+    const HAS_NORMALS: u32 = 0x0001;
+    const HAS_UVS: u32 = 0x0002;
+    const HAS_COLORS: u32 = 0x0008;
+    const FACE_NORMALS: u32 = 0x0010;
+    const SINGLE: u32 = 0x1000;
+    const DOUBLE: u32 = 0x2000;
+    let u16_at = |o: usize| {
+        bytes
+            .get(o..o + 2)
+            .map(|b| u16::from_le_bytes([b[0], b[1]]))
+    };
+    let u32_at = |o: usize| {
+        bytes
+            .get(o..o + 4)
+            .map(|b| u32::from_le_bytes(b.try_into().unwrap()))
+    };
+    let u64_at = |o: usize| {
+        bytes
+            .get(o..o + 8)
+            .map(|b| u64::from_le_bytes(b.try_into().unwrap()))
+    };
+    if u16_at(0) != Some(0x041C) {
+        return Err(
+            "is not a Mitsuba .serialized file (its first two bytes are not 0x041C)".into(),
+        );
+    }
+    let version = u16_at(2).unwrap_or(0);
+    if version != 3 && version != 4 {
+        return Err(format!(
+            "is .serialized version {version}; versions 3 and 4 are read"
+        ));
+    }
+    let cut = || "is cut short".to_string();
+    let count = u32_at(bytes.len().saturating_sub(4)).ok_or_else(cut)?;
+    if index >= count {
+        return Err(format!(
+            "has {count} meshes; shape_index {index} is past them"
+        ));
+    }
+    let table = bytes.len() - 4;
+    let offset = if version == 4 {
+        u64_at(table - 8 * (count - index) as usize).ok_or_else(cut)?
+    } else {
+        u64::from(u32_at(table - 4 * (count - index) as usize).ok_or_else(cut)?)
+    };
+    let start = usize::try_from(offset).map_err(|_| cut())?;
+    if u16_at(start) != Some(0x041C) {
+        return Err(format!(
+            "mesh {index}: its offset {start} holds no mesh header"
+        ));
+    }
+    let stream = bytes.get(start + 4..).ok_or_else(cut)?;
+    let mut z = flate2::read::ZlibDecoder::new(stream);
+    let mut read = |n: usize| -> Result<Vec<u8>, String> {
+        let mut buf = vec![0; n];
+        z.read_exact(&mut buf)
+            .map_err(|e| format!("mesh {index}: cannot be decompressed: {e}"))?;
+        Ok(buf)
+    };
+    let flags = u32::from_le_bytes(read(4)?.try_into().unwrap());
+    if version == 4 {
+        // the shape's name, up to a NUL
+        while read(1)?[0] != 0 {}
+    }
+    let vertices = u64::from_le_bytes(read(8)?.try_into().unwrap());
+    let triangles = u64::from_le_bytes(read(8)?.try_into().unwrap());
+    if triangles > MAX_TRIANGLES as u64 || vertices > 3 * MAX_TRIANGLES as u64 {
+        return Err(format!(
+            "mesh {index} has {triangles} triangles and {vertices} vertices, more than a scene may hold"
+        ));
+    }
+    let (n, t) = (vertices as usize, triangles as usize);
+    let double = match flags & (SINGLE | DOUBLE) {
+        SINGLE => false,
+        DOUBLE => true,
+        _ => return Err(format!("mesh {index}: flags {flags:#x} give no precision")),
+    };
+    let mut floats = |k: usize| -> Result<Vec<f32>, String> {
+        Ok(if double {
+            read(8 * k)?
+                .chunks_exact(8)
+                .map(|c| f64::from_le_bytes(c.try_into().unwrap()) as f32)
+                .collect()
+        } else {
+            read(4 * k)?
+                .chunks_exact(4)
+                .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
+                .collect()
+        })
+    };
+    let positions: Vec<Vec3> = floats(3 * n)?
+        .chunks_exact(3)
+        .map(Vec3::from_slice)
+        .collect();
+    let mut normals: Vec<Vec3> = if flags & HAS_NORMALS != 0 {
+        floats(3 * n)?
+            .chunks_exact(3)
+            .map(Vec3::from_slice)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let uvs: Vec<Vec2> = if flags & HAS_UVS != 0 {
+        floats(2 * n)?
+            .chunks_exact(2)
+            .map(|c| Vec2::new(c[0], 1.0 - c[1]))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let colors: Vec<Vec4> = if flags & HAS_COLORS != 0 {
+        floats(3 * n)?
+            .chunks_exact(3)
+            .map(|c| Vec4::new(c[0], c[1], c[2], 1.0))
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let wide = vertices > u64::from(u32::MAX);
+    let indices: Vec<u32> = if wide {
+        read(8 * 3 * t)?
+            .chunks_exact(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap()).min(u64::from(u32::MAX)) as u32)
+            .collect()
+    } else {
+        read(4 * 3 * t)?
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    if flags & FACE_NORMALS != 0 {
+        normals.clear();
+    }
+    Ok(MeshData {
+        positions,
+        normals,
+        uvs,
+        triangles: indices
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect(),
+        colors,
+        ..Default::default()
+    })
+}
+
+/// One mesh for [`write_serialized`]: positions, triangles, uvs (v as stored; may be empty).
+pub type SerializedMesh = (Vec<[f32; 3]>, Vec<[u32; 3]>, Vec<[f32; 2]>);
+
+/// A `.serialized` file of `meshes` in version 4, single precision: what tests write.
+pub fn write_serialized(meshes: &[SerializedMesh]) -> Vec<u8> {
+    use std::io::Write;
+    let mut out = Vec::new();
+    let mut offsets = Vec::new();
+    for (positions, triangles, uvs) in meshes {
+        offsets.push(out.len() as u64);
+        let mut raw = Vec::new();
+        let flags = 0x1000u32 | if uvs.is_empty() { 0 } else { 0x0002 };
+        raw.extend_from_slice(&flags.to_le_bytes());
+        raw.extend_from_slice(b"mesh\0");
+        raw.extend_from_slice(&(positions.len() as u64).to_le_bytes());
+        raw.extend_from_slice(&(triangles.len() as u64).to_le_bytes());
+        for x in positions.iter().flatten().chain(uvs.iter().flatten()) {
+            raw.extend_from_slice(&x.to_le_bytes());
+        }
+        for i in triangles.iter().flatten() {
+            raw.extend_from_slice(&i.to_le_bytes());
+        }
+        // each mesh starts with the header
+        out.extend_from_slice(&0x041Cu16.to_le_bytes());
+        out.extend_from_slice(&4u16.to_le_bytes());
+        let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
+        z.write_all(&raw).expect("writing to memory");
+        out.extend_from_slice(&z.finish().expect("writing to memory"));
+    }
+    for o in &offsets {
+        out.extend_from_slice(&o.to_le_bytes());
+    }
+    out.extend_from_slice(&(meshes.len() as u32).to_le_bytes());
+    out
+}
+
 /// An OBJ file's models and its .mtl's materials (or why they could not be read).
 pub type ObjFile = (
     Vec<tobj::Model>,

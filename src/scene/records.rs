@@ -550,9 +550,16 @@ pub struct Params {
     /// The first `tables` entry of the microfacet albedo tables that energy compensation
     /// reads (`scene::microfacet_albedo`); 0 without any.
     pub ms_tables: u32,
+    /// 1: camera rays see no emitter and no background (`[render] hide_emitters`,
+    /// Mitsuba's); lights still light the scene.
+    pub hide_emitters: u32,
+    pub pad0: u32,
+    pub pad1: u32,
+    pub pad2: u32,
     /// The filter's radius in pixels, a Gaussian's standard deviation, its value at the
-    /// radius (subtracted, so it falls to 0 there) and its integral over [-radius, radius]
-    /// (1D, after the subtraction); zeros for the box.
+    /// radius (subtracted, so it falls to 0 there), and 1 when samples stay on the image
+    /// (`[render] sample_border = false`: a border pixel's filter restricted to the
+    /// image); zeros for the box.
     pub filter_shape: [f32; 4],
 }
 
@@ -887,6 +894,10 @@ shared_record!(Params {
     orthographic,
     pixel_filter,
     ms_tables,
+    hide_emitters,
+    pad0,
+    pad1,
+    pad2,
     filter_shape
 });
 shared_record!(KernelRay { origin, dir });

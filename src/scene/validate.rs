@@ -207,18 +207,18 @@ impl Validator<'_> {
         }
         if let Some(name) = &bg.texture {
             match file.textures.get(name).map(|t| t.get_ref()) {
-                Some(TextureDesc::Image {
-                    factor, transform, ..
-                }) => {
-                    // the background's sampling distribution is built from the texels
-                    // as they are
-                    if *factor != [1.0; 3] || transform.is_some() {
+                Some(TextureDesc::Image { factor, .. }) => {
+                    // a factor belongs in strength; a transform moves the look-up, while
+                    // the sampling distribution stays on the texels as they are (unbiased,
+                    // and as efficient while the move is small: the Mitsuba importer's
+                    // sub-texel shift to its envmap's texel grid)
+                    if *factor != [1.0; 3] {
                         self.push(
                             0,
                             "background.texture",
                             format!(
-                                "\"{name}\" has a factor or transform; a background image \
-                                 takes none (use strength and rotation)"
+                                "\"{name}\" has a factor; a background image takes none \
+                                 (use strength)"
                             ),
                         );
                     }
@@ -769,6 +769,31 @@ impl Validator<'_> {
     }
 
     fn transform(&mut self, key: &str, t: &TransformDesc, at: usize) {
+        if let Some(m) = t.matrix {
+            if t.scale.is_some() || t.rotate != [0.0; 3] || t.translate != [0.0; 3] {
+                self.push(
+                    at,
+                    &format!("{key}.matrix"),
+                    "give `matrix` or `scale`, `rotate` and `translate`, not both".into(),
+                );
+            }
+            let linear = glam::Mat3::from_cols_array_2d(&[
+                [m[0][0], m[1][0], m[2][0]],
+                [m[0][1], m[1][1], m[2][1]],
+                [m[0][2], m[1][2], m[2][2]],
+            ]);
+            if !m.iter().flatten().all(|x| x.is_finite()) {
+                self.push(at, &format!("{key}.matrix"), "must be finite".into());
+            } else if m[3] != [0.0, 0.0, 0.0, 1.0] {
+                self.push(
+                    at,
+                    &format!("{key}.matrix"),
+                    format!("must be affine: its last row [0, 0, 0, 1], got {:?}", m[3]),
+                );
+            } else if linear.determinant() == 0.0 {
+                self.push(at, &format!("{key}.matrix"), "is singular".into());
+            }
+        }
         if let Some(scale) = t.scale {
             let s = scale.axes();
             if !s.iter().all(|x| x.is_finite() && *x != 0.0) {

@@ -10,7 +10,7 @@
 //! `<alias id="..." as="..."/>`; properties `float`, `integer`, `boolean`, `string`,
 //! `point`, `vector` (`value` of 1 or 3 numbers, or `x`/`y`/`z`), `rgb` (1 or 3), `spectrum`
 //! (a constant, `wavelength:value` pairs, or a `filename` of such pairs), `transform`
-//! (`translate`, `rotate` by degrees about an axis, `scale`, `matrix` of 16 or 9 numbers,
+//! (`translate`, `rotate` by degrees about an axis (not normalized, as Mitsuba's), `scale`, `matrix` of 16 or 9 numbers,
 //! `lookat`, each applied after the ones before it); `<default name value/>` and `$name`
 //! in any attribute (the longest names first, as Mitsuba substitutes), with defines from
 //! the command line (`-D name=value`) taking precedence; `<include filename/>` (a `<scene>`
@@ -108,6 +108,14 @@ pub struct SceneTree {
     pub objects: Vec<Object>,
     pub root: usize,
     pub search_paths: Vec<PathBuf>,
+}
+
+impl SceneTree {
+    /// A file named by a property at `at`, found as Mitsuba finds it: absolute, else beside
+    /// the file that names it, else in the `<path>` folders.
+    pub fn find_file(&self, at: &Pos, name: &str) -> PathBuf {
+        find_in(&self.search_paths, &at.file, name)
+    }
 }
 
 /// The element names that make objects.
@@ -714,7 +722,7 @@ impl Parser {
                     if axis.length_squared() == 0.0 {
                         return src.err(op, "<rotate> needs a nonzero axis");
                     }
-                    DMat4::from_axis_angle(axis.normalize(), angle.to_radians())
+                    rotation(axis, angle.to_radians())
                 }
                 "matrix" => {
                     self.only(src, op, &["value"])?;
@@ -825,19 +833,7 @@ impl Parser {
     /// A file named in the scene: absolute, else beside the file naming it, else in the
     /// `<path>` folders (the first that has it; beside the file when none does).
     fn find(&self, file: &Path, name: &str) -> PathBuf {
-        let name = Path::new(name);
-        if name.is_absolute() {
-            return name.to_path_buf();
-        }
-        let beside = resolve(file, name);
-        if beside.exists() {
-            return beside;
-        }
-        self.search_paths
-            .iter()
-            .map(|d| d.join(name))
-            .find(|p| p.exists())
-            .unwrap_or(beside)
+        find_in(&self.search_paths, file, name)
     }
 
     /// Every `<ref>` pointed at its object.
@@ -925,12 +921,57 @@ impl Source<'_, '_> {
     }
 }
 
+/// A file named in `file`: absolute, else beside `file`, else in the `search_paths` (the
+/// first that has it; beside `file` when none does).
+fn find_in(search_paths: &[PathBuf], file: &Path, name: &str) -> PathBuf {
+    let name = Path::new(name);
+    if name.is_absolute() {
+        return name.to_path_buf();
+    }
+    let beside = resolve(file, name);
+    if beside.exists() {
+        return beside;
+    }
+    search_paths
+        .iter()
+        .map(|d| d.join(name))
+        .find(|p| p.exists())
+        .unwrap_or(beside)
+}
+
 /// `name` relative to the folder of `file`.
 fn resolve(file: &Path, name: &Path) -> PathBuf {
     if name.is_absolute() {
         return name.to_path_buf();
     }
     file.parent().unwrap_or(Path::new("")).join(name)
+}
+
+/// Rodrigues' rotation about `axis` as Mitsuba 3 builds it: cos I + sin [a]x +
+/// (1 - cos) a a^T with the axis as written. For a unit axis that is the rotation; Mitsuba
+/// does not normalize the axis, so a longer one (`x="1" y="1"`) also scales and shears,
+/// and the file renders as Mitsuba renders it.
+fn rotation(a: DVec3, angle: f64) -> DMat4 {
+    let (s, c) = angle.sin_cos();
+    let k = 1.0 - c;
+    let m = glam::DMat3::from_cols(
+        DVec3::new(
+            c + k * a.x * a.x,
+            k * a.x * a.y + s * a.z,
+            k * a.x * a.z - s * a.y,
+        ),
+        DVec3::new(
+            k * a.x * a.y - s * a.z,
+            c + k * a.y * a.y,
+            k * a.y * a.z + s * a.x,
+        ),
+        DVec3::new(
+            k * a.x * a.z + s * a.y,
+            k * a.y * a.z - s * a.x,
+            c + k * a.z * a.z,
+        ),
+    );
+    DMat4::from_mat3(m)
 }
 
 /// Mitsuba's tokens: split at commas and whitespace.

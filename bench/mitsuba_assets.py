@@ -1,0 +1,51 @@
+"""The generated assets of tests/mitsuba's scenes, written with the values
+tests/mitsuba_import.rs writes: generated/sky.exr and generated/pyramid.serialized. Used by
+bench/mitsuba_refs.py and bench/mitsuba_import_report.py."""
+import math
+import os
+import struct
+import zlib
+
+import numpy as np
+
+
+def sky():
+    """The environment image of tests/mitsuba/environment.xml (as tests/mitsuba_import.rs
+    writes it): 128 x 64, a vertical gradient and a bright spot, every texel in [0, 1]."""
+    w, h = 128, 64
+    img = np.zeros((h, w, 3), dtype=np.float32)
+    for y in range(h):
+        for x in range(w):
+            u, v = (x + 0.5) / w, (y + 0.5) / h
+            spot = math.exp(-((u - 0.3) ** 2 + (v - 0.3) ** 2) / 0.005)
+            img[y, x] = [0.1 + 0.5 * (1 - v) + 0.35 * spot, 0.1 + 0.45 * (1 - v) + 0.3 * spot,
+                         0.15 + 0.6 * (1 - v) + 0.2 * spot]
+    return img
+
+
+def serialized(meshes):
+    """A version 4 .serialized file (as wgtrace's mesh::write_serialized writes it)."""
+    out, offsets = b"", []
+    for positions, triangles in meshes:
+        offsets.append(len(out))
+        raw = struct.pack("<I", 0x1000) + b"mesh\0" + struct.pack("<QQ", len(positions), len(triangles))
+        raw += b"".join(struct.pack("<3f", *p) for p in positions)
+        raw += b"".join(struct.pack("<3I", *t) for t in triangles)
+        out += struct.pack("<HH", 0x041C, 4) + zlib.compress(raw)
+    return out + b"".join(struct.pack("<Q", o) for o in offsets) + struct.pack("<I", len(meshes))
+
+
+# mesh 0 a decoy triangle, mesh 1 a square pyramid (base 0.8 at y = 0, apex at 0.9)
+PYRAMID = [
+    ([(0, 0, 0), (1, 0, 0), (0, 1, 0)], [(0, 1, 2)]),
+    ([(-0.4, 0, -0.4), (0.4, 0, -0.4), (0.4, 0, 0.4), (-0.4, 0, 0.4), (0, 0.9, 0)],
+     [(0, 1, 2), (0, 2, 3), (0, 4, 1), (1, 4, 2), (2, 4, 3), (3, 4, 0)]),
+]
+
+
+def write_assets(folder, write_exr):
+    """Writes the assets under folder/generated; write_exr(path, float32 array) writes EXR."""
+    os.makedirs(os.path.join(folder, "generated"), exist_ok=True)
+    write_exr(os.path.join(folder, "generated", "sky.exr"), sky())
+    with open(os.path.join(folder, "generated", "pyramid.serialized"), "wb") as f:
+        f.write(serialized(PYRAMID))

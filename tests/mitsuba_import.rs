@@ -1,0 +1,383 @@
+//! The Mitsuba importer against Mitsuba 3 itself: each scene of tests/mitsuba/*.xml, read
+//! by wgtrace as a user would (`wgtrace render scene.xml`), rendered on the CPU reference
+//! and judged pixel by pixel against the image Mitsuba 3.9.1 rendered from the same file
+//! (tests/mitsuba/refs, written by bench/mitsuba_refs.py: the mean of its runs and that
+//! mean's standard error), as Mitsuba's own render tests judge: each pixel and channel's
+//! difference over both standard errors, the Sidak bound at significance 0.01 over all of
+//! them, and at least 99.75% within it. Also `wgtrace convert` and the importer's errors.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use wgtrace::scene::mesh::write_serialized;
+use wgtrace::Overrides;
+
+/// The environment image of environment.xml, as bench/mitsuba_refs.py writes it.
+fn sky() -> Vec<f32> {
+    let (w, h) = (128, 64);
+    let mut img = Vec::with_capacity(w * h * 3);
+    for y in 0..h {
+        for x in 0..w {
+            let (u, v) = ((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64);
+            let spot = (-((u - 0.3).powi(2) + (v - 0.3).powi(2)) / 0.005).exp();
+            img.extend([
+                (0.1 + 0.5 * (1.0 - v) + 0.35 * spot) as f32,
+                (0.1 + 0.45 * (1.0 - v) + 0.3 * spot) as f32,
+                (0.15 + 0.6 * (1.0 - v) + 0.2 * spot) as f32,
+            ]);
+        }
+    }
+    img
+}
+
+/// The .serialized file of shapes.xml: a decoy triangle, then a square pyramid.
+fn pyramid() -> Vec<u8> {
+    write_serialized(&[
+        (
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+            vec![[0, 1, 2]],
+            vec![],
+        ),
+        (
+            vec![
+                [-0.4, 0.0, -0.4],
+                [0.4, 0.0, -0.4],
+                [0.4, 0.0, 0.4],
+                [-0.4, 0.0, 0.4],
+                [0.0, 0.9, 0.0],
+            ],
+            vec![
+                [0, 1, 2],
+                [0, 2, 3],
+                [0, 4, 1],
+                [1, 4, 2],
+                [2, 4, 3],
+                [3, 4, 0],
+            ],
+            vec![],
+        ),
+    ])
+}
+
+/// tests/mitsuba copied into a fresh folder with its generated assets.
+fn scenes(name: &str) -> PathBuf {
+    let dir = common::tmp_dir(name);
+    let src = common::repo_path("tests/mitsuba");
+    for e in std::fs::read_dir(&src).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, dir.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+    let generated = dir.join("generated");
+    std::fs::create_dir_all(&generated).unwrap();
+    wgtrace::image_io::write_image(&generated.join("sky.exr"), 128, 64, &sky()).unwrap();
+    std::fs::write(generated.join("pyramid.serialized"), pyramid()).unwrap();
+    dir
+}
+
+fn rgb_of(path: &Path) -> (u32, u32, Vec<[f32; 3]>) {
+    let exr = wgtrace::image_io::read_exr(path).unwrap_or_else(|e| panic!("{e}"));
+    let ch = |n: &str| {
+        &exr.channels
+            .iter()
+            .find(|c| c.0 == n)
+            .unwrap_or_else(|| panic!("{}: no channel {n}", path.display()))
+            .1
+    };
+    let (r, g, b) = (ch("R"), ch("G"), ch("B"));
+    let px = (0..r.len()).map(|i| [r[i], g[i], b[i]]).collect();
+    (exr.width, exr.height, px)
+}
+
+type Render = fn(&wgtrace::FlatScene) -> wgtrace::Accumulation;
+
+/// Renders `name`.xml from `dir` at `spp` with `render` and returns the share of pixels
+/// and channels within the Sidak bound of Mitsuba's reference, with the worst few for the
+/// message.
+fn z_test(dir: &Path, name: &str, spp: u32, render: Render) -> (f64, String) {
+    let overrides = Overrides {
+        spp: Some(spp),
+        ..Default::default()
+    };
+    let scene = wgtrace::load_scene(&dir.join(format!("{name}.xml")), &overrides)
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+    let acc = render(&scene);
+    let refs = common::repo_path("tests/mitsuba/refs");
+    let (w, h, mean) = rgb_of(&refs.join(format!("{name}.mean.exr")));
+    let (_, _, se) = rgb_of(&refs.join(format!("{name}.se.exr")));
+    assert_eq!((acc.width, acc.height), (w, h), "{name}: image size");
+    let tests = mean.len() * 3;
+    let bound = common::sidak_z(0.01, tests);
+    let mut within = 0;
+    let mut worst: Vec<(f64, String)> = Vec::new();
+    for i in 0..mean.len() {
+        let (m, v, n) = (acc.mean(i), acc.variance(i), acc.samples(i).max(1.0));
+        for c in 0..3 {
+            let sw = (v[c] as f64 / n as f64).sqrt();
+            let d = m[c] as f64 - mean[i][c] as f64;
+            let z = d / (sw * sw + (se[i][c] as f64).powi(2) + 1e-12).sqrt();
+            if z.abs() <= bound {
+                within += 1;
+            } else {
+                let (x, y) = (i as u32 % w, i as u32 / w);
+                worst.push((
+                    z.abs(),
+                    format!(
+                        "pixel ({x}, {y}) {}: {:.4} against {:.4} (z {z:+.1})",
+                        ["R", "G", "B"][c],
+                        m[c],
+                        mean[i][c]
+                    ),
+                ));
+            }
+        }
+    }
+    worst.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let listed: Vec<String> = worst.iter().take(6).map(|w| w.1.clone()).collect();
+    (within as f64 / tests as f64, listed.join("; "))
+}
+
+/// The scene agrees with Mitsuba's image on both backends.
+fn agrees_with_mitsuba(name: &str, spp: u32) {
+    let dir = scenes(name);
+    for (backend, render) in [
+        ("cpu", common::render_cpu as Render),
+        ("gpu", common::render_gpu),
+    ] {
+        let (share, worst) = z_test(&dir, name, spp, render);
+        assert!(
+            share >= 0.9975,
+            "{name} ({backend}): {:.2}% of pixels and channels within the bound (99.75% \
+             asked); worst: {worst}",
+            share * 100.0
+        );
+    }
+}
+
+#[test]
+fn legacy_cornell_box_agrees_with_mitsuba() {
+    agrees_with_mitsuba("cornell-legacy", 256);
+}
+
+#[test]
+fn materials_agree_with_mitsuba() {
+    agrees_with_mitsuba("materials", 256);
+}
+
+#[test]
+fn shapes_and_instances_agree_with_mitsuba() {
+    agrees_with_mitsuba("shapes", 256);
+}
+
+#[test]
+fn environment_and_thin_lens_agree_with_mitsuba() {
+    agrees_with_mitsuba("environment", 256);
+}
+
+/// The z-test can fail: a reflectance changed by 5% is caught.
+#[test]
+fn a_changed_scene_fails_the_z_test() {
+    let dir = scenes("mitsuba-changed");
+    let path = dir.join("cornell-legacy.xml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let changed = text.replace("0.73 0.73 0.73", "0.69 0.69 0.69");
+    assert_ne!(text, changed);
+    std::fs::write(&path, changed).unwrap();
+    let (share, _) = z_test(&dir, "cornell-legacy", 256, common::render_cpu);
+    assert!(share < 0.9975, "{:.2}% within", share * 100.0);
+}
+
+#[test]
+fn convert_writes_toml_that_loads_and_names_its_origins() {
+    let dir = scenes("mitsuba-convert");
+    let out = dir.join("shapes.toml");
+    let o = common::wgtrace(&[
+        "convert",
+        dir.join("shapes.xml").to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "-D",
+        "spp=7",
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let toml = std::fs::read_to_string(&out).unwrap();
+    assert!(toml.contains("spp = 7"), "{toml}");
+    assert!(
+        toml.contains("# shape instance of shape sphere, shapes.xml:"),
+        "{toml}"
+    );
+    assert!(
+        toml.contains("path = \"generated/pyramid.serialized\""),
+        "{toml}"
+    );
+    assert!(toml.contains("shape_index = 1"), "{toml}");
+    // the converted file renders as the XML does: the same records
+    let a = wgtrace::load_scene(&out, &Overrides::default()).unwrap();
+    let b = wgtrace::load_scene(&dir.join("shapes.xml"), &Overrides::default()).unwrap();
+    assert_eq!(a.primitives.len(), b.primitives.len());
+    assert_eq!(a.primitives, b.primitives);
+}
+
+/// Bad files: one error naming the file, line and column (and the element), exit 1.
+#[test]
+fn bad_files_are_one_error_with_the_position() {
+    let dir = common::tmp_dir("mitsuba-bad");
+    let scene = |body: &str| {
+        format!(
+            "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
+             value=\"40\"/></sensor>\n{body}\n</scene>\n"
+        )
+    };
+    let cases = [
+        (
+            "unknown-plugin",
+            scene("<shape type=\"hair\"/>"),
+            "3:1",
+            "shape hair",
+        ),
+        (
+            "missing-mesh",
+            scene("<shape type=\"obj\"><string name=\"filename\" value=\"nope.obj\"/></shape>"),
+            "3:19",
+            "no such file",
+        ),
+        (
+            "no-default",
+            scene("<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>"),
+            "3:",
+            "$r",
+        ),
+        (
+            "malformed",
+            scene("<shape type=\"sphere\"><float name=\"radius\" value=\"1..5\"/></shape>"),
+            "3:",
+            "1..5",
+        ),
+        (
+            "cyclic-ref",
+            scene(
+                "<bsdf type=\"twosided\" id=\"a\"><ref id=\"b\"/></bsdf>\n\
+                 <bsdf type=\"twosided\" id=\"b\"><ref id=\"a\"/></bsdf>",
+            ),
+            "4:30",
+            "cyclic reference",
+        ),
+        (
+            "medium",
+            scene("<medium type=\"homogeneous\"/>"),
+            "3:1",
+            "issue 43",
+        ),
+        (
+            "bad-value",
+            scene("<shape type=\"sphere\"><float name=\"radius\" value=\"-1\"/></shape>"),
+            "3:1",
+            "shape sphere (converted: objects[0].radius)",
+        ),
+    ];
+    for (name, text, at, says) in cases {
+        let path = dir.join(format!("{name}.xml"));
+        std::fs::write(&path, text).unwrap();
+        let png = dir.join(format!("{name}.png"));
+        let o = common::wgtrace(&[
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+        let lead = format!("{}:{at}", path.display());
+        assert!(err.contains(&lead), "{name}: expected {lead} in: {err}");
+        assert!(err.contains(says), "{name}: expected `{says}` in: {err}");
+    }
+}
+
+#[test]
+fn serialized_meshes_read_back() {
+    let bytes = pyramid();
+    let m = wgtrace::scene::mesh::read_serialized(&bytes, 1).unwrap();
+    assert_eq!(m.positions.len(), 5);
+    assert_eq!(m.triangles.len(), 6);
+    assert_eq!(m.triangles[2], [0, 4, 1]);
+    let first = wgtrace::scene::mesh::read_serialized(&bytes, 0).unwrap();
+    assert_eq!(first.triangles, vec![[0, 1, 2]]);
+    let e = wgtrace::scene::mesh::read_serialized(&bytes, 2).unwrap_err();
+    assert!(e.contains("has 2 meshes"), "{e}");
+    let e = wgtrace::scene::mesh::read_serialized(&bytes[..bytes.len() / 2], 1).unwrap_err();
+    assert!(!e.is_empty());
+    let e = wgtrace::scene::mesh::read_serialized(b"PK\x03\x04", 0).unwrap_err();
+    assert!(e.contains("0x041C"), "{e}");
+}
+
+/// Spectra become the colours Mitsuba 3.9.1's scalar_rgb variant gives them when it loads
+/// the same values (mi.traverse of a diffuse reflectance and of an area emitter's
+/// radiance): a list integrated against the CIE curves, weighted by D65 outside emitters;
+/// a constant in an emitter times the sRGB colour of a flat spectrum.
+#[test]
+fn spectra_convert_as_mitsuba_rgb_mode() {
+    use wgtrace::scene::mitsuba::spectrum::{named_ior, to_rgb, Use};
+    use wgtrace::scene::mitsuba::Spectrum;
+    let s = Spectrum::Samples(vec![(400.0, 0.2), (500.0, 0.5), (600.0, 0.7), (700.0, 0.9)]);
+    let close = |a: [f64; 3], b: [f64; 3]| a.iter().zip(b).all(|(x, y)| (x - y).abs() < 2e-5);
+    let r = to_rgb(&s, Use::Reflectance);
+    assert!(close(r, [0.778248, 0.589654, 0.328566]), "{r:?}");
+    let e = to_rgb(&s, Use::Emission);
+    assert!(close(e, [0.921007, 0.561588, 0.290428]), "{e:?}");
+    let u = to_rgb(&Spectrum::Uniform(2.0), Use::Emission);
+    assert!(close(u, [2.40959, 1.89658, 1.81783]), "{u:?}");
+    assert_eq!(to_rgb(&Spectrum::Uniform(0.3), Use::Reflectance), [0.3; 3]);
+    // bk7 over water, as Mitsuba's dielectric reports its eta
+    let eta = named_ior("bk7").unwrap() / named_ior("Water").unwrap();
+    assert!((eta - 1.1287323).abs() < 1e-6);
+    assert_eq!(named_ior("unobtainium"), None);
+}
+
+/// An envmap turned about +y by a, rendered by wgtrace turned by a + 180 (Mitsuba's image
+/// centre faces +z, wgtrace's -z) with its look-up moved onto Mitsuba's texel grid; a
+/// bitmap's to_uv conjugated by the v flip (an offset of 0.25 in Mitsuba's v, which runs
+/// down, is -0.25 in wgtrace's); an envmap turned about x refused at its element.
+#[test]
+fn envmaps_turn_and_uv_transforms_flip() {
+    let dir = scenes("mitsuba-envmap");
+    let xml = |turn: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="40"/></sensor>
+<emitter type="envmap"><string name="filename" value="generated/sky.exr"/>
+<transform name="to_world"><rotate {turn} angle="30"/></transform></emitter>
+<shape type="rectangle"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">
+<string name="filename" value="generated/sky.exr"/>
+<transform name="to_uv"><translate x="0.5" y="0.25"/></transform></texture></bsdf></shape>
+</scene>"#
+        )
+    };
+    let path = dir.join("turned.xml");
+    std::fs::write(&path, xml("y=\"1\"")).unwrap();
+    let out = wgtrace::scene::load::convert_mitsuba(&path, &[], &dir).unwrap();
+    assert!(out.toml.contains("rotation = 210.0"), "{}", out.toml);
+    // 128 x 64 texels: half a texel across, and rows spread over theta as Mitsuba's
+    assert!(
+        out.toml
+            .contains("matrix = [[1.0, 0.0, 0.00390625], [0.0, 0.984375, 0.0078125]]"),
+        "{}",
+        out.toml
+    );
+    assert!(
+        out.toml
+            .contains("matrix = [[1.0, 0.0, 0.5], [0.0, 1.0, -0.25]]"),
+        "{}",
+        out.toml
+    );
+    std::fs::write(&path, xml("x=\"1\"")).unwrap();
+    let e = wgtrace::scene::load::convert_mitsuba(&path, &[], &dir)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("turned.xml:3:1") && e.contains("about +y only"),
+        "{e}"
+    );
+}
