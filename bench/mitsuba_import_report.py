@@ -6,7 +6,7 @@ each, each run with its own seed; judged pixel by pixel as Mitsuba's render test
 significance 0.01 over all of them, at least 99.75% within). Writes
 docs/bench/mitsuba-import.md; files wgtrace refuses are listed with its message.
 
-usage: python bench/mitsuba_import_report.py [RUNS] [SPP]   (default 4 runs of 256 spp;
+usage: python bench/mitsuba_import_report.py [RUNS] [SPP]   (default 16 runs of 128 spp;
 build target/release/wgtrace first). Needs `pip install mitsuba==3.9.1 numpy` and an LLVM
 named by DRJIT_LIBLLVM_PATH.
 """
@@ -27,8 +27,8 @@ from mitsuba_assets import write_assets
 
 mi.set_variant("llvm_ad_rgb")
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-runs = int(sys.argv[1]) if len(sys.argv) > 1 else 4
-spp = int(sys.argv[2]) if len(sys.argv) > 2 else 256
+runs = int(sys.argv[1]) if len(sys.argv) > 1 else 16
+spp = int(sys.argv[2]) if len(sys.argv) > 2 else 128
 wgtrace = os.path.join(root, "target", "release", "wgtrace")
 tmp = tempfile.mkdtemp()
 

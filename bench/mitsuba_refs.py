@@ -6,7 +6,8 @@ same files with wgtrace and judges each pixel against these, as Mitsuba's render
 The scenes' generated assets are written by bench/mitsuba_assets.py with the values the
 tests write.
 
-usage: python bench/mitsuba_refs.py [RUNS] [SPP] [NAME...]   (default 8 runs of 512 spp)
+usage: python bench/mitsuba_refs.py [RUNS] [SPP] [NAME...]   (default 32 runs of 256 spp: enough runs that their
+standard error is itself well estimated, so the z-test holds its significance)
 Needs `pip install mitsuba==3.9.1 numpy` and an LLVM named by DRJIT_LIBLLVM_PATH.
 """
 import math
@@ -23,8 +24,8 @@ from mitsuba_assets import write_assets
 mi.set_variant("llvm_ad_rgb")
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 src = os.path.join(root, "tests", "mitsuba")
-runs = int(sys.argv[1]) if len(sys.argv) > 1 else 8
-spp = int(sys.argv[2]) if len(sys.argv) > 2 else 512
+runs = int(sys.argv[1]) if len(sys.argv) > 1 else 32
+spp = int(sys.argv[2]) if len(sys.argv) > 2 else 256
 names = sys.argv[3:] or sorted(f[:-4] for f in os.listdir(src) if f.endswith(".xml"))
 
 

@@ -97,6 +97,19 @@ type Render = fn(&wgtrace::FlatScene) -> wgtrace::Accumulation;
 /// and channels within the Sidak bound of Mitsuba's reference, with the worst few for the
 /// message.
 fn z_test(dir: &Path, name: &str, spp: u32, render: Render) -> (f64, String) {
+    z_test_against(dir, name, name, false, spp, render)
+}
+
+/// [`z_test`] against the reference of scene `reference`, mirrored left to right if
+/// `mirrored`.
+fn z_test_against(
+    dir: &Path,
+    name: &str,
+    reference: &str,
+    mirrored: bool,
+    spp: u32,
+    render: Render,
+) -> (f64, String) {
     let overrides = Overrides {
         spp: Some(spp),
         ..Default::default()
@@ -105,8 +118,13 @@ fn z_test(dir: &Path, name: &str, spp: u32, render: Render) -> (f64, String) {
         .unwrap_or_else(|e| panic!("{name}: {e}"));
     let acc = render(&scene);
     let refs = common::repo_path("tests/mitsuba/refs");
-    let (w, h, mean) = rgb_of(&refs.join(format!("{name}.mean.exr")));
-    let (_, _, se) = rgb_of(&refs.join(format!("{name}.se.exr")));
+    let (w, h, mut mean) = rgb_of(&refs.join(format!("{reference}.mean.exr")));
+    let (_, _, mut se) = rgb_of(&refs.join(format!("{reference}.se.exr")));
+    if mirrored {
+        for row in mean.chunks_mut(w as usize).chain(se.chunks_mut(w as usize)) {
+            row.reverse();
+        }
+    }
     assert_eq!((acc.width, acc.height), (w, h), "{name}: image size");
     let tests = mean.len() * 3;
     let bound = common::sidak_z(0.01, tests);
@@ -187,6 +205,27 @@ fn a_changed_scene_fails_the_z_test() {
     std::fs::write(&path, changed).unwrap();
     let (share, _) = z_test(&dir, "cornell-legacy", 256, common::render_cpu);
     assert!(share < 0.9975, "{:.2}% within", share * 100.0);
+}
+
+/// A camera whose to_world mirrors (a scale of -1 along its x before the lookat) shows
+/// the mirror image, as Mitsuba renders it: the Cornell box's reference flipped left to
+/// right.
+#[test]
+fn a_mirrored_camera_shows_the_mirror_image() {
+    let dir = scenes("mitsuba-mirror");
+    let text = std::fs::read_to_string(dir.join("cornell-legacy.xml")).unwrap();
+    let mirrored = text.replace("<lookat origin", "<scale x=\"-1\"/><lookat origin");
+    assert_ne!(text, mirrored);
+    std::fs::write(dir.join("mirrored.xml"), mirrored).unwrap();
+    let (share, worst) = z_test_against(
+        &dir,
+        "mirrored",
+        "cornell-legacy",
+        true,
+        256,
+        common::render_cpu,
+    );
+    assert!(share >= 0.9975, "{:.2}%: {worst}", share * 100.0);
 }
 
 #[test]

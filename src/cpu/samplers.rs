@@ -146,15 +146,18 @@ pub fn filter_cdf(p: &Params, x: f32) -> f32 {
     let ax = x.abs().min(r);
     let g = c * erf_approx(ax * k) - b * ax;
     let total = c * erf_approx(r * k) - b * r;
-    // WGSL's sign(0) is 0
-    let sign = if x > 0.0 {
+    0.5 + wgsl_sign(x) * 0.5 * g / total
+}
+
+/// WGSL's sign: 0 at 0.
+fn wgsl_sign(x: f32) -> f32 {
+    if x > 0.0 {
         1.0
     } else if x < 0.0 {
         -1.0
     } else {
         0.0
-    };
-    0.5 + sign * 0.5 * g / total
+    }
 }
 
 /// Filter importance sampling: a sample's offset from its pixel's centre along one axis,

@@ -793,6 +793,7 @@ fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
     let forward = to_target.normalize();
     let right = forward.cross(Vec3::from(c.up)).normalize();
     let up = right.cross(forward);
+    let right = if c.mirror { -right } else { right };
     let focus_distance = c.focus_distance.unwrap_or(to_target.length());
     let orthographic = c.projection == Projection::Orthographic;
     let half_height = match c.height {

@@ -273,6 +273,10 @@ pub struct CameraDesc {
     /// An orthographic view's height in scene units.
     #[serde(default)]
     pub height: Option<f32>,
+    /// The image mirrored left to right (a Mitsuba camera whose `to_world` has a negative
+    /// determinant).
+    #[serde(default)]
+    pub mirror: bool,
 }
 
 /// `[camera] projection`.

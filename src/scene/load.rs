@@ -374,6 +374,7 @@ fn framing_camera(lo: Vec3, hi: Vec3, aspect: f32) -> CameraDesc {
         focus_distance: None,
         projection: Projection::Perspective,
         height: None,
+        mirror: false,
     }
 }
 

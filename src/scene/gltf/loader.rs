@@ -137,6 +137,7 @@ impl<'a> Loader<'a> {
             focus_distance: None,
             projection: Projection::Perspective,
             height: None,
+            mirror: false,
         };
         match camera.projection() {
             gltf::camera::Projection::Perspective(p) => {

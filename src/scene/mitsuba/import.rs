@@ -164,6 +164,16 @@ impl<'a> Importer<'a> {
         &self.tree.objects[i]
     }
 
+    /// A position for a note: line and column in the scene file, the file too in an
+    /// included one.
+    fn at(&self, pos: &Pos) -> String {
+        if pos.file == self.obj(self.tree.root).pos.file {
+            format!("line {}:{}", pos.line, pos.col)
+        } else {
+            pos.to_string()
+        }
+    }
+
     // ---- typed property access -------------------------------------------------------
 
     fn float(&self, o: &Object, name: &str, default: f64) -> Result<f64> {
@@ -448,7 +458,7 @@ impl<'a> Importer<'a> {
                 };
                 self.notes.push(format!(
                     "{}: integrator moment: rendered by its nested integrator (the same mean image; no second moment)",
-                    o.pos
+                    self.at(&o.pos)
                 ));
                 return self.integrator(Some(inner));
             }
@@ -465,7 +475,7 @@ impl<'a> Importer<'a> {
         if o.plugin == "ptracer" {
             self.notes.push(format!(
                 "{}: integrator ptracer: rendered by the path tracer (the same expected image, other noise)",
-                o.pos
+                self.at(&o.pos)
             ));
         }
         if o.plugin == "direct" {
@@ -495,7 +505,7 @@ impl<'a> Importer<'a> {
         if o.get("rr_depth").is_some() {
             self.notes.push(format!(
                 "{}: rr_depth: Russian roulette starts at wgtrace's fourth ray (the same expected image)",
-                o.pos
+                self.at(&o.pos)
             ));
         }
         Ok(())
@@ -534,17 +544,15 @@ impl<'a> Importer<'a> {
         if !(dir.is_finite() && up.length() > 0.0 && left.length() > 0.0) {
             return err(&o.pos, format!("{}: to_world is degenerate", what(o)));
         }
-        if up.cross(dir).dot(left) <= 0.0 {
-            return err(
-                &o.pos,
-                format!("{}: to_world mirrors the image (negative determinant), which wgtrace's camera cannot", what(o)),
-            );
-        }
         let mut cam = table([
             ("look_from", vec3(origin)),
             ("look_at", vec3(origin + dir)),
             ("up", vec3(up.normalize())),
         ]);
+        // a to_world with a negative determinant mirrors the image
+        if up.cross(dir).dot(left) < 0.0 {
+            cam.insert("mirror".into(), T::Boolean(true));
+        }
         let known_projective = ["to_world", "near_clip", "far_clip"];
         match o.plugin.as_str() {
             "perspective" | "thinlens" => {
