@@ -47,7 +47,7 @@ fn the_scene_hash_is_the_same_on_every_build() {
     let scene = common::scene_from_str(SPHERE);
     assert_eq!(
         scene_hash(&scene),
-        0xaa05_bdff_daf2_ca2c,
+        0x8430_ea83_779f_d9d3,
         "the scene hash changed: checkpoints written before are refused as another scene's"
     );
     let with =
@@ -125,6 +125,16 @@ fn an_older_checkpoint_format_is_refused_with_the_reason() {
             && err.contains("format 3")
             && err.contains("pixel filter")
             && err.contains("render again"),
+        "{err}"
+    );
+    // format 4 hashed the parameters before they held hide_emitters
+    let four = dir.join("four.ckpt");
+    let v4 =
+        String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "format = 4\n");
+    std::fs::write(&four, v4.as_bytes()).unwrap();
+    let err = Checkpoint::read(&four).unwrap_err().to_string();
+    assert!(
+        err.contains("format 4") && err.contains("hide_emitters") && err.contains("render again"),
         "{err}"
     );
     let newer = dir.join("newer.ckpt");
