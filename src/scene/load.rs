@@ -416,9 +416,14 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                             flip_normals: *flip_normals,
                         };
                         if mesh::is_ply(p) || mesh::is_serialized(p) {
-                            return Err("a PLY or .serialized file has no materials: give the \
-                                        object a `material`"
-                                .into());
+                            let kind = if mesh::is_ply(p) {
+                                "PLY"
+                            } else {
+                                ".serialized"
+                            };
+                            return Err(format!(
+                                "a {kind} file has no materials: give the object a `material`"
+                            ));
                         }
                         let mut g = mtl::load_obj_scene(p, &prefix)?;
                         for m in &mut g.meshes {
