@@ -1,5 +1,6 @@
 """The generated assets of tests/mitsuba's scenes, written with the values
-tests/mitsuba_import.rs writes: generated/sky.exr and generated/pyramid.serialized. Used by
+tests/mitsuba_import.rs writes: generated/sky.exr, generated/pyramid.serialized and
+generated/octahedron.obj. Used by
 bench/mitsuba_refs.py and bench/mitsuba_import_report.py."""
 import math
 import os
@@ -49,3 +50,8 @@ def write_assets(folder, write_exr):
     write_exr(os.path.join(folder, "generated", "sky.exr"), sky())
     with open(os.path.join(folder, "generated", "pyramid.serialized"), "wb") as f:
         f.write(serialized(PYRAMID))
+    with open(os.path.join(folder, "generated", "octahedron.obj"), "w") as f:
+        f.write("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n")
+        f.write("vn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\n")
+        for a, b, c in [(1, 3, 5), (3, 2, 5), (2, 4, 5), (4, 1, 5), (3, 1, 6), (2, 3, 6), (4, 2, 6), (1, 4, 6)]:
+            f.write(f"f {a}//{a} {b}//{b} {c}//{c}\n")

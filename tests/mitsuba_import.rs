@@ -60,6 +60,26 @@ fn pyramid() -> Vec<u8> {
     ])
 }
 
+/// The OBJ octahedron of shapes.xml (as bench/mitsuba_assets.py writes it): unit distance
+/// from centre to vertex, faces wound outward, a normal per vertex along its axis.
+fn octahedron() -> String {
+    let mut s = String::from("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n");
+    s += "vn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\n";
+    for f in [
+        [1, 3, 5],
+        [3, 2, 5],
+        [2, 4, 5],
+        [4, 1, 5],
+        [3, 1, 6],
+        [2, 3, 6],
+        [4, 2, 6],
+        [1, 4, 6],
+    ] {
+        s += &format!("f {0}//{0} {1}//{1} {2}//{2}\n", f[0], f[1], f[2]);
+    }
+    s
+}
+
 /// tests/mitsuba copied into a fresh folder with its generated assets.
 fn scenes(name: &str) -> PathBuf {
     let dir = common::tmp_dir(name);
@@ -74,6 +94,7 @@ fn scenes(name: &str) -> PathBuf {
     std::fs::create_dir_all(&generated).unwrap();
     wgtrace::image_io::write_image(&generated.join("sky.exr"), 128, 64, &sky()).unwrap();
     std::fs::write(generated.join("pyramid.serialized"), pyramid()).unwrap();
+    std::fs::write(generated.join("octahedron.obj"), octahedron()).unwrap();
     dir
 }
 
