@@ -7,8 +7,8 @@
 //! Mitsuba's conventions carried over: uv coordinates with v down (v' = 1 - v on shapes
 //! whose uvs Mitsuba makes; OBJ files' uvs Mitsuba flips as it reads them, as wgtrace
 //! keeps them), `to_uv` conjugated by that flip, BSDFs black from behind unless inside a
-//! `twosided`, roughness alpha = roughness^2, the default diffuse BSDF of reflectance 0.5
-//! on shapes without one, area emitters on the front side only, spectra converted as its
+//! `twosided`, roughness alpha = roughness^2, the default diffuse BSDF on shapes without
+//! one (reflectance 0.5, 0 on an emitter), area emitters on the front side only, spectra converted as its
 //! RGB mode converts them, the horizontal field of view, the camera's local +x pointing
 //! left, and its Gaussian pixel filter by default.
 
