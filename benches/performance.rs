@@ -830,7 +830,7 @@ fn mesh_memory(md: &mut String, dir: &Path) {
     let tris = scene
         .primitives
         .iter()
-        .filter(|p| p.tag == wgtrace::scene::records::PRIM_TRIANGLE)
+        .filter(|p| p.tag == wgtrace::scene::primitives::PrimitiveKind::Triangle.tag())
         .count();
     let bytes = [Slot::Primitives, Slot::Bvh, Slot::ShapeData]
         .iter()

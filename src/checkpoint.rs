@@ -19,16 +19,18 @@ const MAGIC: &str = "wgtrace checkpoint";
 /// The renderer version a checkpoint must come from.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
-/// The checkpoint format (the `format` line of the header). 5: the scene hash covers every
+/// The checkpoint format (the `format` line of the header). 6: the scene hash covers every
 /// byte of every record ([`scene_hash`]), the parameters' `hide_emitters` and samples kept
-/// on the image among them; format 4 hashed the parameters before they held those, so its
-/// hashes differ from format 5's for the same scene. Format 3 hashed the parameters before they held the filter, so its hashes differ from
+/// on the image among them, and a light with a surface has its primitive's tag as its
+/// kind; format 5 hashed the light records before their kinds were renumbered so, and
+/// format 4 the parameters before they held `hide_emitters`, so the hashes of both differ
+/// from format 6's for the same scene. Format 3 hashed the parameters before they held the filter, so its hashes differ from
 /// format 4's for the same scene. Format 2 hashed a material record only up to its
 /// first 96 bytes unless pbr had a layer, so a material keeping parameters past them would
 /// not change its hash, and `--resume` or `merge` would take samples of another scene;
 /// format 1 (no `format` line) hashed with Rust's `DefaultHasher`, which a new Rust
 /// release may change. Files of any of them are refused with the reason.
-pub const FORMAT: u32 = 5;
+pub const FORMAT: u32 = 6;
 
 #[derive(Debug, thiserror::Error)]
 pub enum CheckpointError {
@@ -310,9 +312,13 @@ impl Checkpoint {
                     } else if format == 3 {
                         " (its scene hash came before the parameters held the pixel \
                          filter, so it cannot match this wgtrace's hash of the same scene)"
-                    } else if format < FORMAT {
+                    } else if format == 4 {
                         " (its scene hash came before the parameters held hide_emitters \
                          and the filter's border rule, so it cannot match this wgtrace's \
+                         hash of the same scene)"
+                    } else if format < FORMAT {
+                        " (its scene hash came before the lights with a surface took their \
+                         primitive's tag as their kind, so it cannot match this wgtrace's \
                          hash of the same scene)"
                     } else {
                         " (written by a newer wgtrace)"

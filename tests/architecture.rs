@@ -11,6 +11,13 @@ fn root() -> PathBuf {
 
 /// `src` with comments, string and character literals blanked (newlines kept), so that
 /// paths named in docs or messages are not taken for imports.
+/// Whether `rest` starts a raw string (`r"..."`, `r#"..."#`), not a raw identifier
+/// (`r#box`).
+fn raw_string(rest: &[u8]) -> bool {
+    let hashes = rest.iter().skip(1).take_while(|&&c| c == b'#').count();
+    rest.first() == Some(&b'r') && rest.get(1 + hashes) == Some(&b'"')
+}
+
 fn code_only(src: &str) -> String {
     let b = src.as_bytes();
     let mut out = String::with_capacity(src.len());
@@ -44,7 +51,7 @@ fn code_only(src: &str) -> String {
                 }
             }
             j
-        } else if !prev_ident && (rest.starts_with(b"r#") || rest.starts_with(b"r\"")) {
+        } else if !prev_ident && raw_string(rest) {
             let hashes = rest[1..].iter().take_while(|&&c| c == b'#').count();
             let close: Vec<u8> = std::iter::once(b'"')
                 .chain(std::iter::repeat_n(b'#', hashes))
@@ -498,15 +505,11 @@ fn material_places_are_named_only_by_the_material_layer() {
     );
 }
 
-/// Each material's shading has one shape in both languages: `shaders/materials/NAME.wgsl`
-/// defines only functions named `NAME_...`, and exactly the dispatched ones its type has
-/// (`NAME_scatter` with a lobe, `NAME_eval` and `NAME_pdf` with a density,
-/// `NAME_textures` with textures of its own); its twin `src/cpu/materials/NAME.rs`
-/// implements those (`fn scatter`, ...) and every helper of the same name
-/// (`NAME_spec_prob` is `fn spec_prob`).
-#[test]
-fn every_material_has_its_wgsl_and_its_cpu_twin_in_the_same_shape() {
-    use wgtrace::scene::materials::MaterialKind;
+/// Holds the shading file `shaders/LAYER/NAME.wgsl` and its twin `src/cpu/LAYER/NAME.rs` to
+/// one shape: every WGSL function is named `NAME_x` and has a twin `fn x`, and each
+/// dispatched `NAME_f` of `dispatched` is defined exactly when it `has` to be (`why` says
+/// what decides).
+fn check_twins(layer: &str, name: &str, dispatched: &[(&str, bool)], why: &str) {
     let fns = |src: &str| -> Vec<String> {
         code_only(src)
             .split("fn ")
@@ -520,13 +523,41 @@ fn every_material_has_its_wgsl_and_its_cpu_twin_in_the_same_shape() {
             })
             .collect()
     };
+    let wgsl = std::fs::read_to_string(root().join(format!("shaders/{layer}/{name}.wgsl")))
+        .unwrap_or_else(|e| panic!("shaders/{layer}/{name}.wgsl: {e}"));
+    let cpu = std::fs::read_to_string(root().join(format!("src/cpu/{layer}/{name}.rs")))
+        .unwrap_or_else(|e| panic!("src/cpu/{layer}/{name}.rs: {e}"));
+    let (gpu_fns, cpu_fns) = (fns(&wgsl), fns(&cpu));
+    for f in &gpu_fns {
+        let own = f
+            .strip_prefix(&format!("{name}_"))
+            .unwrap_or_else(|| panic!("{name}.wgsl: fn {f} is not named {name}_..."));
+        assert!(
+            cpu_fns.iter().any(|c| c == own),
+            "{name}: fn {f} has no twin fn {own} in src/cpu/{layer}/{name}.rs"
+        );
+    }
+    for &(f, has) in dispatched {
+        let defined = gpu_fns.contains(&format!("{name}_{f}"));
+        assert_eq!(
+            defined,
+            has,
+            "{name}.wgsl: fn {name}_{f} {} by {why}",
+            if has { "is needed" } else { "is never called" }
+        );
+    }
+}
+
+/// Each material's shading has one shape in both languages: `shaders/materials/NAME.wgsl`
+/// defines only functions named `NAME_...`, and exactly the dispatched ones its type has
+/// (`NAME_scatter` with a lobe, `NAME_eval` and `NAME_pdf` with a density,
+/// `NAME_textures` with textures of its own); its twin `src/cpu/materials/NAME.rs`
+/// implements those (`fn scatter`, ...) and every helper of the same name
+/// (`NAME_spec_prob` is `fn spec_prob`).
+#[test]
+fn every_material_has_its_wgsl_and_its_cpu_twin_in_the_same_shape() {
+    use wgtrace::scene::materials::MaterialKind;
     for &kind in MaterialKind::ALL {
-        let name = kind.name();
-        let wgsl = std::fs::read_to_string(root().join(format!("shaders/materials/{name}.wgsl")))
-            .unwrap_or_else(|e| panic!("shaders/materials/{name}.wgsl: {e}"));
-        let cpu = std::fs::read_to_string(root().join(format!("src/cpu/materials/{name}.rs")))
-            .unwrap_or_else(|e| panic!("src/cpu/materials/{name}.rs: {e}"));
-        let (gpu_fns, cpu_fns) = (fns(&wgsl), fns(&cpu));
         let lobes = kind.lobes();
         let dispatched = [
             ("scatter", lobes.any()),
@@ -534,23 +565,40 @@ fn every_material_has_its_wgsl_and_its_cpu_twin_in_the_same_shape() {
             ("pdf", lobes.density),
             ("textures", kind.view().own_textures()),
         ];
-        for f in &gpu_fns {
-            let own = f
-                .strip_prefix(&format!("{name}_"))
-                .unwrap_or_else(|| panic!("{name}.wgsl: fn {f} is not named {name}_..."));
-            assert!(
-                cpu_fns.iter().any(|c| c == own),
-                "{name}: fn {f} has no twin fn {own} in src/cpu/materials/{name}.rs"
-            );
-        }
-        for (f, has) in dispatched {
-            let defined = gpu_fns.contains(&format!("{name}_{f}"));
-            assert_eq!(
-                defined,
-                has,
-                "{name}.wgsl: fn {name}_{f} {} by its type's lobes and view",
-                if has { "is needed" } else { "is never called" }
-            );
-        }
+        check_twins(
+            "materials",
+            kind.name(),
+            &dispatched,
+            "its type's lobes and view",
+        );
+    }
+}
+
+/// Each primitive has one shape in both languages: `shaders/primitives/NAME.wgsl` defines
+/// only functions named `NAME_...`, among them `NAME_intersect`, `NAME_surface` and
+/// `NAME_uv_derivatives`, and the light functions (`NAME_light_sample`, `NAME_light_pdf`,
+/// `NAME_light_distance`) exactly when its type can be a light; its twin
+/// `src/cpu/primitives/NAME.rs` implements each of them under its own name (`fn
+/// intersect`, ..., `NAME_cone` is `fn cone`). Its record view is its module's
+/// (`scene::primitives::NAME::Params`): no file outside the layer names a shape's place.
+#[test]
+fn every_primitive_has_its_wgsl_and_its_cpu_twin_in_the_same_shape() {
+    use wgtrace::scene::primitives::PrimitiveKind;
+    assert!(PrimitiveKind::ALL.len() >= 6);
+    for &kind in PrimitiveKind::ALL {
+        let dispatched = [
+            ("intersect", true),
+            ("surface", true),
+            ("uv_derivatives", true),
+            ("light_sample", kind.light()),
+            ("light_pdf", kind.light()),
+            ("light_distance", kind.light()),
+        ];
+        check_twins(
+            "primitives",
+            kind.name(),
+            &dispatched,
+            "its type (PrimitiveKind::light)",
+        );
     }
 }

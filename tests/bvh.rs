@@ -8,7 +8,8 @@ mod common;
 
 use common::icosphere;
 use glam::Vec3;
-use wgtrace::cpu::intersect::{bvh_walk, safe_inverse as finite_inv_dir};
+use wgtrace::cpu::geometry::safe_inverse as finite_inv_dir;
+use wgtrace::cpu::intersect::bvh_walk;
 use wgtrace::cpu::types::{Ray, FAR};
 use wgtrace::scene::bvh::{
     build, collapse, Aabb, Bvh, Node as BvhNode, WideBvh, BVH_MAX_DEPTH, BVH_MAX_LEAF_DEPTH,

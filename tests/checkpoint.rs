@@ -137,6 +137,16 @@ fn an_older_checkpoint_format_is_refused_with_the_reason() {
         err.contains("format 4") && err.contains("hide_emitters") && err.contains("render again"),
         "{err}"
     );
+    // format 5 hashed the light records before their kinds were renumbered
+    let five = dir.join("five.ckpt");
+    let v5 =
+        String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "format = 5\n");
+    std::fs::write(&five, v5.as_bytes()).unwrap();
+    let err = Checkpoint::read(&five).unwrap_err().to_string();
+    assert!(
+        err.contains("format 5") && err.contains("primitive's tag") && err.contains("render again"),
+        "{err}"
+    );
     let newer = dir.join("newer.ckpt");
     let v3 =
         String::from_utf8_lossy(&text).replace(&format!("format = {FORMAT}\n"), "format = 99\n");

@@ -4,9 +4,10 @@ mod common;
 
 use std::path::Path;
 
+use common::shapes::{intersect_sphere, intersect_triangle};
 use glam::Vec3;
 use wgtrace::cpu::bindings::Bindings;
-use wgtrace::cpu::intersect::{intersect_scene, intersect_sphere, intersect_triangle, surface_at};
+use wgtrace::cpu::intersect::{intersect_scene, surface_at};
 use wgtrace::cpu::rng::{pcg4d, rand_2d};
 use wgtrace::cpu::sampling::{offset_ray, sample_cosine_hemisphere};
 use wgtrace::cpu::types::{Ray, FAR, NO_HIT};

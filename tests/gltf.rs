@@ -915,7 +915,7 @@ material = "white"
     let xs: Vec<f32> = s
         .primitives
         .iter()
-        .filter(|p| p.tag == records::PRIM_TRIANGLE)
+        .filter(|p| p.tag == wgtrace::scene::primitives::PrimitiveKind::Triangle.tag())
         .flat_map(|p| [p.a[0], p.b[0], p.c[0]])
         .collect();
     assert!(

@@ -4,11 +4,11 @@
 
 mod common;
 
+use common::shapes::{intersect_box, intersect_cylinder};
 use glam::{Vec2, Vec3, Vec4Swizzles};
 use wgtrace::cpu::bindings::Bindings;
-use wgtrace::cpu::intersect::{
-    intersect_box, intersect_cylinder, intersect_plane, intersect_scene, surface_at,
-};
+use wgtrace::cpu::geometry::intersect_plane;
+use wgtrace::cpu::intersect::{intersect_scene, surface_at};
 use wgtrace::cpu::types::{Candidate, Hit, Ray, FAR, NO_HIT};
 use wgtrace::scene::flatten::transform_matrix;
 use wgtrace::scene::format::{ScaleDesc, TransformDesc};

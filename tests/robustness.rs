@@ -7,13 +7,12 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
+use common::shapes::{intersect_box, intersect_cylinder, intersect_sphere, intersect_triangle};
 use common::{image_mean, random_f32, random_unit, render_cpu, render_gpu};
 use glam::{DVec3, Vec3};
 use wgtrace::cpu::bindings::Bindings;
-use wgtrace::cpu::intersect::{
-    intersect_box, intersect_cylinder, intersect_plane, intersect_scene, intersect_sphere,
-    intersect_triangle,
-};
+use wgtrace::cpu::geometry::intersect_plane;
+use wgtrace::cpu::intersect::intersect_scene;
 use wgtrace::cpu::trace::accumulate;
 use wgtrace::cpu::types::{Ray, FAR, NO_HIT};
 use wgtrace::gpu::kernel::intersect_rays;
@@ -793,13 +792,13 @@ fn rays_leaving_a_surface_never_hit_it_again() {
         let scene = common::scene_from_str(&src);
         let b = Bindings::new(&scene, scene.params(0, scene.full_band()));
         let p = &scene.primitives[0];
-        let target = if p.tag == wgtrace::scene::records::PRIM_SPHERE {
+        let target = if p.tag == wgtrace::scene::primitives::PrimitiveKind::Sphere.tag() {
             Vec3::from_slice(&p.a)
         } else {
             (Vec3::from_slice(&p.a) + Vec3::from_slice(&p.b) + Vec3::from_slice(&p.c)) / 3.0
         };
         // start near the shape: a few radii, or a few triangle sizes, away
-        let reach = if p.tag == wgtrace::scene::records::PRIM_SPHERE {
+        let reach = if p.tag == wgtrace::scene::primitives::PrimitiveKind::Sphere.tag() {
             3.0 * p.a[3]
         } else {
             4.0 * (Vec3::from_slice(&p.b) - Vec3::from_slice(&p.a)).length()
@@ -828,7 +827,7 @@ fn rays_leaving_a_surface_never_hit_it_again() {
         // a sphere far smaller than the f32 spacing at its position (radius 1e-4 at 1e5,
         // where that spacing is 0.0078) cannot be aimed at; only what is hit is checked
         let spacing = |x: f32| f32::from_bits(x.abs().to_bits() + 1) - x.abs();
-        let representable = p.tag != wgtrace::scene::records::PRIM_SPHERE
+        let representable = p.tag != wgtrace::scene::primitives::PrimitiveKind::Sphere.tag()
             || p.a[3] >= 100.0 * spacing(target.abs().max_element());
         if representable {
             assert!(hits >= 20, "{object}: only {hits} of 40 rays hit");

@@ -14,9 +14,10 @@ use wgtrace::gpu::limits::DeviceFit;
 use wgtrace::gpu::plan::{
     Feature, FeatureSet, GpuPlan, ShaderSpec, BAKED_PRIMITIVES_MAX, BAKED_RECORDS_MAX,
 };
-use wgtrace::gpu::shader::{used_bindings, validate, ENTRY_SHADERS, SHADER_FILES};
+use wgtrace::gpu::shader::{shader_files, used_bindings, validate, ENTRY_SHADERS};
 use wgtrace::scene::format::{LightSampling, SamplerKind};
 use wgtrace::scene::materials::MaterialKind;
+use wgtrace::scene::primitives::PrimitiveKind;
 use wgtrace::scene::records::{
     record_layouts, SharedValue, BVH_STACK_LANES, BVH_STACK_SIZE, SHARED_CONSTANTS,
 };
@@ -115,7 +116,7 @@ fn every_combination_of_texture_and_light_features_binds_what_it_reads() {
             .map(|(_, &f)| f)
             .chain([
                 Feature::Emission,
-                Feature::Triangle,
+                Feature::Primitive(PrimitiveKind::Triangle),
                 Feature::Material(MaterialKind::Lambertian),
             ])
             .collect();
@@ -187,8 +188,8 @@ fn every_plan_the_scenes_reach_validates_and_binds_only_what_it_reads() {
         Feature::Emission,
         Feature::Material(MaterialKind::Lambertian),
         Feature::Sobol,
-        Feature::Sphere,
-        Feature::Triangle,
+        Feature::Primitive(PrimitiveKind::Sphere),
+        Feature::Primitive(PrimitiveKind::Triangle),
     ]
     .into_iter()
     .collect();
@@ -292,7 +293,7 @@ fn small_scenes_get_their_primitives_as_constants_exactly() {
 fn every_shader_file_is_embedded_and_imported() {
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders");
     let mut on_disk = Vec::new();
-    for sub in ["", "shared", "materials"] {
+    for sub in ["", "shared", "materials", "primitives"] {
         for e in std::fs::read_dir(dir.join(sub)).unwrap() {
             let p = e.unwrap().path();
             if p.extension().is_some_and(|x| x == "wgsl") {
@@ -306,11 +307,11 @@ fn every_shader_file_is_embedded_and_imported() {
         }
     }
     on_disk.sort();
-    let mut embedded: Vec<String> = SHADER_FILES.iter().map(|(n, _)| n.to_string()).collect();
+    let mut embedded: Vec<String> = shader_files().iter().map(|(n, _)| n.to_string()).collect();
     embedded.sort();
     assert_eq!(
         on_disk, embedded,
-        "shaders/ and gpu::shader::SHADER_FILES differ"
+        "shaders/ and gpu::shader::shader_files() differ"
     );
     // The trace shader pulls in every shared file exactly once.
     let src = ShaderSpec::default().wgsl("trace").unwrap();
@@ -395,7 +396,7 @@ fn preprocessor_selects_branches_imports_once_and_reports_errors() {
 fn every_shader_directive_names_a_known_define() {
     let known = ShaderSpec::known_defines();
     let mut named = 0;
-    for (name, src) in SHADER_FILES {
+    for (name, src) in shader_files() {
         for (i, line) in src.lines().enumerate() {
             let mut words = line.split_whitespace();
             if let Some("#if" | "#ifdef" | "#ifndef") = words.next() {
@@ -492,7 +493,7 @@ fn shared_constants_have_one_value_in_both_languages() {
             assert_eq!(bits(w), bits(v), "{entry}: {name}");
         }
     }
-    for (name, src) in SHADER_FILES {
+    for (name, src) in shader_files() {
         for (i, line) in src.lines().enumerate() {
             assert!(
                 !line.trim_start().starts_with("const "),

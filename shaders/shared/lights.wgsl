@@ -1,9 +1,12 @@
 // Lights: the background's radiance, choosing a light in proportion to its power, sampling
 // a direction toward it, and the solid-angle pdf of a direction under light sampling.
 // Every pdf includes the probability of choosing the light, exactly as the estimators use
-// it. Area lights (triangles, disks, spheres) are sampled from their world-space records
-// in `emitters`; the image background from a 2D distribution over its pixels.
+// it. Lights with a surface are sampled from their world-space records in `emitters`, by
+// their primitive type's functions (shape_light_sample, shape_light_pdf and
+// shape_light_distance, the dispatch gpu::codegen::primitives writes); the image
+// background from a 2D distribution over its pixels.
 #import shared/bindings
+#import shared/geometry
 #import shared/intersect
 #import shared/sampling
 #import shared/textures
@@ -265,105 +268,23 @@ struct LightSample {
     uv: vec2<f32>,
 }
 
-// Solid-angle pdf of a point x with unit normal n drawn uniformly from an area, seen from
-// p: |x - p|^2 / (|cos| area); 0 when seen edge-on.
-fn area_pdf(p: vec3<f32>, x: vec3<f32>, n: vec3<f32>, area: f32) -> f32 {
-    let v = x - p;
-    let d2 = dot(v, v);
-    let c = abs(dot(n, v)) / sqrt(d2);
-    if (!(d2 > 0.0) || !(c >= EDGE_ON_COS) || c * area <= d2 * 1e-30) {
-        return 0.0;
-    }
-    return d2 / (c * area);
-}
-
-// Whether p is inside a sphere light for sampling: within radius x (1 + 1/1024), squared 1 + 1/512. On and just
-// outside the surface (a point shaded on the light itself) the cone degenerates into a
-// cap of nearly zero size whose directions rounding destroys; area sampling is exact there.
-fn sphere_inside(p: vec3<f32>, center: vec3<f32>, r: f32) -> bool {
-    let v = p - center;
-    return dot(v, v) <= r * r * (1.0 + 1.0 / 512.0);
-}
-
-// 1 - cos(theta_max) of the cone a sphere of radius r subtends at squared distance dc2
-// from its centre (sin^2 / 2 for small cones, where the subtraction would cancel).
-fn sphere_cone(r: f32, dc2: f32) -> f32 {
-    let sin2_max = r * r / dc2;
-    if (sin2_max < 0.00068523) {
-        return 0.5 * sin2_max;
-    }
-    return 1.0 - sqrt(max(0.0, 1.0 - sin2_max));
-}
-
-// A point on a sphere light seen from p: uniform in the cone of directions the sphere
-// subtends (pbrt-v4's Sphere::Sample, small cones by the series), or uniform by area when
-// p is inside (sphere_inside). Returns the point in .xyz, its solid-angle pdf in .w.
-fn sample_sphere_light(center: vec3<f32>, r: f32, p: vec3<f32>, u: vec2<f32>) -> vec4<f32> {
-    let oc = center - p;
-    let dc2 = dot(oc, oc);
-    if (sphere_inside(p, center, r)) {
-        let n = sample_sphere(u);
-        let x = center + r * n;
-        return vec4<f32>(x, area_pdf(p, x, n, 4.0 * PI * r * r));
-    }
-    let sin2_max = r * r / dc2;
-    let sin_max = sqrt(sin2_max);
-    let cos_max = sqrt(max(0.0, 1.0 - sin2_max));
-    var cos_t = (cos_max - 1.0) * u.x + 1.0;
-    var sin2_t = 1.0 - cos_t * cos_t;
-    if (sin2_max < 0.00068523) {
-        sin2_t = sin2_max * u.x;
-        cos_t = sqrt(1.0 - sin2_t);
-    }
-    let cos_a = sin2_t / sin_max + cos_t * sqrt(max(0.0, 1.0 - sin2_t / sin2_max));
-    let sin_a = sqrt(max(0.0, 1.0 - cos_a * cos_a));
-    let phi = 2.0 * PI * u.y;
-    let wc = oc / sqrt(dc2);
-    let tb = onb_tangents(wc);
-    let n = -(sin_a * cos(phi) * tb[0] + sin_a * sin(phi) * tb[1] + cos_a * wc);
-    return vec4<f32>(center + r * n, 1.0 / (2.0 * PI * sphere_cone(r, dc2)));
-}
-
 // Solid-angle pdf that light `i` is sampled toward x (a point on it, in direction d from
 // p), the choice of the light included.
 fn light_pdf(i: u32, p: vec3<f32>, x: vec3<f32>, d: vec3<f32>) -> f32 {
     let e = emitter_record(i);
-    var pdf = 0.0;
-    switch e.kind {
-#ifdef HAS_TRIANGLE
-        case LIGHT_TRIANGLE: {
-            let n = normalize(cross(e.b.xyz - e.a.xyz, e.c.xyz - e.a.xyz));
-            pdf = area_pdf(p, x, n, e.area);
-        }
-#endif
-#ifdef HAS_DISK
-        case LIGHT_DISK: {
-            pdf = area_pdf(p, x, e.b.xyz, e.area);
-        }
-#endif
-#ifdef HAS_SPHERE
-        case LIGHT_SPHERE: {
-            if (sphere_inside(p, e.a.xyz, e.a.w)) {
-                pdf = area_pdf(p, x, normalize(x - e.a.xyz), e.area);
-            } else {
-                pdf = 1.0 / (2.0 * PI * sphere_cone(e.a.w, dot(e.a.xyz - p, e.a.xyz - p)));
-            }
-        }
-#endif
 #ifdef HAS_ENV_MAP
-        case LIGHT_ENVIRONMENT: {
-            pdf = env_pdf(d);
-        }
-#endif
-        default: {}
+    if (e.kind == LIGHT_ENVIRONMENT) {
+        return e.prob * env_pdf(d);
     }
+#endif
+    let pdf = shape_light_pdf(e, p, x);
     return e.prob * pdf;
 }
 
 // Samples a direction toward a light from p: the light by u_light (in proportion to
-// power), the point on it by u. Triangles: u = 1 - sqrt(xi1), v = xi2 sqrt(xi1) weigh
-// vertices a and b; disks: rho = R sqrt(xi1), theta = 2 pi xi2 in the disk's plane;
-// spheres: the cone they subtend; the image background: its 2D distribution.
+// power), the point on it by u: by its type's NAME_light_sample (a triangle or a disk by
+// area, a sphere in the cone it subtends), the image background from its 2D
+// distribution.
 fn sample_light(p: vec3<f32>, u_light: f32, u: vec2<f32>) -> LightSample {
     var ls = LightSample(NO_LIGHT, vec3<f32>(0.0, 0.0, 1.0), FAR, 0.0, vec2<f32>(0.0));
     if (params.num_emitters == 0u) {
@@ -371,51 +292,24 @@ fn sample_light(p: vec3<f32>, u_light: f32, u: vec2<f32>) -> LightSample {
     }
     let i = choose_light(u_light);
     let e = emitter_record(i);
-    var x = vec3<f32>(0.0);
-    var pdf = 0.0;
-    switch e.kind {
-#ifdef HAS_TRIANGLE
-        case LIGHT_TRIANGLE: {
-            let su = sqrt(u.x);
-            let wa = 1.0 - su;
-            let wb = u.y * su;
-            x = wa * e.a.xyz + wb * e.b.xyz + (1.0 - wa - wb) * e.c.xyz;
-            let n = normalize(cross(e.b.xyz - e.a.xyz, e.c.xyz - e.a.xyz));
-            pdf = area_pdf(p, x, n, e.area);
-            ls.uv = vec2<f32>(wb, 1.0 - wa - wb);
-        }
-#endif
-#ifdef HAS_DISK
-        case LIGHT_DISK: {
-            let d = sample_disk(u) * e.a.w;
-            let tb = onb_tangents(e.b.xyz);
-            x = e.a.xyz + d.x * tb[0] + d.y * tb[1];
-            pdf = area_pdf(p, x, e.b.xyz, e.area);
-        }
-#endif
-#ifdef HAS_SPHERE
-        case LIGHT_SPHERE: {
-            let s = sample_sphere_light(e.a.xyz, e.a.w, p, u);
-            x = s.xyz;
-            pdf = s.w;
-        }
-#endif
 #ifdef HAS_ENV_MAP
-        case LIGHT_ENVIRONMENT: {
-            let tex = textures[params.env_texture];
-            let row = sample_cdf(0u, tex.height, u.y);
-            let col = sample_cdf(tex.height + 1u + row.i * (tex.width + 1u), tex.width, u.x);
-            let sin_theta = sin(PI * row.x);
-            if (sin_theta > 0.0) {
-                ls.dir = env_direction(vec2<f32>(col.x, row.x));
-                ls.pdf = e.prob * row.pdf * col.pdf / (2.0 * PI * PI * sin_theta);
-                ls.light = select(NO_LIGHT, i, ls.pdf > 0.0);
-            }
-            return ls;
+    if (e.kind == LIGHT_ENVIRONMENT) {
+        let tex = textures[params.env_texture];
+        let row = sample_cdf(0u, tex.height, u.y);
+        let col = sample_cdf(tex.height + 1u + row.i * (tex.width + 1u), tex.width, u.x);
+        let sin_theta = sin(PI * row.x);
+        if (sin_theta > 0.0) {
+            ls.dir = env_direction(vec2<f32>(col.x, row.x));
+            ls.pdf = e.prob * row.pdf * col.pdf / (2.0 * PI * PI * sin_theta);
+            ls.light = select(NO_LIGHT, i, ls.pdf > 0.0);
         }
-#endif
-        default: {}
+        return ls;
     }
+#endif
+    let lp = shape_light_sample(e, p, u);
+    let x = lp.x;
+    let pdf = lp.pdf;
+    ls.uv = lp.uv;
     let v = x - p;
     let dist = length(v);
     if (pdf > 0.0 && dist > 0.0) {
@@ -431,45 +325,15 @@ fn sample_light(p: vec3<f32>, u_light: f32, u: vec2<f32>) -> LightSample {
 // lights of choice x density, each light's surface found along the ray whatever lies in
 // between (what the 50/50 mixture divides by). Costs one test per light.
 fn light_pdf_total(p: vec3<f32>, d: vec3<f32>) -> f32 {
-    let ray = Ray(p, d);
     var total = 0.0;
     for (var i = 0u; i < params.num_emitters; i++) {
         let e = emitter_record(i);
-        var t = FAR;
-        switch e.kind {
-#ifdef HAS_TRIANGLE
-            case LIGHT_TRIANGLE: {
-                t = intersect_triangle(e.a.xyz, e.b.xyz, e.c.xyz, ray, FAR).x;
-            }
-#endif
-#ifdef HAS_DISK
-            case LIGHT_DISK: {
-                t = intersect_disk(e.a.xyz, e.b.xyz, e.a.w, ray, FAR);
-            }
-#endif
-#ifdef HAS_SPHERE
-            case LIGHT_SPHERE: {
-                if (sphere_inside(p, e.a.xyz, e.a.w)) {
-                    // inside: the far root (the way out)
-                    let oc = p - e.a.xyz;
-                    let b = dot(oc, d);
-                    let c = dot(oc, oc) - e.a.w * e.a.w;
-                    t = -b + sqrt(max(0.0, b * b - c));
-                    if (!(t > 0.0)) {
-                        t = FAR;
-                    }
-                } else {
-                    t = intersect_sphere(e.a.xyz, e.a.w, ray, FAR);
-                }
-            }
-#endif
 #ifdef HAS_ENV_MAP
-            case LIGHT_ENVIRONMENT: {
-                t = 0.0;
-            }
+        // the image background is along every ray, at no distance
+        let t = select(shape_light_distance(e, p, d), 0.0, e.kind == LIGHT_ENVIRONMENT);
+#else
+        let t = shape_light_distance(e, p, d);
 #endif
-            default: {}
-        }
         if (t < FAR) {
             total += light_pdf(i, p, p + t * d, d);
         }

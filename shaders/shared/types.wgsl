@@ -8,19 +8,16 @@
 // written into every shader from there (gpu::codegen::constants):
 #import generated/constants
 
-// In object space when PRIM_FLAG_TRANSFORM is set.
+// In object space when PRIM_FLAG_TRANSFORM is set. Storage: each type names its places in
+// its view (NAMEParams, written from scene::primitives).
 struct Primitive {
     tag: u32,
     material: u32,
     flags: u32,
     // first shape_data entry of the transform or of the vertex attributes
     data: u32,
-    // sphere: center, radius | triangle: vertex 0 | plane: point, uv scale | box: min
-    // cylinder: base center, radius | disk: center, radius
     a: vec4<f32>,
-    // triangle: vertex 1 | plane, disk: unit normal | box: max | cylinder: top center
     b: vec4<f32>,
-    // triangle: vertex 2
     c: vec4<f32>,
 }
 
@@ -101,6 +98,8 @@ struct Texture {
 // (primitive = NO_HIT). Chosen with probability prob by inverting the running sum cdf.
 // triangle: vertices a, b, c | disk: a = (center, radius), b = unit normal
 // sphere: a = (center, radius)
+// A light with a surface: kind = its primitive's tag, a, b, c = its primitive's places in
+// world space.
 struct Emitter {
     primitive: u32,
     kind: u32,
@@ -189,6 +188,28 @@ struct Params {
 struct Ray {
     origin: vec3<f32>,
     dir: vec3<f32>,
+}
+
+// A hit in a primitive's own space (each type's NAME_surface).
+struct Surface {
+    p: vec3<f32>,
+    ng: vec3<f32>,
+    ns: vec3<f32>,
+    uv: vec2<f32>,
+    err: f32,
+    tangent: vec4<f32>,
+    // a triangle's second uv set (PRIM_FLAG_UV1) and vertex colour (PRIM_FLAG_COLORS)
+    uv1: vec2<f32>,
+    color: vec4<f32>,
+}
+
+// A point sampled on a light with a surface (each such type's NAME_light_sample): the
+// point, its solid-angle pdf seen from where it was sampled (0: none), and its (u, v) as
+// a hit's candidate would have them.
+struct LightPoint {
+    x: vec3<f32>,
+    pdf: f32,
+    uv: vec2<f32>,
 }
 
 // What the closest-hit search reports: distance, primitive, and the primitive's own

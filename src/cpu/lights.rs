@@ -4,14 +4,13 @@
 use glam::{Vec2, Vec3, Vec4};
 
 use super::bindings::Bindings;
-use super::intersect::{intersect_disk, intersect_sphere, intersect_triangle};
-use super::sampling::{onb_tangents, sample_disk, sample_sphere, PI};
+use super::primitives::{shape_light_distance, shape_light_pdf, shape_light_sample};
+use super::sampling::PI;
 use super::textures::texture_value;
-use super::types::{xyz, Ray, FAR};
+use super::types::{xyz, FAR};
 use crate::scene::records::{
-    Emitter, BACKGROUND_GRADIENT, BACKGROUND_IMAGE, LIGHT_DIRECTIONAL, LIGHT_DISK,
-    LIGHT_ENVIRONMENT, LIGHT_PROJECTOR, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_LIGHT,
-    NO_TEXTURE,
+    Emitter, BACKGROUND_GRADIENT, BACKGROUND_IMAGE, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT,
+    LIGHT_PROJECTOR, LIGHT_SPOT, NO_LIGHT, NO_TEXTURE,
 };
 
 pub use crate::scene::records::EDGE_ON_COS;
@@ -277,79 +276,13 @@ pub struct LightSample {
     pub uv: Vec2,
 }
 
-/// Solid-angle pdf of a point drawn uniformly from an area, seen from p; 0 edge-on.
-pub fn area_pdf(p: Vec3, x: Vec3, n: Vec3, area: f32) -> f32 {
-    let v = x - p;
-    let d2 = v.dot(v);
-    let c = n.dot(v).abs() / d2.sqrt();
-    // Written as in WGSL, so NaN takes the same branch on both backends.
-    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-    if !(d2 > 0.0) || !(c >= EDGE_ON_COS) || c * area <= d2 * 1e-30 {
-        return 0.0;
-    }
-    d2 / (c * area)
-}
-
-/// Whether p is inside a sphere light for sampling: within radius x (1 + 1/1024), squared 1 + 1/512, so that
-/// points on the surface sample by area rather than by a degenerate cone.
-pub fn sphere_inside(p: Vec3, center: Vec3, r: f32) -> bool {
-    let v = p - center;
-    v.dot(v) <= r * r * (1.0 + 1.0 / 512.0)
-}
-
-/// 1 - cos(theta_max) of the cone a sphere subtends at squared distance dc2.
-pub fn sphere_cone(r: f32, dc2: f32) -> f32 {
-    let sin2_max = r * r / dc2;
-    if sin2_max < 0.000_685_23 {
-        return 0.5 * sin2_max;
-    }
-    1.0 - (1.0 - sin2_max).max(0.0).sqrt()
-}
-
-/// A point on a sphere light seen from p (cone, or area from inside) and its pdf in `.w`.
-pub fn sample_sphere_light(center: Vec3, r: f32, p: Vec3, u: [f32; 2]) -> Vec4 {
-    let oc = center - p;
-    let dc2 = oc.dot(oc);
-    if sphere_inside(p, center, r) {
-        let n = sample_sphere(u);
-        let x = center + r * n;
-        return x.extend(area_pdf(p, x, n, 4.0 * PI * r * r));
-    }
-    let sin2_max = r * r / dc2;
-    let sin_max = sin2_max.sqrt();
-    let cos_max = (1.0 - sin2_max).max(0.0).sqrt();
-    let mut cos_t = (cos_max - 1.0) * u[0] + 1.0;
-    let mut sin2_t = 1.0 - cos_t * cos_t;
-    if sin2_max < 0.000_685_23 {
-        sin2_t = sin2_max * u[0];
-        cos_t = (1.0 - sin2_t).sqrt();
-    }
-    let cos_a = sin2_t / sin_max + cos_t * (1.0 - sin2_t / sin2_max).max(0.0).sqrt();
-    let sin_a = (1.0 - cos_a * cos_a).max(0.0).sqrt();
-    let phi = 2.0 * PI * u[1];
-    let wc = oc / dc2.sqrt();
-    let tb = onb_tangents(wc);
-    let n = -(sin_a * phi.cos() * tb[0] + sin_a * phi.sin() * tb[1] + cos_a * wc);
-    (center + r * n).extend(1.0 / (2.0 * PI * sphere_cone(r, dc2)))
-}
-
 /// Solid-angle pdf that light i is sampled toward x (direction d from p), choice included.
 pub fn light_pdf(b: &Bindings, i: u32, p: Vec3, x: Vec3, d: Vec3) -> f32 {
     let e = &b.emitters[i as usize];
-    let (ea, eb, ec) = (xyz(e.a), xyz(e.b), xyz(e.c));
-    let pdf = match e.kind {
-        LIGHT_TRIANGLE => area_pdf(p, x, (eb - ea).cross(ec - ea).normalize(), e.area),
-        LIGHT_DISK => area_pdf(p, x, eb, e.area),
-        LIGHT_SPHERE => {
-            if sphere_inside(p, ea, e.a[3]) {
-                area_pdf(p, x, (x - ea).normalize(), e.area)
-            } else {
-                1.0 / (2.0 * PI * sphere_cone(e.a[3], (ea - p).dot(ea - p)))
-            }
-        }
-        LIGHT_ENVIRONMENT => env_pdf(b, d),
-        _ => 0.0,
-    };
+    if e.kind == LIGHT_ENVIRONMENT {
+        return e.prob * env_pdf(b, d);
+    }
+    let pdf = shape_light_pdf(e, p, x);
     e.prob * pdf
 }
 
@@ -367,41 +300,21 @@ pub fn sample_light(b: &Bindings, p: Vec3, u_light: f32, u: [f32; 2]) -> LightSa
     }
     let i = choose_light(b, u_light);
     let e = &b.emitters[i as usize];
-    let (ea, eb, ec) = (xyz(e.a), xyz(e.b), xyz(e.c));
-    let (x, pdf) = match e.kind {
-        LIGHT_TRIANGLE => {
-            let su = u[0].sqrt();
-            let wa = 1.0 - su;
-            let wb = u[1] * su;
-            let x = wa * ea + wb * eb + (1.0 - wa - wb) * ec;
-            ls.uv = Vec2::new(wb, 1.0 - wa - wb);
-            let n = (eb - ea).cross(ec - ea).normalize();
-            (x, area_pdf(p, x, n, e.area))
+    if e.kind == LIGHT_ENVIRONMENT {
+        let tex = &b.textures[b.params.env_texture as usize];
+        let row = sample_cdf(b, 0, tex.height, u[1]);
+        let col = sample_cdf(b, tex.height + 1 + row.i * (tex.width + 1), tex.width, u[0]);
+        let sin_theta = (PI * row.x).sin();
+        if sin_theta > 0.0 {
+            ls.dir = env_direction(b, Vec2::new(col.x, row.x));
+            ls.pdf = e.prob * row.pdf * col.pdf / (2.0 * PI * PI * sin_theta);
+            ls.light = if ls.pdf > 0.0 { i } else { NO_LIGHT };
         }
-        LIGHT_DISK => {
-            let d = sample_disk(u) * e.a[3];
-            let tb = onb_tangents(eb);
-            let x = ea + d.x * tb[0] + d.y * tb[1];
-            (x, area_pdf(p, x, eb, e.area))
-        }
-        LIGHT_SPHERE => {
-            let s = sample_sphere_light(ea, e.a[3], p, u);
-            (s.truncate(), s.w)
-        }
-        LIGHT_ENVIRONMENT => {
-            let tex = &b.textures[b.params.env_texture as usize];
-            let row = sample_cdf(b, 0, tex.height, u[1]);
-            let col = sample_cdf(b, tex.height + 1 + row.i * (tex.width + 1), tex.width, u[0]);
-            let sin_theta = (PI * row.x).sin();
-            if sin_theta > 0.0 {
-                ls.dir = env_direction(b, Vec2::new(col.x, row.x));
-                ls.pdf = e.prob * row.pdf * col.pdf / (2.0 * PI * PI * sin_theta);
-                ls.light = if ls.pdf > 0.0 { i } else { NO_LIGHT };
-            }
-            return ls;
-        }
-        _ => (Vec3::ZERO, 0.0),
-    };
+        return ls;
+    }
+    let lp = shape_light_sample(e, p, u);
+    let (x, pdf) = (lp.x, lp.pdf);
+    ls.uv = lp.uv;
     let v = x - p;
     let dist = v.length();
     if pdf > 0.0 && dist > 0.0 {
@@ -416,32 +329,14 @@ pub fn sample_light(b: &Bindings, p: Vec3, u_light: f32, u: [f32; 2]) -> LightSa
 /// Solid-angle pdf of direction d from p under light sampling as a whole (every light's
 /// surface along the ray, whatever lies in between).
 pub fn light_pdf_total(b: &Bindings, p: Vec3, d: Vec3) -> f32 {
-    let ray = Ray { origin: p, dir: d };
     let mut total = 0.0;
     for i in 0..b.params.num_emitters {
         let e = &b.emitters[i as usize];
-        let (ea, eb, ec) = (xyz(e.a), xyz(e.b), xyz(e.c));
-        let t = match e.kind {
-            LIGHT_TRIANGLE => intersect_triangle(ea, eb, ec, &ray, FAR).x,
-            LIGHT_DISK => intersect_disk(ea, eb, e.a[3], &ray, FAR),
-            LIGHT_SPHERE => {
-                if sphere_inside(p, ea, e.a[3]) {
-                    let oc = p - ea;
-                    let bb = oc.dot(d);
-                    let c = oc.dot(oc) - e.a[3] * e.a[3];
-                    let t = -bb + (bb * bb - c).max(0.0).sqrt();
-                    #[allow(clippy::neg_cmp_op_on_partial_ord)]
-                    if !(t > 0.0) {
-                        FAR
-                    } else {
-                        t
-                    }
-                } else {
-                    intersect_sphere(ea, e.a[3], &ray, FAR)
-                }
-            }
-            LIGHT_ENVIRONMENT => 0.0,
-            _ => FAR,
+        // the image background is along every ray, at no distance
+        let t = if e.kind == LIGHT_ENVIRONMENT {
+            0.0
+        } else {
+            shape_light_distance(e, p, d)
         };
         if t < FAR {
             total += light_pdf(b, i, p, p + t * d, d);

@@ -8,9 +8,11 @@
 
 pub mod bindings;
 pub mod bsdf;
+pub mod geometry;
 pub mod intersect;
 pub mod lights;
 pub mod materials;
+pub mod primitives;
 pub mod rng;
 pub mod samplers;
 pub mod sampling;

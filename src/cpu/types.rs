@@ -1,6 +1,6 @@
 //! Mirrors the non-record structs of `shaders/shared/types.wgsl`.
 
-use glam::{Vec3, Vec4};
+use glam::{Vec2, Vec3, Vec4};
 
 pub use crate::scene::records::{FAR, NO_HIT};
 
@@ -14,6 +14,30 @@ pub fn xyz(v: [f32; 4]) -> Vec3 {
 pub struct Ray {
     pub origin: Vec3,
     pub dir: Vec3,
+}
+
+/// A hit in a primitive's own space (each type's `surface`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Surface {
+    pub p: Vec3,
+    pub ng: Vec3,
+    pub ns: Vec3,
+    pub uv: Vec2,
+    pub err: f32,
+    pub tangent: Vec4,
+    /// A triangle's second uv set (`PRIM_FLAG_UV1`) and vertex colour
+    /// (`PRIM_FLAG_COLORS`).
+    pub uv1: Vec2,
+    pub color: Vec4,
+}
+
+/// A point sampled on a light with a surface (each such type's `light_sample`): the
+/// point, its solid-angle pdf (0: none), its (u, v) as a hit's candidate would have them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LightPoint {
+    pub x: Vec3,
+    pub pdf: f32,
+    pub uv: Vec2,
 }
 
 /// Closest-hit search result: distance, primitive, primitive-specific parameters.

@@ -7,17 +7,20 @@
 
 use crate::scene::flat::FlatScene;
 use crate::scene::materials::common::{Field, FieldKind, Surface, View};
-use crate::scene::materials::{tag_constants, MaterialKind};
+use crate::scene::materials::{self, MaterialKind};
+use crate::scene::primitives::{self, PrimitiveKind};
 use crate::scene::records::{FieldValue, SharedRecord, SharedValue, SHARED_CONSTANTS};
 
-/// Every constant the shaders get from Rust: the shared constants, then the material tags.
+/// Every constant the shaders get from Rust: the shared constants, then the material and
+/// primitive tags.
 pub fn shared_constants() -> Vec<(String, SharedValue)> {
     SHARED_CONSTANTS
         .iter()
         .map(|&(name, value)| (name.to_string(), value))
         .chain(
-            tag_constants()
+            materials::tag_constants()
                 .into_iter()
+                .chain(primitives::tag_constants())
                 .map(|(name, tag)| (name, SharedValue::U32(tag))),
         )
         .collect()
@@ -56,19 +59,8 @@ pub fn materials(kinds: &[MaterialKind]) -> String {
         code += &view(k.view(), k.name());
     }
     let dispatch = |signature: &str, kinds: &[MaterialKind], call: &str, default: &str| {
-        let mut f = format!("{signature} {{\n");
-        if kinds.is_empty() {
-            return f + &format!("    return {default};\n}}\n");
-        }
-        f += "    switch mat.tag {\n";
-        for k in kinds {
-            let call = call.replace("NAME", k.name());
-            f += &format!(
-                "        case {}: {{\n            return {call};\n        }}\n",
-                k.wgsl_tag()
-            );
-        }
-        f + &format!("        default: {{\n            return {default};\n        }}\n    }}\n}}\n")
+        let cases: Vec<(&str, String)> = kinds.iter().map(|k| (k.name(), k.wgsl_tag())).collect();
+        switch(signature, "mat.tag", &cases, call, default)
     };
     let having = |has: fn(&MaterialKind) -> bool| -> Vec<MaterialKind> {
         kinds.iter().copied().filter(has).collect()
@@ -104,13 +96,130 @@ pub fn materials(kinds: &[MaterialKind]) -> String {
     code
 }
 
-/// A view in WGSL: its struct, `NAME_params(m: Material)` reading each field from its
-/// place, and `NAME_record(p, m)`, `m` with the fields written back. A view without
-/// fields gets one unused member (WGSL has no empty structs).
+/// A function of `signature` that switches on `on` over `cases` (name, tag constant):
+/// each returns `call` with `NAME` replaced by its name; the default case `default`. No
+/// switch without cases.
+fn switch(
+    signature: &str,
+    on: &str,
+    cases: &[(&str, String)],
+    call: &str,
+    default: &str,
+) -> String {
+    let mut f = format!("{signature} {{\n");
+    if cases.is_empty() {
+        return f + &format!("    return {default};\n}}\n");
+    }
+    f += &format!("    switch {on} {{\n");
+    for (name, tag) in cases {
+        let call = call.replace("NAME", name);
+        f += &format!("        case {tag}: {{\n            return {call};\n        }}\n");
+    }
+    f + &format!("        default: {{\n            return {default};\n        }}\n    }}\n}}\n")
+}
+
+/// The primitives of a shader (`#import generated/primitives`, in shared/intersect.wgsl):
+/// for each type in `kinds`, its file (`#import primitives/NAME`) and its view
+/// (`NAME_params(m: Primitive)`); the dispatch by tag to its functions: `intersect_local`
+/// (`NAME_intersect`), `surface_local` (`NAME_surface`), `surface_uv_derivatives`
+/// (`NAME_uv_derivatives`, with HAS_BUMP); `intersect_each_type`, the plain loop as one
+/// loop per bounded type in the type list's order (`scene::primitives::sort_for_loops`
+/// sorts the records so), each ending at the first record of another type, visiting the
+/// indices in order as the CPU's single loop does; and for the types that can be lights
+/// (`PrimitiveKind::light`), `shape_light_sample`, `shape_light_pdf` and
+/// `shape_light_distance` on an emitter's record, by its kind (its primitive's tag).
+pub fn primitives(kinds: &[PrimitiveKind]) -> String {
+    let mut code = String::from(
+        "// Written by gpu::codegen::primitives from the type list and the views of \
+         scene::primitives.\n#import shared/geometry\n#import shared/types\n",
+    );
+    for k in kinds {
+        code += &format!("#import primitives/{}\n", k.name());
+    }
+    for k in kinds {
+        code += &view(k.view(), k.name());
+    }
+    let cases = |light: bool| -> Vec<(&str, String)> {
+        kinds
+            .iter()
+            .filter(|k| !light || k.light())
+            .map(|k| (k.name(), k.wgsl_tag()))
+            .collect()
+    };
+    code += "// One primitive of type `tag` in its own space: (t, u, v) as in Candidate.\n";
+    code += &switch(
+        "fn intersect_local(prim: Primitive, tag: u32, ray: Ray, t_max: f32) -> vec3<f32>",
+        "tag",
+        &cases(false),
+        "NAME_intersect(NAME_params(prim), ray, t_max)",
+        "vec3<f32>(FAR, 0.0, 0.0)",
+    );
+    code +=
+        "// Hit point, normals, uv and error bound of a candidate in the primitive's own space.\n";
+    code += &switch(
+        "fn surface_local(prim: Primitive, ray: Ray, cand: Candidate) -> Surface",
+        "prim.tag",
+        &cases(false),
+        "NAME_surface(NAME_params(prim), ray, cand)",
+        "blank_surface()",
+    );
+    code += "#ifdef HAS_BUMP\n// The derivatives of the point along the first uv set, in the primitive's own space.\n";
+    code += &switch(
+        "fn surface_uv_derivatives(prim: Primitive, s: Surface, cand: Candidate) -> array<vec3<f32>, 2>",
+        "prim.tag",
+        &cases(false),
+        "NAME_uv_derivatives(NAME_params(prim), s, cand)",
+        "onb_tangents(s.ng)",
+    );
+    code += "#endif\n";
+    code += "// The plain loop over the bounded primitives, one loop per type.\n\
+             fn intersect_each_type(ray: Ray, start: Candidate) -> Candidate {\n    \
+             var best = start;\n    var i = params.num_unbounded;\n";
+    for k in kinds.iter().filter(|k| k.bounded()) {
+        code += &format!(
+            "    for (; i < params.num_primitives; i++) {{\n        \
+             let prim = primitive_record(i);\n        \
+             if (prim.tag != {tag}) {{\n            break;\n        }}\n        \
+             best = closer_hit(best, i, intersect_record(prim, {tag}, ray, best.t));\n    }}\n",
+            tag = k.wgsl_tag()
+        );
+    }
+    code += "    return best;\n}\n";
+    code += "// A point on light e seen from `origin`, by its primitive type.\n";
+    code += &switch(
+        "fn shape_light_sample(e: Emitter, origin: vec3<f32>, u: vec2<f32>) -> LightPoint",
+        "e.kind",
+        &cases(true),
+        "NAME_light_sample(NAME_params(emitter_shape(e)), e.area, origin, u)",
+        "LightPoint(vec3<f32>(0.0), 0.0, vec2<f32>(0.0))",
+    );
+    code += "// The solid-angle pdf of shape_light_sample toward x on light e.\n";
+    code += &switch(
+        "fn shape_light_pdf(e: Emitter, origin: vec3<f32>, x: vec3<f32>) -> f32",
+        "e.kind",
+        &cases(true),
+        "NAME_light_pdf(NAME_params(emitter_shape(e)), e.area, origin, x)",
+        "0.0",
+    );
+    code += "// Where the ray from `origin` along unit d meets light e as its sampling sees it.\n";
+    code += &switch(
+        "fn shape_light_distance(e: Emitter, origin: vec3<f32>, d: vec3<f32>) -> f32",
+        "e.kind",
+        &cases(true),
+        "NAME_light_distance(NAME_params(emitter_shape(e)), origin, d)",
+        "FAR",
+    );
+    code
+}
+
+/// A view in WGSL: its struct, `NAME_params(m: RECORD)` reading each field from its place
+/// in its record (`Material` or `Primitive`), and for a material's, `NAME_record(p, m)`,
+/// `m` with the fields written back. A view without fields gets one unused member (WGSL
+/// has no empty structs).
 fn view(v: &View, name: &str) -> String {
     let ty = v.wgsl_struct;
     let place = |f: &Field, of: &str| match (f.kind, f.lane) {
-        (FieldKind::Rgb, _) => format!("{of}.{}.xyz", f.place),
+        (FieldKind::Rgb | FieldKind::Vec3, _) => format!("{of}.{}.xyz", f.place),
         (_, Some(lane)) => format!("{of}.{}.{lane}", f.place),
         (_, None) => format!("{of}.{}", f.place),
     };
@@ -125,13 +234,18 @@ fn view(v: &View, name: &str) -> String {
         let values: Vec<String> = v.fields.iter().map(|f| place(f, "m")).collect();
         values.join(", ")
     };
-    code += &format!(
-        "}}\nfn {name}_params(m: Material) -> {ty} {{\n    return {ty}({values});\n}}\n\
-         fn {name}_record(p: {ty}, m: Material) -> Material {{\n    var r = m;\n"
-    );
+    let record = v.record;
+    code +=
+        &format!("}}\nfn {name}_params(m: {record}) -> {ty} {{\n    return {ty}({values});\n}}\n");
+    if record != "Material" {
+        return code;
+    }
+    code += &format!("fn {name}_record(p: {ty}, m: Material) -> Material {{\n    var r = m;\n");
     for f in v.fields {
         code += &match f.kind {
-            FieldKind::Rgb => format!("    r.{0} = vec4<f32>(p.{1}, r.{0}.w);\n", f.place, f.name),
+            FieldKind::Rgb | FieldKind::Vec3 => {
+                format!("    r.{0} = vec4<f32>(p.{1}, r.{0}.w);\n", f.place, f.name)
+            }
             _ => format!("    {} = p.{};\n", place(f, "r"), f.name),
         };
     }

@@ -20,6 +20,7 @@ use crate::scene::format::{FilterKind, LightSampling, SamplerKind};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::MaterialKind;
 use crate::scene::materials::{conductor, dielectric, pbr, plastic};
+use crate::scene::primitives::PrimitiveKind;
 use crate::scene::records as r;
 use crate::tuning::Tuning;
 
@@ -29,12 +30,8 @@ use crate::tuning::Tuning;
 /// costs). Random sampling and bsdf light sampling are always there too.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum Feature {
-    Sphere,
-    Triangle,
-    Plane,
-    Box,
-    Cylinder,
-    Disk,
+    /// A primitive type of the type list (`scene::primitives`): its file and its cases.
+    Primitive(PrimitiveKind),
     /// Object-space intersection of transformed analytic shapes.
     Transforms,
     /// The BVH walk.
@@ -112,18 +109,8 @@ pub enum Feature {
     EnergyCompensation,
 }
 
-/// The features before the materials' in define order.
-const GEOMETRY: [Feature; 9] = [
-    Feature::Sphere,
-    Feature::Triangle,
-    Feature::Plane,
-    Feature::Box,
-    Feature::Cylinder,
-    Feature::Disk,
-    Feature::Transforms,
-    Feature::Bvh,
-    Feature::PrimitiveLoop,
-];
+/// The features after the primitives' and before the materials' in define order.
+const GEOMETRY: [Feature; 3] = [Feature::Transforms, Feature::Bvh, Feature::PrimitiveLoop];
 
 /// The features after the materials'.
 const SHADING: [Feature; 32] = [
@@ -162,10 +149,13 @@ const SHADING: [Feature; 32] = [
 ];
 
 impl Feature {
-    /// Every feature, in define order: one per material of the type list among them.
+    /// Every feature, in define order: one per primitive and one per material of the type
+    /// lists among them.
     pub fn all() -> impl Iterator<Item = Feature> {
-        GEOMETRY
-            .into_iter()
+        PrimitiveKind::ALL
+            .iter()
+            .map(|&k| Feature::Primitive(k))
+            .chain(GEOMETRY)
             .chain(MaterialKind::ALL.iter().map(|&k| Feature::Material(k)))
             .chain(SHADING)
     }
@@ -173,12 +163,7 @@ impl Feature {
     /// The preprocessor define that keeps its code (`#ifdef HAS_SPHERE`).
     pub fn define(self) -> &'static str {
         match self {
-            Feature::Sphere => "HAS_SPHERE",
-            Feature::Triangle => "HAS_TRIANGLE",
-            Feature::Plane => "HAS_PLANE",
-            Feature::Box => "HAS_BOX",
-            Feature::Cylinder => "HAS_CYLINDER",
-            Feature::Disk => "HAS_DISK",
+            Feature::Primitive(kind) => kind.define(),
             Feature::Transforms => "HAS_TRANSFORMS",
             Feature::Bvh => "HAS_BVH",
             Feature::PrimitiveLoop => "HAS_PRIMITIVE_LOOP",
@@ -225,10 +210,11 @@ impl Feature {
             .to_ascii_lowercase()
     }
 
-    /// Its bit in a [`FeatureSet`]: the others' order, the materials' from
-    /// `MATERIAL_BITS` on by tag.
+    /// Its bit in a [`FeatureSet`]: the others' order, the primitives' from
+    /// `PRIMITIVE_BITS` on by tag, the materials' from `MATERIAL_BITS` on by tag.
     fn bit(self) -> u32 {
         match self {
+            Feature::Primitive(kind) => PRIMITIVE_BITS + kind.tag(),
             Feature::Material(kind) => MATERIAL_BITS + kind.tag(),
             f => GEOMETRY
                 .iter()
@@ -239,11 +225,17 @@ impl Feature {
     }
 }
 
+/// The first bit of the primitives in a [`FeatureSet`], after every other feature's but
+/// the materials'.
+const PRIMITIVE_BITS: u32 = 38;
+
 /// The first bit of the materials in a [`FeatureSet`], after every other feature's.
 const MATERIAL_BITS: u32 = 48;
 
-// the other features' bits stay under the materials', and the materials' in a u64
-const _: () = assert!(GEOMETRY.len() + SHADING.len() <= MATERIAL_BITS as usize);
+// the other features' bits stay under the primitives', the primitives' under the
+// materials', and the materials' in a u64
+const _: () = assert!(GEOMETRY.len() + SHADING.len() <= PRIMITIVE_BITS as usize);
+const _: () = assert!(PRIMITIVE_BITS as usize + PrimitiveKind::ALL.len() <= MATERIAL_BITS as usize);
 const _: () = assert!(MATERIAL_BITS as usize + MaterialKind::ALL.len() <= 64);
 
 /// A set of [`Feature`]s.
@@ -308,18 +300,17 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         .iter()
         .any(|m| is_pbr(m) && pbr::has_sheen(m));
     let lit = scene.emitters.len() > scene.num_punctual as usize && nee;
-    let materials: FeatureSet = MaterialKind::ALL
+    let materials = MaterialKind::ALL
         .iter()
         .filter(|&&k| kind(k))
-        .map(|&k| Feature::Material(k))
-        .collect();
-    materials
-        .with(Feature::Sphere, prim(r::PRIM_SPHERE))
-        .with(Feature::Triangle, prim(r::PRIM_TRIANGLE))
-        .with(Feature::Plane, prim(r::PRIM_PLANE))
-        .with(Feature::Box, prim(r::PRIM_BOX))
-        .with(Feature::Cylinder, prim(r::PRIM_CYLINDER))
-        .with(Feature::Disk, prim(r::PRIM_DISK))
+        .map(|&k| Feature::Material(k));
+    let shapes = PrimitiveKind::ALL
+        .iter()
+        .filter(|&&k| prim(k.tag()))
+        .map(|&k| Feature::Primitive(k));
+    shapes
+        .chain(materials)
+        .collect::<FeatureSet>()
         .with(
             Feature::Transforms,
             scene
@@ -541,15 +532,13 @@ impl ShaderSpec {
             }
         }
         let f = |x: Feature| self.features.contains(x);
-        let other_bounded = [
-            Feature::Sphere,
-            Feature::Box,
-            Feature::Cylinder,
-            Feature::Disk,
-            Feature::Transforms,
-        ];
-        if f(Feature::Triangle) && !other_bounded.into_iter().any(f) {
+        let kinds = self.primitive_kinds();
+        let bounded: Vec<_> = kinds.iter().filter(|k| k.bounded()).collect();
+        if bounded == [&PrimitiveKind::Triangle] && !f(Feature::Transforms) {
             d.insert(BOUNDED_TRIANGLES_ONLY);
+        }
+        if kinds.iter().any(|k| !k.bounded()) {
+            d.insert(HAS_UNBOUNDED);
         }
         if self.lane_stats {
             d.insert(LANE_STATS);
@@ -561,12 +550,24 @@ impl ShaderSpec {
     }
 
     /// Every name a shader file's `#if` may ask about: each feature's define, each
-    /// `BAKED_*`, `BOUNDED_TRIANGLES_ONLY`, `LANE_STATS` and `HAS_ERF`. The preprocessor refuses any other.
+    /// `BAKED_*`, `BOUNDED_TRIANGLES_ONLY`, `HAS_UNBOUNDED`, `LANE_STATS` and `HAS_ERF`.
+    /// The preprocessor refuses any other.
     pub fn known_defines() -> BTreeSet<&'static str> {
         Feature::all()
             .map(Feature::define)
             .chain(BAKED_DEFINES.map(|(_, d)| d))
-            .chain([BOUNDED_TRIANGLES_ONLY, LANE_STATS, HAS_ERF])
+            .chain([BOUNDED_TRIANGLES_ONLY, HAS_UNBOUNDED, LANE_STATS, HAS_ERF])
+            .collect()
+    }
+
+    /// The primitive types of the shader, in the type list's order.
+    fn primitive_kinds(&self) -> Vec<PrimitiveKind> {
+        self.features
+            .iter()
+            .filter_map(|f| match f {
+                Feature::Primitive(k) => Some(k),
+                _ => None,
+            })
             .collect()
     }
 
@@ -585,6 +586,7 @@ impl ShaderSpec {
             })
             .collect();
         let materials = codegen::materials(&kinds);
+        let primitives = codegen::primitives(&self.primitive_kinds());
         let (known, set) = (Self::known_defines(), self.defines());
         shader::assemble(
             entry,
@@ -596,6 +598,7 @@ impl ShaderSpec {
                 ("generated/constants", &constants),
                 ("generated/bindings", &bindings),
                 ("generated/materials", &materials),
+                ("generated/primitives", &primitives),
                 ("generated/scene", &self.scene_code),
             ],
         )
@@ -619,7 +622,10 @@ impl ShaderSpec {
                     buffer(slot) && (f(Feature::Mis) || f(Feature::Mixture) || f(Feature::Punctual))
                 }
                 Slot::Bvh => f(Feature::Bvh),
-                Slot::ShapeData => f(Feature::Transforms) || f(Feature::Triangle),
+                Slot::ShapeData => {
+                    f(Feature::Transforms)
+                        || self.primitive_kinds().iter().any(|k| k.reads_shape_data())
+                }
                 Slot::Textures => f(Feature::Textures) || f(Feature::EnvMap),
                 // image texels are read by image look-ups (of textured materials, and of
                 // the image background, which goes through the same texture_value)
@@ -657,6 +663,10 @@ impl ShaderSpec {
 /// The define of a shader whose BVH leaves hold only untransformed triangles (they test
 /// without the tag's switch).
 const BOUNDED_TRIANGLES_ONLY: &str = "BOUNDED_TRIANGLES_ONLY";
+
+/// The define of a shader with unbounded primitive types (planes): tested on their own,
+/// before the BVH or the per-type loops.
+const HAS_UNBOUNDED: &str = "HAS_UNBOUNDED";
 
 /// The define of a shader that needs the error function and its inverse (sampling.wgsl):
 /// Beckmann microfacets' masking and slopes, and the Gaussian pixel filter's inverse CDF.

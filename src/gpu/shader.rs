@@ -3,7 +3,8 @@
 //! Directives (each alone on its line):
 //! - `#import shared/name` pulls in `shaders/shared/name.wgsl`, once per assembled shader;
 //!   `#import materials/NAME` a material's shading (`shaders/materials/NAME.wgsl`, which
-//!   the generated dispatch imports); `#import generated/name` a file written from Rust
+//!   the generated dispatch imports), `#import primitives/NAME` a primitive's
+//!   (`shaders/primitives/NAME.wgsl`, likewise); `#import generated/name` a file written from Rust
 //!   (`gpu::codegen`, `gpu::bindings`);
 //! - `#if NAME` / `#ifdef NAME`, `#ifndef NAME`, `#else`, `#endif` keep or drop lines by
 //!   whether `NAME` is in the set of defines (they nest). A name that is no define at all
@@ -14,23 +15,58 @@
 
 use std::collections::BTreeSet;
 
-macro_rules! shader_files {
+/// The shader files of the entry points and the shared concerns, by the name `#import`
+/// uses; embedded so the binary runs from anywhere.
+const BASE_FILES: &[(&str, &str)] = &[
+    ("trace", include_str!("../../shaders/trace.wgsl")),
+    ("kernel", include_str!("../../shaders/kernel.wgsl")),
+    (
+        "shared/bindings",
+        include_str!("../../shaders/shared/bindings.wgsl"),
+    ),
+    (
+        "shared/bsdf",
+        include_str!("../../shaders/shared/bsdf.wgsl"),
+    ),
+    (
+        "shared/geometry",
+        include_str!("../../shaders/shared/geometry.wgsl"),
+    ),
+    (
+        "shared/intersect",
+        include_str!("../../shaders/shared/intersect.wgsl"),
+    ),
+    (
+        "shared/lights",
+        include_str!("../../shaders/shared/lights.wgsl"),
+    ),
+    (
+        "shared/materials",
+        include_str!("../../shaders/shared/materials.wgsl"),
+    ),
+    ("shared/rng", include_str!("../../shaders/shared/rng.wgsl")),
+    (
+        "shared/samplers",
+        include_str!("../../shaders/shared/samplers.wgsl"),
+    ),
+    (
+        "shared/sampling",
+        include_str!("../../shaders/shared/sampling.wgsl"),
+    ),
+    (
+        "shared/textures",
+        include_str!("../../shaders/shared/textures.wgsl"),
+    ),
+    (
+        "shared/types",
+        include_str!("../../shaders/shared/types.wgsl"),
+    ),
+];
+
+macro_rules! material_files {
     ($( $(#[$doc:meta])* $kind:ident = $tag:literal, $module:ident, $define:literal; )*) => {
-        /// Every shader file, by the name `#import` uses; embedded so the binary runs from
-        /// anywhere. Each material's (`materials/NAME`) follows from the type list.
-        pub const SHADER_FILES: &[(&str, &str)] = &[
-            ("trace", include_str!("../../shaders/trace.wgsl")),
-            ("kernel", include_str!("../../shaders/kernel.wgsl")),
-            ("shared/bindings", include_str!("../../shaders/shared/bindings.wgsl")),
-            ("shared/bsdf", include_str!("../../shaders/shared/bsdf.wgsl")),
-            ("shared/intersect", include_str!("../../shaders/shared/intersect.wgsl")),
-            ("shared/lights", include_str!("../../shaders/shared/lights.wgsl")),
-            ("shared/materials", include_str!("../../shaders/shared/materials.wgsl")),
-            ("shared/rng", include_str!("../../shaders/shared/rng.wgsl")),
-            ("shared/samplers", include_str!("../../shaders/shared/samplers.wgsl")),
-            ("shared/sampling", include_str!("../../shaders/shared/sampling.wgsl")),
-            ("shared/textures", include_str!("../../shaders/shared/textures.wgsl")),
-            ("shared/types", include_str!("../../shaders/shared/types.wgsl")),
+        /// Each material's shading (`materials/NAME`), from the type list.
+        const MATERIAL_FILES: &[(&str, &str)] = &[
             $( (
                 concat!("materials/", stringify!($module)),
                 include_str!(concat!("../../shaders/materials/", stringify!($module), ".wgsl")),
@@ -39,7 +75,27 @@ macro_rules! shader_files {
     };
 }
 
-crate::scene::materials::for_each_material!(shader_files);
+crate::scene::materials::for_each_material!(material_files);
+
+macro_rules! primitive_files {
+    ($( $(#[$doc:meta])* $kind:ident = $tag:literal, $module:ident, $name:literal, $define:literal; )*) => {
+        /// Each primitive's functions (`primitives/NAME`), from the type list.
+        const PRIMITIVE_FILES: &[(&str, &str)] = &[
+            $( (
+                concat!("primitives/", $name),
+                include_str!(concat!("../../shaders/primitives/", $name, ".wgsl")),
+            ), )*
+        ];
+    };
+}
+
+crate::scene::primitives::for_each_primitive!(primitive_files);
+
+/// Every shader file, by the name `#import` uses: the entry points and shared files, each
+/// material's and each primitive's.
+pub fn shader_files() -> Vec<(&'static str, &'static str)> {
+    [BASE_FILES, MATERIAL_FILES, PRIMITIVE_FILES].concat()
+}
 
 /// Entry-point files: each is assembled into one shader module.
 pub const ENTRY_SHADERS: &[&str] = &["trace", "kernel"];
@@ -65,14 +121,14 @@ pub struct Defines<'a> {
     pub set: &'a BTreeSet<&'a str>,
 }
 
-/// Assembles shader `entry` with its imports from [`SHADER_FILES`] and the `generated`
+/// Assembles shader `entry` with its imports from [`shader_files`] and the `generated`
 /// files, keeping the `#if` branches `defines` selects.
 pub fn assemble(
     entry: &str,
     defines: Defines,
     generated: &[(&str, &str)],
 ) -> Result<String, ShaderError> {
-    let mut files = SHADER_FILES.to_vec();
+    let mut files = shader_files();
     files.extend_from_slice(generated);
     preprocess_files(entry, defines, &files)
 }

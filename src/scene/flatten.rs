@@ -17,6 +17,7 @@ use super::materials::{
 };
 use super::mesh::MeshData;
 use super::microfacet_albedo;
+use super::primitives::{sort_for_loops, PrimitiveKind};
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
 use super::textures::{texture_records, ImageData, TextureData};
@@ -141,7 +142,7 @@ impl Builder {
             return;
         }
         let mut prim = Primitive {
-            tag: records::PRIM_TRIANGLE,
+            tag: PrimitiveKind::Triangle.tag(),
             material,
             data: NO_DATA,
             a: v4(v[0], 0.0),
@@ -251,7 +252,7 @@ impl Builder {
         match o {
             ObjectDesc::Sphere { center, radius, .. } => {
                 let mut prim = Primitive {
-                    tag: records::PRIM_SPHERE,
+                    tag: PrimitiveKind::Sphere.tag(),
                     ..base
                 };
                 if let Some(s) = at.uniform {
@@ -277,14 +278,14 @@ impl Builder {
                 uv_scale,
                 ..
             } => self.unbounded.push(Primitive {
-                tag: records::PRIM_PLANE,
+                tag: PrimitiveKind::Plane.tag(),
                 a: v4(at.point(*point), *uv_scale),
                 b: v4(at.normal(*normal), 0.0),
                 ..base
             }),
             ObjectDesc::Box { min, max, .. } => {
                 let mut prim = Primitive {
-                    tag: records::PRIM_BOX,
+                    tag: PrimitiveKind::Box.tag(),
                     ..base
                 };
                 if at.axis_aligned {
@@ -306,7 +307,7 @@ impl Builder {
                 ..
             } => {
                 let mut prim = Primitive {
-                    tag: records::PRIM_CYLINDER,
+                    tag: PrimitiveKind::Cylinder.tag(),
                     flags: if *caps { records::PRIM_FLAG_CAPS } else { 0 },
                     ..base
                 };
@@ -327,7 +328,7 @@ impl Builder {
                 ..
             } => {
                 let mut prim = Primitive {
-                    tag: records::PRIM_DISK,
+                    tag: PrimitiveKind::Disk.tag(),
                     ..base
                 };
                 if let Some(s) = at.uniform {
@@ -762,7 +763,8 @@ fn build_primitives(
 
 /// The primitives in their final order, with the BVH over the bounded ones
 /// (`bvh::collapse`) and its depth: planes first, then the bounded primitives in the
-/// BVH's leaf order, or, without it, grouped by type (a stable sort), with no nodes.
+/// BVH's leaf order, or, without it, grouped by type in the order of the shaders'
+/// per-type loops (`primitives::sort_for_loops`), with no nodes.
 fn order(
     unbounded: Vec<Primitive>,
     bounded: Vec<Primitive>,
@@ -773,7 +775,7 @@ fn order(
     let mut primitives = unbounded;
     if !use_bvh {
         let mut sorted = bounded;
-        sorted.sort_by_key(|p| p.tag);
+        sort_for_loops(&mut sorted);
         primitives.extend(sorted);
         return (primitives, Vec::new(), 0);
     }

@@ -7,10 +7,10 @@ use glam::{Mat3, Vec3};
 use super::format::{LightDesc, SpotFalloff};
 use super::materials::common::ColorDesc;
 use super::materials::common::Surface;
+use super::primitives;
 use super::records::{
-    self, Emitter, Material, Primitive, LIGHT_DIRECTIONAL, LIGHT_DISK, LIGHT_ENVIRONMENT,
-    LIGHT_POINT, LIGHT_PROJECTOR, LIGHT_SPHERE, LIGHT_SPOT, LIGHT_TRIANGLE, NO_HIT, NO_LIGHT,
-    NO_TEXTURE, PRIM_LIGHT_SHIFT,
+    self, Emitter, Material, Primitive, LIGHT_DIRECTIONAL, LIGHT_ENVIRONMENT, LIGHT_POINT,
+    LIGHT_PROJECTOR, LIGHT_SPOT, NO_HIT, NO_LIGHT, NO_TEXTURE, PRIM_LIGHT_SHIFT,
 };
 use super::shapes::primitive_area;
 use super::textures::ImageData;
@@ -246,37 +246,20 @@ fn similarity(p: &Primitive, shape_data: &[[f32; 4]]) -> Option<(Mat3, Vec3, f32
     similar.then(|| (m, t, s2.sqrt()))
 }
 
-/// A primitive's light record with world-space geometry, or None when it cannot be sampled
-/// (planes, boxes, cylinders, and spheres and disks under a non-uniform scale: they still
-/// emit, and paths find them by hitting them).
+/// A primitive's light record with world-space geometry (its type's, `kind` = its tag),
+/// or None when it cannot be sampled (planes, boxes, cylinders, and any shape under a
+/// transform that is no similarity: they still emit, and paths find them by hitting
+/// them).
 fn emitter_geometry(p: &Primitive, shape_data: &[[f32; 4]]) -> Option<Emitter> {
     let (m, t, s) = similarity(p, shape_data)?;
-    let point = |v: [f32; 4]| (m * Vec3::from_slice(&v) + t).extend(v[3] * s).to_array();
-    let e = match p.tag {
-        records::PRIM_TRIANGLE => Emitter {
-            kind: LIGHT_TRIANGLE,
-            a: [p.a[0], p.a[1], p.a[2], 0.0],
-            b: [p.b[0], p.b[1], p.b[2], 0.0],
-            c: [p.c[0], p.c[1], p.c[2], 0.0],
-            ..Default::default()
-        },
-        records::PRIM_DISK => Emitter {
-            kind: LIGHT_DISK,
-            a: point(p.a),
-            b: (m * Vec3::from_slice(&p.b))
-                .normalize()
-                .extend(0.0)
-                .to_array(),
-            ..Default::default()
-        },
-        records::PRIM_SPHERE => Emitter {
-            kind: LIGHT_SPHERE,
-            a: point(p.a),
-            ..Default::default()
-        },
-        _ => return None,
-    };
-    Some(e)
+    let world = primitives::light_geometry(p, m, t, s)?;
+    Some(Emitter {
+        kind: p.tag,
+        a: world.a,
+        b: world.b,
+        c: world.c,
+        ..Default::default()
+    })
 }
 
 /// The light list, with each listed primitive's flags carrying its light index. Every

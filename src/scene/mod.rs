@@ -20,6 +20,7 @@ pub mod metals;
 pub mod microfacet_albedo;
 pub mod mitsuba;
 pub mod mtl;
+pub mod primitives;
 pub mod records;
 pub mod shapes;
 pub mod texels;

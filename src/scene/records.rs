@@ -37,14 +37,6 @@ macro_rules! shared_constants {
 }
 
 shared_constants! {
-    /// Primitive tags: the cases of the `switch` in `intersect.wgsl`.
-    PRIM_SPHERE: u32 = 0;
-    PRIM_TRIANGLE: u32 = 1;
-    PRIM_PLANE: u32 = 2;
-    PRIM_BOX: u32 = 3;
-    PRIM_CYLINDER: u32 = 4;
-    PRIM_DISK: u32 = 5;
-
     /// Primitive flag: `data` indexes a world-to-object transform in `shape_data` (analytic
     /// shapes whose transform cannot be baked exactly).
     PRIM_FLAG_TRANSFORM: u32 = 1;
@@ -185,11 +177,10 @@ shared_constants! {
     BACKGROUND_GRADIENT: u32 = 1;
     BACKGROUND_IMAGE: u32 = 2;
 
-    /// Light kinds (`Emitter::kind`): the cases of the `switch` in `lights.wgsl`.
-    LIGHT_TRIANGLE: u32 = 0;
-    LIGHT_DISK: u32 = 1;
-    LIGHT_SPHERE: u32 = 2;
-    LIGHT_ENVIRONMENT: u32 = 3;
+    /// Light kinds (`Emitter::kind`). A light with a surface has its primitive's tag
+    /// (`scene::primitives`, all below this), its geometry in the primitive's places of
+    /// `a`, `b`, `c` in world space; the image background, then the lights without one.
+    LIGHT_ENVIRONMENT: u32 = 16;
     /// Lights without a surface (`[[lights]]`), last in the list: `a` = position (a spot:
     /// `.w` = cos of the outer angle), `b` = intensity (a spot: `.w` = cos of the inner
     /// angle), `c` = a spot's unit axis (`.w` = 1 + its cones' difference in radians for
@@ -198,10 +189,10 @@ shared_constants! {
     /// irradiance colour times its scale, `c.xyz` = its up vector over tan(half its
     /// height's angle) and (a.w, b.w, c.w) its right vector over tan(half its width's),
     /// `texture` = its irradiance texture (or `NO_TEXTURE`).
-    LIGHT_POINT: u32 = 4;
-    LIGHT_SPOT: u32 = 5;
-    LIGHT_DIRECTIONAL: u32 = 6;
-    LIGHT_PROJECTOR: u32 = 7;
+    LIGHT_POINT: u32 = 17;
+    LIGHT_SPOT: u32 = 18;
+    LIGHT_DIRECTIONAL: u32 = 19;
+    LIGHT_PROJECTOR: u32 = 20;
     /// An index that names no light.
     NO_LIGHT: u32 = u32::MAX;
     /// `Primitive::flags >> PRIM_LIGHT_SHIFT` is the primitive's index in the light list
@@ -311,13 +302,9 @@ pub const NOISE_TABLE_ENTRIES: u32 = 512;
 /// Most lights a scene may have (the index must fit the flag bits above the shift).
 pub const MAX_LIGHTS: u32 = (1 << (32 - PRIM_LIGHT_SHIFT)) - 2;
 
-/// A tagged primitive (object space when `PRIM_FLAG_TRANSFORM` is set):
-/// - sphere: `a` = (center, radius)
-/// - triangle: vertices `a`, `b`, `c`
-/// - plane: `a` = (point, uv scale), `b` = (unit normal, 0)
-/// - box: `a` = (min, 0), `b` = (max, 0)
-/// - cylinder: `a` = (base center, radius), `b` = (top center, 0)
-/// - disk: `a` = (center, radius), `b` = (unit normal, 0)
+/// A tagged primitive (object space when `PRIM_FLAG_TRANSFORM` is set). The record is
+/// storage: each type names its places in its view (`scene::primitives::NAME::Params`),
+/// e.g. a sphere's `a` = (center, radius), a disk's `b` = (unit normal, 0).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Primitive {
@@ -456,10 +443,9 @@ impl Default for Texture {
 /// sampling, or the environment (`primitive` = `NO_HIT`). Lights are chosen with
 /// probability `prob`, by inverting the running sum `cdf` (that of the lights up to and
 /// including this one); `prob` is the difference of consecutive `cdf` values, so it is
-/// exactly the probability that the inversion picks this light.
-/// - triangle: vertices `a`, `b`, `c`
-/// - disk: `a` = (center, radius), `b` = (unit normal, 0)
-/// - sphere: `a` = (center, radius)
+/// exactly the probability that the inversion picks this light. A light with a surface
+/// holds its primitive's places `a`, `b`, `c` in world space (its type's view reads them:
+/// `scene::primitives::light_geometry`).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct Emitter {

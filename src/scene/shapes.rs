@@ -1,41 +1,17 @@
-//! Host geometry of each primitive type: bounds, surface area, whether a record is usable
-//! in f32, and polygon normals. The flattener, the light list and validation share these;
-//! the intersection tests themselves live in `shaders/shared/intersect.wgsl` and its CPU
-//! twin `cpu/intersect.rs`.
+//! Host geometry of primitives in world space: bounds, surface area, whether a record is
+//! usable in f32, and polygon normals. The flattener, the light list and validation share
+//! these; each type's own answers (in its own space) are its module's
+//! (`scene::primitives`).
 
 use glam::{Mat3, Vec3};
 
 use super::bvh::Aabb;
+use super::primitives::{self, PrimitiveKind};
 use super::records::{self, Primitive};
 
-/// Half-extent along each world axis of a disk of radius r with unit normal n.
-pub fn disk_extent(n: Vec3, r: f32) -> Vec3 {
-    r * (Vec3::ONE - n * n).max(Vec3::ZERO).powf(0.5)
-}
-
-/// Object-space bounds of a bounded primitive.
+/// Object-space bounds of a bounded primitive (its type's answer).
 pub fn local_bounds(p: &Primitive) -> Aabb {
-    let (a, b, c) = (
-        Vec3::from_slice(&p.a),
-        Vec3::from_slice(&p.b),
-        Vec3::from_slice(&p.c),
-    );
-    let r = p.a[3];
-    let (lo, hi) = match p.tag {
-        records::PRIM_SPHERE => (a - r, a + r),
-        records::PRIM_TRIANGLE => (a.min(b).min(c), a.max(b).max(c)),
-        records::PRIM_BOX => (a, b),
-        records::PRIM_CYLINDER => {
-            let e = disk_extent((b - a).normalize(), r);
-            (a.min(b) - e, a.max(b) + e)
-        }
-        records::PRIM_DISK => {
-            let e = disk_extent(b, r);
-            (a - e, a + e)
-        }
-        _ => (Vec3::ZERO, Vec3::ZERO),
-    };
-    Aabb { lo, hi }
+    primitives::local_bounds(p)
 }
 
 /// World-space bounds: transformed primitives bound the eight corners of their object box.
@@ -72,31 +48,7 @@ pub fn world_bounds(p: &Primitive, shape_data: &[[f32; 4]]) -> Aabb {
 /// transformed primitive's area is its object-space area times |det|^(2/3), exact for
 /// similarities and an estimate otherwise.
 pub fn primitive_area(p: &Primitive, shape_data: &[[f32; 4]]) -> f32 {
-    use std::f32::consts::PI;
-    let (a, b, c) = (
-        Vec3::from_slice(&p.a),
-        Vec3::from_slice(&p.b),
-        Vec3::from_slice(&p.c),
-    );
-    let r = p.a[3];
-    let local = match p.tag {
-        records::PRIM_SPHERE => 4.0 * PI * r * r,
-        records::PRIM_TRIANGLE => 0.5 * (b - a).cross(c - a).length(),
-        records::PRIM_BOX => {
-            let e = b - a;
-            2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
-        }
-        records::PRIM_CYLINDER => {
-            let caps = if p.flags & records::PRIM_FLAG_CAPS != 0 {
-                2.0 * PI * r * r
-            } else {
-                0.0
-            };
-            2.0 * PI * r * (b - a).length() + caps
-        }
-        records::PRIM_DISK => PI * r * r,
-        _ => 0.0,
-    };
+    let local = primitives::local_area(p);
     if p.flags & records::PRIM_FLAG_TRANSFORM == 0 {
         return local;
     }
@@ -113,23 +65,15 @@ pub fn primitive_area(p: &Primitive, shape_data: &[[f32; 4]]) -> f32 {
 /// with non-zero sizes and unit normals. A valid scene can still fail this under an extreme
 /// transform (a scale that underflows or overflows f32, a matrix that is singular in f32).
 pub fn record_ok(p: &Primitive, shape_data: &[[f32; 4]]) -> bool {
-    let (a, b) = (Vec3::from_slice(&p.a), Vec3::from_slice(&p.b));
-    let unit = |n: Vec3| (n.length() - 1.0).abs() < 1e-3;
     let finite = [p.a, p.b, p.c].iter().flatten().all(|x| x.is_finite());
-    let shape = match p.tag {
-        records::PRIM_SPHERE => p.a[3] > 0.0,
-        records::PRIM_PLANE => unit(b),
-        records::PRIM_DISK => unit(b) && p.a[3] > 0.0,
-        records::PRIM_BOX => a.cmplt(b).all(),
-        records::PRIM_CYLINDER => (b - a).length().is_normal() && p.a[3] > 0.0,
-        _ => true,
-    };
+    let shape = primitives::shape_ok(p);
     let transform = p.flags & records::PRIM_FLAG_TRANSFORM == 0
         || shape_data[p.data as usize..][..records::TRANSFORM_ENTRIES as usize]
             .iter()
             .flatten()
             .all(|x| x.is_finite());
-    let bounded = p.tag == records::PRIM_PLANE || {
+    let unbounded = PrimitiveKind::from_tag(p.tag).is_some_and(|k| !k.bounded());
+    let bounded = unbounded || {
         let bb = world_bounds(p, shape_data);
         bb.lo.is_finite() && bb.hi.is_finite()
     };

@@ -695,3 +695,55 @@ pub fn icosphere(levels: u32, r: f32) -> Vec<[glam::Vec3; 3]> {
     }
     tris
 }
+
+/// The primitive types' CPU tests through their views (`scene::primitives`), by their
+/// places: what the intersection tests of the tests call.
+pub mod shapes {
+    use glam::Vec3;
+    use wgtrace::cpu::primitives::ShapeTest;
+    use wgtrace::cpu::types::Ray;
+    use wgtrace::scene::primitives::{cylinder, r#box, sphere, triangle};
+    use wgtrace::scene::records::PRIM_FLAG_CAPS;
+
+    /// t of the nearest hit in (0, t_max), else FAR.
+    pub fn intersect_sphere(center: Vec3, radius: f32, r: &Ray, t_max: f32) -> f32 {
+        sphere::Params { center, radius }.intersect(r, t_max).x
+    }
+
+    /// (t, b1, b2).
+    pub fn intersect_triangle(v0: Vec3, v1: Vec3, v2: Vec3, r: &Ray, t_max: f32) -> Vec3 {
+        let (flags, data) = (0, 0);
+        let p = triangle::Params {
+            v0,
+            v1,
+            v2,
+            flags,
+            data,
+        };
+        p.intersect(r, t_max)
+    }
+
+    /// (t, axis of the face, 0).
+    pub fn intersect_box(lo: Vec3, hi: Vec3, r: &Ray, t_max: f32) -> Vec3 {
+        r#box::Params { lo, hi }.intersect(r, t_max)
+    }
+
+    /// (t, part, 0): 0 side, 1 base cap, 2 top cap.
+    pub fn intersect_cylinder(
+        base: Vec3,
+        top: Vec3,
+        radius: f32,
+        caps: bool,
+        r: &Ray,
+        t_max: f32,
+    ) -> Vec3 {
+        let flags = if caps { PRIM_FLAG_CAPS } else { 0 };
+        let p = cylinder::Params {
+            base,
+            top,
+            radius,
+            flags,
+        };
+        p.intersect(r, t_max)
+    }
+}

@@ -380,6 +380,8 @@ impl Roughness {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FieldKind {
     Rgb,
+    /// A point or a direction (a primitive's): a vec3 as `Rgb` is.
+    Vec3,
     F32,
     U32,
 }
@@ -388,7 +390,7 @@ impl FieldKind {
     /// Its WGSL type.
     pub fn wgsl(self) -> &'static str {
         match self {
-            FieldKind::Rgb => "vec3<f32>",
+            FieldKind::Rgb | FieldKind::Vec3 => "vec3<f32>",
             FieldKind::F32 => "f32",
             FieldKind::U32 => "u32",
         }
@@ -410,7 +412,9 @@ impl Field {
     /// three lanes, a scalar its lane, a u32 the whole field.
     pub fn components(&self) -> Vec<(&'static str, &'static str)> {
         match (self.kind, self.lane) {
-            (FieldKind::Rgb, _) => ["x", "y", "z"].map(|l| (self.place, l)).to_vec(),
+            (FieldKind::Rgb | FieldKind::Vec3, _) => {
+                ["x", "y", "z"].map(|l| (self.place, l)).to_vec()
+            }
             (_, Some(lane)) => vec![(self.place, lane)],
             (_, None) => vec![(self.place, "")],
         }
@@ -423,6 +427,8 @@ impl Field {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct View {
     pub wgsl_struct: &'static str,
+    /// The record it views: `Material`, or `Primitive` (a shape's, `scene::primitives`).
+    pub record: &'static str,
     pub fields: &'static [Field],
 }
 
@@ -441,7 +447,9 @@ impl View {
 /// Declares a view of the record: a struct of named parameters, each read from and
 /// written to one place of [`Material`] (`read`, `write`), and its [`View`] (`VIEW`),
 /// from which `gpu::codegen` writes the same struct and functions in WGSL. The one
-/// description of what a material's places mean, for both languages.
+/// description of what a material's places mean, for both languages. `of Primitive`
+/// views a primitive's record instead (`scene::primitives`: a shape's places, with
+/// `vec3` fields for its points and directions).
 ///
 /// ```text
 /// material_view! {
@@ -455,7 +463,7 @@ impl View {
 macro_rules! material_view {
     (
         $(#[$meta:meta])*
-        pub struct $name:ident($wgsl:literal) {
+        pub struct $name:ident($wgsl:literal) $(of $record:ident)? {
             $( $(#[$fmeta:meta])* $field:ident : $kind:ident = $place:ident $(. $lane:ident)? ),* $(,)?
         }
     ) => {
@@ -470,6 +478,7 @@ macro_rules! material_view {
             pub const VIEW: $crate::scene::materials::common::View =
                 $crate::scene::materials::common::View {
                     wgsl_struct: $wgsl,
+                    record: material_view!(@record_name $($record)?),
                     fields: &[$(
                         $crate::scene::materials::common::Field {
                             name: stringify!($field),
@@ -482,21 +491,27 @@ macro_rules! material_view {
 
             /// The parameters as the record holds them.
             #[allow(unused_variables)]
-            pub fn read(m: &$crate::scene::records::Material) -> Self {
+            pub fn read(m: &material_view!(@record $($record)?)) -> Self {
                 Self { $( $field: material_view!(@read m, $kind, $place $(. $lane)?), )* }
             }
 
             /// Writes the parameters into their places of the record.
             #[allow(unused_variables)]
-            pub fn write(&self, m: &mut $crate::scene::records::Material) {
+            pub fn write(&self, m: &mut material_view!(@record $($record)?)) {
                 $( material_view!(@write m, self.$field, $kind, $place $(. $lane)?); )*
             }
         }
     };
+    (@record) => { $crate::scene::records::Material };
+    (@record $record:ident) => { $crate::scene::records::$record };
+    (@record_name) => { "Material" };
+    (@record_name $record:ident) => { stringify!($record) };
     (@type rgb) => { glam::Vec3 };
+    (@type vec3) => { glam::Vec3 };
     (@type f32) => { f32 };
     (@type u32) => { u32 };
     (@kind rgb) => { $crate::scene::materials::common::FieldKind::Rgb };
+    (@kind vec3) => { $crate::scene::materials::common::FieldKind::Vec3 };
     (@kind f32) => { $crate::scene::materials::common::FieldKind::F32 };
     (@kind u32) => { $crate::scene::materials::common::FieldKind::U32 };
     (@lane) => { None };
@@ -507,6 +522,9 @@ macro_rules! material_view {
     (@index w) => { 3 };
     (@read $m:ident, rgb, $place:ident) => {
         glam::Vec3::new($m.$place[0], $m.$place[1], $m.$place[2])
+    };
+    (@read $m:ident, vec3, $place:ident) => {
+        material_view!(@read $m, rgb, $place)
     };
     (@read $m:ident, f32, $place:ident . $lane:ident) => {
         $m.$place[material_view!(@index $lane)]
@@ -520,6 +538,9 @@ macro_rules! material_view {
         $m.$place[1] = v.y;
         $m.$place[2] = v.z;
     }};
+    (@write $m:ident, $v:expr, vec3, $place:ident) => {
+        material_view!(@write $m, $v, rgb, $place)
+    };
     (@write $m:ident, $v:expr, f32, $place:ident . $lane:ident) => {
         $m.$place[material_view!(@index $lane)] = $v
     };
