@@ -13,6 +13,8 @@
 
 // Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left, x grows along
 // the camera's right vector. `jitter` is the position inside the pixel, `lens` in [0, 1)^2.
+// The ray starts where it crosses the near clip plane, params.near_clip in front of the
+// camera along its forward vector (Mitsuba's near_clip: ray.o + d near_clip / d.z).
 fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
     let s = (f32(x) + jitter.x) / f32(params.width);
     let t = (f32(y) + jitter.y) / f32(params.height);
@@ -32,7 +34,8 @@ fn camera_ray(x: u32, y: u32, jitter: vec2<f32>, lens: vec2<f32>) -> Ray {
     let ortho = params.orthographic != 0u;
     let origin = select(params.cam_origin.xyz + lens_offset, params.cam_origin.xyz + target_offset - forward * params.cam_forward.w, ortho);
     let dir = select(normalize(target_offset - lens_offset), forward, ortho);
-    return Ray(origin, dir);
+    // from the near clip plane on (0: the camera itself)
+    return Ray(origin + dir * (params.near_clip / dot(dir, forward)), dir);
 }
 
 // A ray leaving a hit in direction dir, from just off the surface on dir's side.

@@ -249,6 +249,8 @@ material = "nope"
     assert!(e.contains("bad.toml:4:1") && e.contains("zoom"), "{e}");
     let e = load_err("[camera]\nlook_from = [0, 0, 5\n");
     assert!(e.starts_with("bad.toml:2:"), "{e}");
+    let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\nnear_clip = -1\n");
+    assert!(e.contains("camera.near_clip: must be >= 0, got -1"), "{e}");
     let e = load_err("[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[render]\nspp = 0\n");
     assert!(
         e.contains("render.spp: must be in 1..=16777216, got 0"),

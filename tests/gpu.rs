@@ -1580,6 +1580,90 @@ material = "white"
     }
 }
 
+/// `[camera] near_clip` (Mitsuba's): camera rays start at the plane that far in front of
+/// the camera, so a surface nearer than it is not seen and what lies behind it is, for a
+/// perspective camera (its rays leave the plane at an angle, each at near_clip / cos) and an
+/// orthographic one; exact values, on both backends. A sheet at distance 1 fills the view:
+/// near_clip 0.5 shows it (radiance 3), near_clip 1.5 the sheet behind it at distance 3
+/// (radiance 2), and near_clip 4 the background; a sheet seen at the edge of the view
+/// (0.9 along the axis from a plane at 1) is kept by 0.95 and clipped by 1.05, which a
+/// clip by distance along the ray instead of by the plane would not tell apart.
+#[test]
+fn near_clip_hides_what_lies_in_front_of_its_plane() {
+    let src = |projection: &str, near: f32| {
+        format!(
+            r#"
+[render]
+width = 8
+height = 8
+spp = 4
+max_depth = 1
+
+[camera]
+{projection}
+look_from = [0, 0, 0]
+look_at = [0, 0, -1]
+near_clip = {near}
+
+[background]
+color = [0.25, 0.25, 0.25]
+
+[materials]
+near = {{ type = "emissive", radiance = [3, 3, 3], two_sided = true }}
+far = {{ type = "emissive", radiance = [2, 2, 2], two_sided = true }}
+
+[[objects]]
+type = "polygon"
+vertices = [[-9, -9, -1], [9, -9, -1], [9, 9, -1], [-9, 9, -1]]
+material = "near"
+
+[[objects]]
+type = "polygon"
+vertices = [[-99, -99, -3], [99, -99, -3], [99, 99, -3], [-99, 99, -3]]
+material = "far"
+"#
+        )
+    };
+    let perspective = "vfov = 90";
+    let orthographic = "projection = \"orthographic\"\nheight = 2";
+    let cases = [
+        (perspective, 0.5, 3.0),
+        (perspective, 1.5, 2.0),
+        (perspective, 4.0, 0.25),
+        (orthographic, 0.5, 3.0),
+        (orthographic, 1.5, 2.0),
+        (orthographic, 4.0, 0.25),
+    ];
+    for (projection, near, want) in cases {
+        let scene = scene_from_str(&src(projection, near));
+        for (name, render) in [
+            (
+                "gpu",
+                render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
+            ),
+            ("cpu", render_cpu),
+        ] {
+            let acc = render(&scene);
+            for pixel in [0, 27, 63] {
+                assert_eq!(
+                    acc.mean(pixel),
+                    [want; 3],
+                    "{name}: {projection} near_clip {near}, pixel {pixel}"
+                );
+            }
+        }
+    }
+    // the corner pixel of the 90-degree view looks 54.7 degrees off the axis: its ray
+    // crosses the sheet at distance 1 along the axis, past a plane at 0.95 and before one at
+    // 1.05
+    for (near, want) in [(0.95, 3.0), (1.05, 2.0)] {
+        let scene = scene_from_str(&src(perspective, near));
+        for acc in [render_gpu(&scene), render_cpu(&scene)] {
+            assert_eq!(acc.mean(0), [want; 3], "near_clip {near}");
+        }
+    }
+}
+
 /// Masks decide independently of each other: two sheets of opacity 0.5 one behind the
 /// other pass a quarter of the rays, 0.25 of an emitter behind them (a Bernoulli mean, to 5
 /// standard errors), on both backends. Each surface along a ray draws its own uniform

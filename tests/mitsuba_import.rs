@@ -441,3 +441,41 @@ fn envmaps_turn_and_uv_transforms_flip() {
         "{e}"
     );
 }
+
+/// A sensor's near_clip becomes the camera's (times the length of its z axis under
+/// to_world, as Mitsuba's rays leave the plane), Mitsuba's 0.01 when it has none;
+/// far_clip is noted, since wgtrace's rays are not cut off; near_clip past far_clip is
+/// an error at the sensor's position.
+#[test]
+fn near_clip_is_the_cameras_and_far_clip_a_note() {
+    let dir = scenes("mitsuba-clip");
+    let xml = |clip: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="40"/>{clip}
+<transform name="to_world"><scale value="2"/></transform></sensor>
+<shape type="sphere"/>
+</scene>"#
+        )
+    };
+    let path = dir.join("clip.xml");
+    let convert = |clip: &str| {
+        std::fs::write(&path, xml(clip)).unwrap();
+        wgtrace::scene::load::convert_mitsuba(&path, &[], &dir)
+    };
+    let plain = convert("").unwrap();
+    assert!(plain.toml.contains("near_clip = 0.02"), "{}", plain.toml);
+    let set =
+        convert(r#"<float name="near_clip" value="1.5"/><float name="far_clip" value="50"/>"#)
+            .unwrap();
+    assert!(set.toml.contains("near_clip = 3.0"), "{}", set.toml);
+    assert!(
+        set.notes.iter().any(|n| n.contains("far_clip 50")),
+        "{:?}",
+        set.notes
+    );
+    let e = convert(r#"<float name="near_clip" value="60"/><float name="far_clip" value="50"/>"#)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("clip.xml:2:1") && e.contains("near_clip"), "{e}");
+}

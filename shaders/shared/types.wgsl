@@ -177,7 +177,8 @@ struct Params {
     ms_tables: u32,
     // 1: camera rays see no emitter and no background
     hide_emitters: u32,
-    pad0: u32,
+    // camera rays start this far in front of the camera (along cam_forward); 0: none
+    near_clip: f32,
     pad1: u32,
     pad2: u32,
     // the filter's radius (pixels), a Gaussian's standard deviation, its value at the

@@ -28,7 +28,8 @@ use crate::scene::records::{
 
 pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
 
-/// Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left.
+/// Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left. It starts
+/// at the near clip plane (`near_clip` in front of the camera along its forward vector).
 pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]) -> Ray {
     let p = &b.params;
     let s = (x as f32 + jitter[0]) / p.width as f32;
@@ -41,15 +42,21 @@ pub fn camera_ray(b: &Bindings, x: u32, y: u32, jitter: [f32; 2], lens: [f32; 2]
         + up * ((1.0 - 2.0 * t) * p.cam_up[3]);
     let d = sample_disk(lens) * p.cam_origin[3];
     let lens_offset = right * d.x + up * d.y;
-    if p.orthographic != 0 {
-        return Ray {
-            origin: xyz(p.cam_origin) + target_offset - forward * p.cam_forward[3],
-            dir: forward,
-        };
-    }
+    let (origin, dir) = if p.orthographic != 0 {
+        (
+            xyz(p.cam_origin) + target_offset - forward * p.cam_forward[3],
+            forward,
+        )
+    } else {
+        (
+            xyz(p.cam_origin) + lens_offset,
+            (target_offset - lens_offset).normalize(),
+        )
+    };
+    // from the near clip plane on (0: the camera itself)
     Ray {
-        origin: xyz(p.cam_origin) + lens_offset,
-        dir: (target_offset - lens_offset).normalize(),
+        origin: origin + dir * (p.near_clip / dir.dot(forward)),
+        dir,
     }
 }
 

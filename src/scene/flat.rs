@@ -27,6 +27,8 @@ pub struct CameraFrame {
     /// Parallel rays along `forward` from the rectangle of half sizes `half_width` x
     /// `half_height` about `origin` (no lens).
     pub orthographic: bool,
+    /// Rays start at the plane this far in front of the camera (0: at the camera).
+    pub near_clip: f32,
 }
 
 /// A validated scene flattened into shader records.
@@ -177,6 +179,7 @@ impl FlatScene {
             pixel_filter: self.filter.kind.record(),
             ms_tables: self.ms_tables,
             hide_emitters: self.hide_emitters as u32,
+            near_clip: c.near_clip,
             filter_shape: self.filter.shape(),
             ..Default::default()
         }

@@ -812,5 +812,6 @@ fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
         focus_distance,
         lens_radius: if orthographic { 0.0 } else { c.aperture * 0.5 },
         orthographic,
+        near_clip: c.near_clip,
     }
 }

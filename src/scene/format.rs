@@ -277,6 +277,10 @@ pub struct CameraDesc {
     /// determinant).
     #[serde(default)]
     pub mirror: bool,
+    /// Camera rays start where they cross the plane this far in front of the camera, along
+    /// its view direction: nearer surfaces are not seen (Mitsuba's `near_clip`). 0: none.
+    #[serde(default)]
+    pub near_clip: f32,
 }
 
 /// `[camera] projection`.

@@ -375,6 +375,7 @@ fn framing_camera(lo: Vec3, hi: Vec3, aspect: f32) -> CameraDesc {
         projection: Projection::Perspective,
         height: None,
         mirror: false,
+        near_clip: 0.0,
     }
 }
 

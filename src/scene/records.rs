@@ -539,7 +539,10 @@ pub struct Params {
     /// 1: camera rays see no emitter and no background (`[render] hide_emitters`,
     /// Mitsuba's); lights still light the scene.
     pub hide_emitters: u32,
-    pub pad0: u32,
+    /// Camera rays start where they cross the plane this far in front of the camera
+    /// (along `cam_forward`; `[camera] near_clip`, Mitsuba's): nearer surfaces are not
+    /// seen. 0: from the camera.
+    pub near_clip: f32,
     pub pad1: u32,
     pub pad2: u32,
     /// The filter's radius in pixels, a Gaussian's standard deviation, its value at the
@@ -881,7 +884,7 @@ shared_record!(Params {
     pixel_filter,
     ms_tables,
     hide_emitters,
-    pad0,
+    near_clip,
     pad1,
     pad2,
     filter_shape

@@ -165,6 +165,13 @@ impl Validator<'_> {
                 self.push(0, "camera.focus_distance", format!("must be > 0, got {fd}"));
             }
         }
+        if !(c.near_clip >= 0.0 && c.near_clip.is_finite()) {
+            self.push(
+                0,
+                "camera.near_clip",
+                format!("must be >= 0, got {}", c.near_clip),
+            );
+        }
         match (c.projection, c.height) {
             (Projection::Orthographic, None) => self.push(
                 0,

@@ -138,6 +138,8 @@ impl<'a> Loader<'a> {
             projection: Projection::Perspective,
             height: None,
             mirror: false,
+            // glTF's znear is left out: wgtrace's glTF cameras start at the camera
+            near_clip: 0.0,
         };
         match camera.projection() {
             gltf::camera::Projection::Perspective(p) => {

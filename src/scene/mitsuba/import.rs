@@ -554,6 +554,29 @@ impl<'a> Importer<'a> {
             cam.insert("mirror".into(), T::Boolean(true));
         }
         let known_projective = ["to_world", "near_clip", "far_clip"];
+        // rays start at the near clip plane, near_clip along the camera's z axis (its
+        // length under to_world too, as Mitsuba's ray.o + to_world(d) near_clip / d.z)
+        let near = self.float(o, "near_clip", 1e-2)?;
+        let far = self.float(o, "far_clip", 1e4)?;
+        if !(near >= 0.0 && near.is_finite() && far > near) {
+            return err(
+                &o.pos,
+                format!(
+                    "{}: near_clip {near} and far_clip {far} must be 0 <= near_clip < far_clip",
+                    what(o)
+                ),
+            );
+        }
+        cam.insert(
+            "near_clip".into(),
+            float(near * m.transform_vector3(DVec3::Z).length()),
+        );
+        if o.get("far_clip").is_some() {
+            self.notes.push(format!(
+                "{}: far_clip {far}: camera rays are not cut off at a distance",
+                self.at(&o.pos)
+            ));
+        }
         match o.plugin.as_str() {
             "perspective" | "thinlens" => {
                 let fov_x = self.fov_x(o, aspect)?;
