@@ -56,7 +56,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation
         out.ng = vec4<f32>(h.ng, 0.0);
         out.ns = vec4<f32>(h.ns, 0.0);
         out.uv = vec4<f32>(h.uv.xy, cand.u, cand.v);
+#ifdef HAS_INSTANCES
+        // the instance hit through, plus 1 (0: none)
+        out.uv1 = vec4<f32>(h.uv.zw, f32(cand.inst + 1u), 0.0);
+#else
         out.uv1 = vec4<f32>(h.uv.zw, 0.0, 0.0);
+#endif
         out.color = h.color;
     }
     hits[i] = out;

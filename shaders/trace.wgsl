@@ -98,7 +98,11 @@ fn direct_light(mat: Material, ray: Ray, hit: Hit, u_light: f32, u: vec2<f32>, u
     if (e.kind == LIGHT_ENVIRONMENT) {
         le = background_radiance(ls.dir);
     } else {
+#ifdef HAS_INSTANCES
+        let lh = surface_at(Ray(hit.p, ls.dir), Candidate(ls.dist, e.primitive, ls.uv.x, ls.uv.y, NO_HIT));
+#else
         let lh = surface_at(Ray(hit.p, ls.dir), Candidate(ls.dist, e.primitive, ls.uv.x, ls.uv.y));
+#endif
         le = emitted(material_at(material_record(lh.material), lh), lh);
 #ifdef HAS_ALPHA
         // a light point where the emitter is cut out or passed through emits nothing

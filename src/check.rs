@@ -71,7 +71,8 @@ pub fn cpu_hit(scene: &FlatScene, r: &Ray) -> KernelHit {
         out.ng = h.ng.extend(0.0).to_array();
         out.ns = h.ns.extend(0.0).to_array();
         out.uv = [h.uv.x, h.uv.y, c.u, c.v];
-        out.uv1 = [h.uv.z, h.uv.w, 0.0, 0.0];
+        // the instance hit through, plus 1 (0: none)
+        out.uv1 = [h.uv.z, h.uv.w, c.inst.wrapping_add(1) as f32, 0.0];
         out.color = h.color.to_array();
     }
     out
@@ -134,6 +135,7 @@ pub fn agree(g: &KernelHit, c: &KernelHit) -> Result<(), String> {
             "vertex colour",
             (0..4).all(|k| rel(g.color[k], c.color[k], 1e-5)),
         ),
+        ("instance", g.uv1[2] == c.uv1[2]),
     ];
     match checks.iter().find(|(_, ok)| !ok) {
         Some((what, _)) => Err(format!("{what} differs")),

@@ -213,7 +213,7 @@ fn via_wide(
 ) -> Option<(usize, f32)> {
     let mut best = None;
     let ray = Ray { origin: o, dir: d };
-    bvh_walk(&wide.nodes, &ray, FAR, |k, t_max| {
+    bvh_walk(&wide.nodes, 0, &ray, FAR, |k, t_max| {
         let p = wide.order[k as usize] as usize;
         match hit(p) {
             Some(t) if t < t_max => {
@@ -644,7 +644,7 @@ fn traversal_never_culls_a_grazed_box() {
         let dist = [0.0, 0.5, 100.0, 1e5][(i / 3) % 4];
         let o = p - d * dist;
         let mut offered = vec![false; boxes.len()];
-        bvh_walk(&wide.nodes, &Ray { origin: o, dir: d }, FAR, |k, t| {
+        bvh_walk(&wide.nodes, 0, &Ray { origin: o, dir: d }, FAR, |k, t| {
             offered[wide.order[k as usize] as usize] = true;
             Some(t)
         });

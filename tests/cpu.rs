@@ -614,3 +614,90 @@ fn the_benchmark_cornell_box_is_the_scenes_one_with_random_samples() {
         (scene.width, scene.height, scene.spp, scene.max_depth)
     );
 }
+
+/// Groups and instances that cannot render: each one edit of a valid scene, its error
+/// naming the file, the line and the key (a group's object as `groups.NAME.objects[i]`).
+#[test]
+fn broken_groups_and_instances_name_file_line_and_key() {
+    let base = r#"[camera]
+look_from = [0, 0, 5]
+look_at = [0, 0, 0]
+[render]
+width = 8
+height = 8
+[materials]
+m = { type = "lambertian", albedo = [0.5, 0.5, 0.5] }
+lamp = { type = "emissive", radiance = [1, 1, 1] }
+[[objects]]
+type = "instance"
+group = "g"
+transform = { translate = [1, 0, 0] }
+[[groups.g.objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "m"
+"#;
+    let table: &[(&str, &str, &str, &str)] = &[
+        (
+            "unknown group",
+            "group = \"g\"",
+            "group = \"h\"",
+            "bad.toml:10:1: objects[0].group: unknown group \"h\" (defined: g)",
+        ),
+        (
+            "unknown material",
+            "material = \"m\"",
+            "material = \"nope\"",
+            "bad.toml:14:1: groups.g.objects[0].material: unknown material \"nope\"",
+        ),
+        (
+            "bad shape",
+            "radius = 1",
+            "radius = -1",
+            "bad.toml:14:1: groups.g.objects[0].radius: must be > 0, got -1",
+        ),
+        (
+            "plane",
+            "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1",
+            "type = \"plane\"\npoint = [0, 0, 0]\nnormal = [0, 1, 0]",
+            "bad.toml:14:1: groups.g.objects[0]: a plane has no bounds",
+        ),
+        (
+            "emitting",
+            "material = \"m\"",
+            "material = \"lamp\"",
+            "bad.toml:14:1: groups.g.objects[0]: an emitting material in a group",
+        ),
+        (
+            "nested",
+            "type = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"m\"",
+            "type = \"instance\"\ngroup = \"g\"",
+            "bad.toml:14:1: groups.g.objects[0]: an instance in a group: groups do not nest",
+        ),
+        (
+            "empty",
+            "[[groups.g.objects]]",
+            "[groups.e]\nobjects = []\n[[groups.g.objects]]",
+            "groups.e.objects: a group needs at least one object",
+        ),
+        (
+            "singular",
+            "translate = [1, 0, 0]",
+            "scale = [1, 0, 1]",
+            "bad.toml:10:1: objects[0].transform.scale",
+        ),
+    ];
+    let scene = wgtrace::load_scene_str(base, Path::new("bad.toml"), &Overrides::default())
+        .expect("the base scene loads");
+    assert_eq!(
+        scene.primitives.len(),
+        2,
+        "an instance and the group's sphere"
+    );
+    for (what, from, to, expected) in table {
+        assert!(base.contains(from), "{what}: the edit does not apply");
+        let e = load_err(&base.replacen(from, to, 1));
+        assert!(e.contains(expected), "{what}: {e}");
+    }
+}

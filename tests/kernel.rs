@@ -239,6 +239,83 @@ fn bvh_agrees(
     Ok(())
 }
 
+/// Instances of a group (analytic shapes, transformed ones and a mesh under a
+/// translation, a rotation, a non-uniform scale and a mirror), ray by ray: the GPU's walk
+/// into the group's BVH finds what the CPU's does (the same primitive through the same
+/// instance, the same point, normals and uv), under every record placement; and both find
+/// what the expanded scene (each object placed by the product of the matrices) finds:
+/// the same distance, point, geometric normal, side and uv.
+#[test]
+fn gpu_instances_match_cpu_and_the_expanded_scene() {
+    let ctx = common::gpu_context();
+    let (instanced, expanded) =
+        common::instances::instanced_and_expanded(HEADER.trim_end_matches("[[objects]]\n"));
+    let load = |src: &str| common::scene_from_file_str(src, "scenes/kernel-test.toml");
+    let (instanced, expanded) = (load(&instanced), load(&expanded));
+    let copies = common::instances::placements().len();
+    let group_prims = expanded.primitives.len() / copies;
+    assert_eq!(
+        instanced.primitives.len(),
+        group_prims + copies,
+        "the group's primitives are stored once"
+    );
+    const N: usize = 8192;
+    let batch = rays(Vec3::ZERO, 2.5, N, 0x1257);
+    let kernel: Vec<KernelRay> = batch.iter().map(common::to_kernel).collect();
+    let cpu: Vec<KernelHit> = batch.iter().map(|r| cpu_hit(&instanced, r)).collect();
+    let through = cpu.iter().filter(|c| c.uv1[2] > 0.0).count();
+    assert!(
+        through >= N / 4,
+        "only {through} of {N} rays hit an instance"
+    );
+    for (place, tuning) in placements() {
+        let gpu = intersect_rays(&ctx, &instanced, &tuning, &kernel).expect("kernel dispatch");
+        let disagree: Vec<String> = batch
+            .iter()
+            .zip(&gpu)
+            .zip(&cpu)
+            .filter_map(|((r, g), c)| {
+                agree(g, c)
+                    .err()
+                    .map(|e| format!("{r:?}: {e}\n  gpu {g:?}\n  cpu {c:?}"))
+            })
+            .collect();
+        assert!(
+            disagree.len() * 1000 <= N,
+            "records in {place}: {} of {N} rays differ, first: {}",
+            disagree.len(),
+            disagree[0]
+        );
+    }
+    // against the expanded scene: rays that graze an edge may land on either side
+    let flat: Vec<KernelHit> = batch.iter().map(|r| cpu_hit(&expanded, r)).collect();
+    let differ: Vec<String> = batch
+        .iter()
+        .zip(&cpu)
+        .zip(&flat)
+        .filter(|((_, a), b)| {
+            if (a.prim == NO_HIT) != (b.prim == NO_HIT) {
+                return true;
+            }
+            if a.prim == NO_HIT {
+                return false;
+            }
+            let near = |x: f32, y: f32| (x - y).abs() <= 1e-4 * (1.0 + y.abs());
+            let p = (0..3).all(|k| near(a.p[k], b.p[k]));
+            let ng = Vec3::from_slice(&a.ng[..3]).dot(Vec3::from_slice(&b.ng[..3])) > 0.9999;
+            let uv = (0..2).all(|k| near(a.uv[k], b.uv[k]));
+            !(near(a.t, b.t) && p && ng && a.front_face == b.front_face && uv)
+        })
+        .map(|((r, a), b)| format!("{r:?}\n  instanced {a:?}\n  expanded {b:?}"))
+        .collect();
+    assert!(
+        differ.len() * 1000 <= N,
+        "{} of {N} rays differ from the expanded scene, first: {}",
+        differ.len(),
+        differ[0]
+    );
+}
+
 // ------------------------------------------------------- materials and lights, GPU vs CPU
 
 use wgtrace::cpu::lights::{

@@ -264,8 +264,11 @@ fn convert_writes_toml_that_loads_and_names_its_origins() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let toml = std::fs::read_to_string(&out).unwrap();
     assert!(toml.contains("spp = 7"), "{toml}");
+    // the shapegroup is written once, as a group, and each instance places it
+    assert_eq!(toml.matches("type = \"instance\"").count(), 3, "{toml}");
+    assert!(toml.contains("group = \"pair\""), "{toml}");
     assert!(
-        toml.contains("# shape instance of shape sphere, shapes.xml:"),
+        toml.contains("[[groups.pair.objects]]  # shape sphere, shapes.xml:"),
         "{toml}"
     );
     assert!(

@@ -101,6 +101,7 @@ fn in_section(id: &str, lines: &str) -> String {
         "materials" => format!("{CAMERA}[materials.m]\ntype = \"{kind}\"\n{lines}\n"),
         "objects" => format!("{CAMERA}[[objects]]\ntype = \"{kind}\"\n{lines}\n"),
         "lights" => format!("{CAMERA}[[lights]]\ntype = \"{kind}\"\n{lines}\n"),
+        "groups" => format!("{CAMERA}[groups.g]\n{lines}\n"),
         "transform" => format!(
             "{CAMERA}[[objects]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\n\
              material = \"m\"\n[objects.transform]\n{lines}\n"
@@ -112,7 +113,14 @@ fn in_section(id: &str, lines: &str) -> String {
 /// The parser's keys for every section the format has, and its `type`s per table.
 fn code_sections() -> BTreeMap<String, BTreeSet<String>> {
     let mut out = BTreeMap::new();
-    for id in ["top", "render", "camera", "background", "transform"] {
+    for id in [
+        "top",
+        "render",
+        "camera",
+        "background",
+        "transform",
+        "groups",
+    ] {
         out.insert(
             id.to_string(),
             expected(&in_section(id, &format!("{PROBE} = 1"))),

@@ -116,13 +116,45 @@ fn intersect_bounded(i: u32, ray: Ray, t_max: f32) -> vec3<f32> {
 #endif
 }
 
+#ifdef HAS_INSTANCES
+// intersect_bounded for a record already fetched (the walk reads its tag first, for
+// instances).
+fn intersect_bounded_record(prim: Primitive, ray: Ray, t_max: f32) -> vec3<f32> {
+#ifdef BOUNDED_TRIANGLES_ONLY
+    return intersect_record(prim, PRIM_TRIANGLE, ray, t_max);
+#else
+    return intersect_record(prim, prim.tag, ray, t_max);
+#endif
+}
+#endif
+
 // The closer of the closest hit so far and hit h = (t, u, v) of primitive i.
 fn closer_hit(best: Candidate, i: u32, h: vec3<f32>) -> Candidate {
     if (h.x < best.t) {
+#ifdef HAS_INSTANCES
+        return Candidate(h.x, i, h.y, h.z, NO_HIT);
+#else
         return Candidate(h.x, i, h.y, h.z);
+#endif
     }
     return best;
 }
+
+#ifdef HAS_INSTANCES
+// closer_hit for primitive i of a group, hit through instance inst (NO_HIT: a primitive
+// of the scene's own).
+fn closer_hit_in(best: Candidate, i: u32, h: vec3<f32>, inst: u32) -> Candidate {
+    if (h.x < best.t) {
+        return Candidate(h.x, i, h.y, h.z, inst);
+    }
+    return best;
+}
+
+// The no-hit candidate of a search before t_max.
+fn no_candidate(t_max: f32) -> Candidate {
+    return Candidate(t_max, NO_HIT, 0.0, 0.0, NO_HIT);
+}
+#endif
 
 // Primitive i tested against the closest hit so far; the closer of the two.
 fn closer(best: Candidate, i: u32, ray: Ray) -> Candidate {
@@ -232,7 +264,11 @@ fn intersect_scene(ray: Ray, t_max: f32) -> Candidate {
     // a small scene's records are constants of its shader (gpu::codegen::baked_primitives)
     return intersect_baked(ray, t_max);
 #else
+#ifdef HAS_INSTANCES
+    var best = no_candidate(t_max);
+#else
     var best = Candidate(t_max, NO_HIT, 0.0, 0.0);
+#endif
 #ifdef HAS_UNBOUNDED
     // (without unbounded primitives llvmpipe would still run this loop's body once,
     // masked off)
@@ -292,7 +328,11 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
         }
     }
 #endif
+#ifdef HAS_INSTANCES
+    return bvh_walk(ray, no_candidate(t_max), true).prim != NO_HIT;
+#else
     return bvh_walk(ray, Candidate(t_max, NO_HIT, 0.0, 0.0), true).prim != NO_HIT;
+#endif
 }
 
 // The BVH walk of intersect_scene and occluded_bvh (the CPU's bvh_walk): the closest hit
@@ -302,6 +342,36 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
 // test; sp indexes bvh_stack (the entries of this lane are BVH_STACK_LANES apart); the
 // root is a group of one child node, in slot 0. Boxes are culled against the closest hit
 // so far (an any-hit walk ends at its first, so it culls against t_max only).
+// With instances (HAS_INSTANCES), a primitive of the walk may be an instance: the
+// primitive loop stops there, and the walk pushes the node's child nodes still to visit,
+// keeps the leaf's other primitives and the ray, and goes on at the root of the
+// instance's group, with the ray in the group's space (a unit direction; distances,
+// best.t among them, times inst_scale, at most FAR) and the stack above the entries it had
+// (inst_sp; NO_HIT outside an instance); when the group's walk has no node left, it takes
+// the ray and the rest of the leaf back. Both happen once per turn of the outer loop, not
+// in the node and primitive loops (llvmpipe would run them, masked, on every step). One
+// loop, one stack: a lane in an instance and one outside it step together (flatten checks
+// that both BVHs' depths fit the stack).
+#ifdef HAS_INSTANCES
+fn bvh_walk(world_ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
+    var best = start;
+    if (params.num_primitives == params.num_unbounded) {
+        return best;
+    }
+    var ray = world_ray;
+    var inv_dir = safe_inverse(ray.dir);
+    var order = bvh_order(inv_dir);
+    var inst = NO_HIT;
+    var inst_sp = NO_HIT;
+    var inst_scale = 1.0;
+    var inst_prims = vec2<u32>(0u, 0u);
+    var world_t = 0.0;
+    // the instance the primitive loop stopped at (NO_HIT: none), its transform's and its
+    // group's root's indices
+    var entering = NO_HIT;
+    var entering_data = 0u;
+    var entering_root = 0u;
+#else
 fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
     var best = start;
     if (params.num_primitives == params.num_unbounded) {
@@ -309,15 +379,26 @@ fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
     }
     let inv_dir = safe_inverse(ray.dir);
     let order = bvh_order(inv_dir);
+#endif
     var sp = stack_lane;
     var group = vec2<u32>(0u, (1u << (24u + order)) | 1u);
     var prims = vec2<u32>(0u, 0u);
     var live = true;
     loop {
+#ifdef HAS_INSTANCES
+        // (the rest of a leaf after an instance is tested before any node)
+        if (prims.y == 0u) {
+#endif
         // Nodes until the lane has primitives to test (tested after the loop, when every
         // lane of the subgroup has some) or none is left.
         loop {
             if ((group.y & BVH_NODE_BITS) == 0u) {
+#ifdef HAS_INSTANCES
+                if (sp == inst_sp) {
+                    // the group's walk is over (left below)
+                    break;
+                }
+#endif
                 if (sp == stack_lane) {
                     live = false;
                     break;
@@ -336,6 +417,9 @@ fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
                 break;
             }
         }
+#ifdef HAS_INSTANCES
+        }
+#endif
         loop {
             if (prims.y == 0u) {
                 break;
@@ -345,7 +429,19 @@ fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
 #endif
             let k = prims.x + firstTrailingBit(prims.y);
             prims.y &= prims.y - 1u;
+#ifdef HAS_INSTANCES
+            let prim = primitive_record(k);
+            if (prim.tag == PRIM_INSTANCE) {
+                // entered below
+                entering = k;
+                entering_data = prim.data;
+                entering_root = bitcast<u32>(prim.a.x);
+                break;
+            }
+            best = closer_hit_in(best, k, intersect_bounded_record(prim, ray, best.t), inst);
+#else
             best = closer_hit(best, k, intersect_bounded(k, ray, best.t));
+#endif
             if (any_hit && best.prim != NO_HIT) {
                 live = false;
                 break;
@@ -354,13 +450,81 @@ fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
         if (!live) {
             break;
         }
+#ifdef HAS_INSTANCES
+        if (entering != NO_HIT) {
+            // into the instance's group: the node's child nodes still to visit go on the
+            // stack, under the group's entries
+            if ((group.y & BVH_NODE_BITS) != 0u) {
+                bvh_stack[sp] = group;
+                sp += BVH_STACK_LANES;
+            }
+            inst = entering;
+            entering = NO_HIT;
+            inst_sp = sp;
+            inst_prims = prims;
+            prims.y = 0u;
+            world_t = best.t;
+            let r = ray_to_object(entering_data, world_ray);
+            inst_scale = length(r.dir);
+            ray = Ray(r.origin, r.dir / inst_scale);
+            // below FAR, which a miss returns
+            best.t = min(best.t * inst_scale, FAR);
+            inv_dir = safe_inverse(ray.dir);
+            order = bvh_order(inv_dir);
+            group = vec2<u32>(entering_root, (1u << (24u + order)) | 1u);
+        } else if (sp == inst_sp && (group.y & BVH_NODE_BITS) == 0u) {
+            // the group's walk is over: the scene's ray, and the rest of its leaf
+            ray = world_ray;
+            best.t = select(world_t, best.t / inst_scale, best.inst == inst);
+            inv_dir = safe_inverse(ray.dir);
+            order = bvh_order(inv_dir);
+            inst = NO_HIT;
+            inst_sp = NO_HIT;
+            prims = inst_prims;
+        }
+#endif
     }
     return best;
 }
 #endif
 
+#ifdef HAS_INSTANCES
+// Shading record of a candidate hit, in world space: a hit through an instance is the
+// group primitive's in the group's space (the ray there with a unit direction, as the
+// walk had it), placed by the instance's transform.
+fn surface_at(ray: Ray, cand: Candidate) -> Hit {
+    if (cand.inst == NO_HIT) {
+        return surface_own(ray, cand);
+    }
+    let data = primitive_record(cand.inst).data;
+    let r = ray_to_object(data, ray);
+    let scale = length(r.dir);
+    var h = surface_own(Ray(r.origin, r.dir / scale), Candidate(cand.t * scale, cand.prim, cand.u, cand.v, NO_HIT));
+    let p_obj = h.p;
+    h.p = point_to_world(data, p_obj);
+    h.ng = normal_to_world(data, h.ng);
+    h.ns = normal_to_world(data, h.ns);
+    h.err = transform_error(data, p_obj, h.err);
+    h.front_face = dot(ray.dir, h.ng) < 0.0;
+    // tangent vectors by the object-to-world matrix itself; a mirror flips the
+    // bitangent's handedness
+    let origin = point_to_world(data, vec3<f32>(0.0));
+    let linear_det = dot(cross(shape_data[data].xyz, shape_data[data + 1u].xyz), shape_data[data + 2u].xyz);
+    h.tangent = vec4<f32>(point_to_world(data, h.tangent.xyz) - origin, select(h.tangent.w, -h.tangent.w, linear_det < 0.0));
+#ifdef HAS_BUMP
+    h.dpdu = point_to_world(data, h.dpdu) - origin;
+    h.dpdv = point_to_world(data, h.dpdv) - origin;
+#endif
+    return h;
+}
+
+// surface_at for a hit on a primitive of its own space (the scene's, or a group's in the
+// group's space).
+fn surface_own(ray: Ray, cand: Candidate) -> Hit {
+#else
 // Shading record of a candidate hit, in world space.
 fn surface_at(ray: Ray, cand: Candidate) -> Hit {
+#endif
     let prim = primitive_record(cand.prim);
     var s: Surface;
 #ifdef HAS_BUMP
@@ -370,7 +534,11 @@ fn surface_at(ray: Ray, cand: Candidate) -> Hit {
     if ((prim.flags & PRIM_FLAG_TRANSFORM) != 0u) {
         let r = ray_to_object(prim.data, ray);
         let scale = length(r.dir);
+#ifdef HAS_INSTANCES
+        let local = Candidate(cand.t * scale, cand.prim, cand.u, cand.v, NO_HIT);
+#else
         let local = Candidate(cand.t * scale, cand.prim, cand.u, cand.v);
+#endif
         s = surface_local(prim, Ray(r.origin, r.dir / scale), local);
 #ifdef HAS_BUMP
         // tangent vectors go to world space by the object-to-world matrix itself

@@ -215,12 +215,17 @@ struct LightPoint {
 
 // What the closest-hit search reports: distance, primitive, and the primitive's own
 // parameters of the hit: barycentrics of v1 and v2 for triangles, the slab axis for boxes,
-// the part (0 side, 1 base cap, 2 top cap) for cylinders.
+// the part (0 side, 1 base cap, 2 top cap) for cylinders. With instances, also the
+// instance the primitive was hit through (NO_HIT: none; prim is then its group's), t along
+// the ray the search was given.
 struct Candidate {
     t: f32,
     prim: u32,
     u: f32,
     v: f32,
+#ifdef HAS_INSTANCES
+    inst: u32,
+#endif
 }
 
 // The shading record of the closest hit.

@@ -10,7 +10,7 @@ use super::primitives::{intersect_local, surface_local, surface_uv_derivatives};
 use super::types::{Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::records::{
     BvhNode, Primitive, BVH_NODE_BITS, BVH_SLAB_ERROR, BVH_STACK_SIZE, PRIM_FLAG_TRANSFORM,
-    PRIM_FLAG_UV1,
+    PRIM_FLAG_UV1, PRIM_INSTANCE,
 };
 
 fn row(b: &Bindings, i: u32) -> Vec4 {
@@ -95,15 +95,33 @@ pub fn intersect_bounded(b: &Bindings, i: u32, ray: &Ray, t_max: f32) -> Vec3 {
 
 /// The closer of the closest hit so far and hit h = (t, u, v) of primitive i.
 pub fn closer_hit(best: Candidate, i: u32, h: Vec3) -> Candidate {
+    closer_hit_in(best, i, h, NO_HIT)
+}
+
+/// closer_hit for primitive i of a group, hit through instance inst (NO_HIT: a primitive
+/// of the scene's own).
+pub fn closer_hit_in(best: Candidate, i: u32, h: Vec3, inst: u32) -> Candidate {
     if h.x < best.t {
         return Candidate {
             t: h.x,
             prim: i,
             u: h.y,
             v: h.z,
+            inst,
         };
     }
     best
+}
+
+/// The no-hit candidate of a search before t_max.
+pub fn no_candidate(t_max: f32) -> Candidate {
+    Candidate {
+        t: t_max,
+        prim: NO_HIT,
+        u: 0.0,
+        v: 0.0,
+        inst: NO_HIT,
+    }
 }
 
 /// Primitive i tested against the closest hit so far; the closer of the two.
@@ -232,9 +250,11 @@ pub fn bvh_node_hits(n: &BvhNode, origin: Vec3, inv_dir: Vec3, order: u32, t_max
 /// index, their bits in the hit mask above the node's imask) and primitives (the first's
 /// index, their bits). It takes the child nodes one at a time in the hit mask's order,
 /// pushing the rest of their group, and tests a group of primitives as soon as it has one
-/// (the shader when every lane of its subgroup has one: the same order per lane).
+/// (the shader when every lane of its subgroup has one: the same order per lane). `root`
+/// is the index of the root node: 0 for the scene's BVH, a group's for an instance's.
 pub fn bvh_walk(
     nodes: &[BvhNode],
+    root: u32,
     ray: &Ray,
     t_max: f32,
     mut test: impl FnMut(u32, f32) -> Option<f32>,
@@ -244,7 +264,7 @@ pub fn bvh_walk(
     let mut stack = [[0u32; 2]; BVH_STACK_SIZE as usize];
     let mut sp = 0usize;
     // the root: a group of one child node, in slot 0
-    let mut group = [0u32, (1 << (24 + order)) | 1];
+    let mut group = [root, (1 << (24 + order)) | 1];
     let mut t = t_max;
     loop {
         if group[1] & BVH_NODE_BITS == 0 {
@@ -297,24 +317,53 @@ pub fn occluded_bvh(b: &Bindings, ray: &Ray, t_max: f32) -> bool {
     if p.num_primitives == p.num_unbounded {
         return false;
     }
-    let mut hit = false;
-    bvh_walk(b.bvh, ray, t_max, |k, t| {
-        hit = intersect_bounded(b, k, ray, t).x < t;
-        (!hit).then_some(t)
+    let mut best = no_candidate(t_max);
+    bvh_walk(b.bvh, 0, ray, t_max, |k, _| {
+        best = walk_test(b, best, k, ray, true);
+        (best.prim == NO_HIT).then_some(best.t)
     });
-    hit
+    best.prim != NO_HIT
+}
+
+/// A primitive k the scene's BVH walk reaches, against the closest hit so far: tested, or,
+/// when it is an instance, its group's BVH walked in the group's space (the ray with a unit
+/// direction, distances times its length there) from the group's root, the shader's walk
+/// into an instance; with any_hit the group's walk ends at its first hit.
+pub fn walk_test(b: &Bindings, best: Candidate, k: u32, ray: &Ray, any_hit: bool) -> Candidate {
+    let prim = &b.primitives[k as usize];
+    if prim.tag != PRIM_INSTANCE {
+        return closer_hit(best, k, intersect_bounded(b, k, ray, best.t));
+    }
+    let r = ray_to_object(b, prim.data, ray);
+    let scale = r.dir.length();
+    let local = Ray {
+        origin: r.origin,
+        dir: r.dir / scale,
+    };
+    let mut inner = Candidate {
+        // below FAR, which a miss returns
+        t: (best.t * scale).min(FAR),
+        ..best
+    };
+    bvh_walk(b.bvh, prim.a[0].to_bits(), &local, inner.t, |j, t| {
+        inner = closer_hit_in(inner, j, intersect_bounded(b, j, &local, t), k);
+        (!(any_hit && inner.inst == k)).then_some(inner.t)
+    });
+    if inner.inst == k {
+        Candidate {
+            t: inner.t / scale,
+            ..inner
+        }
+    } else {
+        best
+    }
 }
 
 /// Closest hit along the ray before t_max: planes, then the BVH in order (or every
 /// primitive).
 pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
     let p = &b.params;
-    let mut best = Candidate {
-        t: t_max,
-        prim: NO_HIT,
-        u: 0.0,
-        v: 0.0,
-    };
+    let mut best = no_candidate(t_max);
     for i in 0..p.num_unbounded {
         best = closer(b, best, i, ray);
     }
@@ -327,15 +376,58 @@ pub fn intersect_scene(b: &Bindings, ray: &Ray, t_max: f32) -> Candidate {
     if p.num_primitives == p.num_unbounded {
         return best;
     }
-    bvh_walk(b.bvh, ray, best.t, |k, t| {
-        best = closer_hit(best, k, intersect_bounded(b, k, ray, t));
+    bvh_walk(b.bvh, 0, ray, best.t, |k, _| {
+        best = walk_test(b, best, k, ray, false);
         Some(best.t)
     });
     best
 }
 
-/// Shading record of a candidate hit, in world space.
+/// Shading record of a candidate hit, in world space: a hit through an instance is the
+/// group primitive's in the group's space (the ray there with a unit direction, as the
+/// walk had it), placed by the instance's transform.
 pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
+    if cand.inst == NO_HIT {
+        return surface_own(b, ray, cand);
+    }
+    let data = b.primitives[cand.inst as usize].data;
+    let r = ray_to_object(b, data, ray);
+    let scale = r.dir.length();
+    let local_ray = Ray {
+        origin: r.origin,
+        dir: r.dir / scale,
+    };
+    let local = Candidate {
+        t: cand.t * scale,
+        inst: NO_HIT,
+        ..*cand
+    };
+    let mut h = surface_own(b, &local_ray, &local);
+    let p_obj = h.p;
+    h.p = point_to_world(b, data, p_obj);
+    h.ng = normal_to_world(b, data, h.ng);
+    h.ns = normal_to_world(b, data, h.ns);
+    h.err = transform_error(b, data, p_obj, h.err);
+    h.front_face = ray.dir.dot(h.ng) < 0.0;
+    // tangent vectors by the object-to-world matrix itself; a mirror flips the
+    // bitangent's handedness
+    let origin = point_to_world(b, data, Vec3::ZERO);
+    let rows = [0, 1, 2].map(|k| row(b, data + k).truncate());
+    let linear_det = rows[0].cross(rows[1]).dot(rows[2]);
+    let w = if linear_det < 0.0 {
+        -h.tangent.w
+    } else {
+        h.tangent.w
+    };
+    h.tangent = (point_to_world(b, data, h.tangent.truncate()) - origin).extend(w);
+    h.dpdu = point_to_world(b, data, h.dpdu) - origin;
+    h.dpdv = point_to_world(b, data, h.dpdv) - origin;
+    h
+}
+
+/// surface_at for a hit on a primitive of its own space (the scene's, or a group's in the
+/// group's space).
+pub fn surface_own(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
     let prim = &b.primitives[cand.prim as usize];
     // the uv derivatives, where a bump map may need them (as HAS_BUMP: every hit, since
     // a blend's part may be the bumped one)

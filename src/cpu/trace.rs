@@ -139,6 +139,7 @@ pub fn direct_light(
             prim: e.primitive,
             u: ls.uv.x,
             v: ls.uv.y,
+            inst: NO_HIT,
         };
         let lh = surface_at(b, &to_light, &cand);
         let mut le = emitted(

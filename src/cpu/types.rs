@@ -47,6 +47,9 @@ pub struct Candidate {
     pub prim: u32,
     pub u: f32,
     pub v: f32,
+    /// The instance the primitive was hit through (`NO_HIT`: none; `prim` is then its
+    /// group's).
+    pub inst: u32,
 }
 
 /// Shading record of the closest hit.

@@ -38,6 +38,9 @@ pub enum Feature {
     Bvh,
     /// The plain loop over a list of primitives grouped by type.
     PrimitiveLoop,
+    /// Instances of groups (`PRIM_INSTANCE`): the walk goes on into a group's BVH in the
+    /// group's space, and a hit names its instance.
+    Instances,
     /// A material's type: its shading (`shaders/materials/NAME.wgsl`) and its case of
     /// the dispatch.
     Material(MaterialKind),
@@ -110,7 +113,12 @@ pub enum Feature {
 }
 
 /// The features after the primitives' and before the materials' in define order.
-const GEOMETRY: [Feature; 3] = [Feature::Transforms, Feature::Bvh, Feature::PrimitiveLoop];
+const GEOMETRY: [Feature; 4] = [
+    Feature::Transforms,
+    Feature::Bvh,
+    Feature::PrimitiveLoop,
+    Feature::Instances,
+];
 
 /// The features after the materials'.
 const SHADING: [Feature; 32] = [
@@ -167,6 +175,7 @@ impl Feature {
             Feature::Transforms => "HAS_TRANSFORMS",
             Feature::Bvh => "HAS_BVH",
             Feature::PrimitiveLoop => "HAS_PRIMITIVE_LOOP",
+            Feature::Instances => "HAS_INSTANCES",
             Feature::Material(kind) => kind.define(),
             Feature::Textures => "HAS_TEXTURES",
             Feature::NormalMap => "HAS_NORMAL_MAP",
@@ -320,6 +329,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         )
         .with(Feature::Bvh, bounded && scene.use_bvh)
         .with(Feature::PrimitiveLoop, bounded && !scene.use_bvh)
+        .with(Feature::Instances, prim(r::PRIM_INSTANCE))
         .with(Feature::Textures, !scene.textures.is_empty())
         .with(
             Feature::NormalMap,
@@ -484,7 +494,8 @@ impl ShaderSpec {
     /// (conductor, thin_dielectric, plastic, blend, principled), the pixel filters, projectors, opacity
     /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps, mesh attributes and energy compensation too: the full shader of every other
     /// scene stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 24] = [
+    pub const OPTIONAL_IN_FULL: [Feature; 25] = [
+        Feature::Instances,
         Feature::Aovs,
         Feature::Alpha,
         Feature::NormalMap,
@@ -624,6 +635,7 @@ impl ShaderSpec {
                 Slot::Bvh => f(Feature::Bvh),
                 Slot::ShapeData => {
                     f(Feature::Transforms)
+                        || f(Feature::Instances)
                         || self.primitive_kinds().iter().any(|k| k.reads_shape_data())
                 }
                 Slot::Textures => f(Feature::Textures) || f(Feature::EnvMap),

@@ -107,21 +107,31 @@ struct Builder {
     unbounded: Vec<Primitive>,
     bounded: Vec<Primitive>,
     shape_data: Vec<[f32; 4]>,
+    /// Each group's primitives (`SceneFile::members`' order), in the group's space.
+    groups: Vec<Vec<Primitive>>,
+    /// Each instance's group and object-to-world matrix.
+    instances: Vec<(usize, Affine3A)>,
 }
 
 impl Builder {
     /// An analytic primitive in object space with its transform (PRIM_FLAG_TRANSFORM).
     fn push_transformed(&mut self, mut prim: Primitive, at: &ObjectTransform) {
-        let w2o = at.m.inverse();
         prim.flags |= records::PRIM_FLAG_TRANSFORM;
-        prim.data = self.shape_data.len() as u32;
-        for m in [w2o, at.m] {
+        prim.data = self.push_transform(at.m);
+        self.bounded.push(prim);
+    }
+
+    /// The rows of a transform (`TRANSFORM_ENTRIES`: world-to-object, then
+    /// object-to-world), at the index returned.
+    fn push_transform(&mut self, m: Affine3A) -> u32 {
+        let data = self.shape_data.len() as u32;
+        for m in [m.inverse(), m] {
             let (l, t) = (Mat3::from(m.matrix3), Vec3::from(m.translation));
             for r in 0..3 {
                 self.shape_data.push(v4(l.row(r), t[r]));
             }
         }
-        self.bounded.push(prim);
+        data
     }
 
     /// A triangle; `attributes` = its corners' normals, uvs and the rest when it has any,
@@ -346,6 +356,7 @@ impl Builder {
                 self.push_mesh(&at, mesh, material);
             }
             ObjectDesc::Gltf { .. } => unreachable!("glTF objects are pushed by push_imported"),
+            ObjectDesc::Instance { .. } => unreachable!("instances are placed by flatten"),
         }
     }
 
@@ -477,6 +488,8 @@ pub enum FlattenError {
     Degenerate(Vec<usize>),
     /// The texels do not fit the banks (`texels::pack`).
     Texels(String),
+    /// The scene's BVH and a group's together are deeper than the walk's stack.
+    Depth(u32),
 }
 
 /// What a scene's objects and textures bring from files, read before flattening.
@@ -620,18 +633,36 @@ pub fn flatten(
         tables.extend(table.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
         plastic::point_at_table(m, offset);
     }
+    let mut builder =
+        build_primitives(file, files, &material_names).map_err(FlattenError::Degenerate)?;
+    let groups = build_groups(&mut builder);
     let Builder {
         unbounded,
-        bounded,
+        mut bounded,
         shape_data,
-    } = build_primitives(file, files, &material_names).map_err(FlattenError::Degenerate)?;
-    let boxes: Vec<Aabb> = bounded
+        ..
+    } = builder;
+    let mut boxes: Vec<Aabb> = bounded
         .iter()
         .map(|p| world_bounds(p, &shape_data))
         .collect();
-    let use_bvh = build.acceleration.uses_bvh(&bounded);
+    for (prim, b) in &groups.instances {
+        bounded.push(*prim);
+        boxes.push(*b);
+    }
+    // instances are reached through the BVH only
+    let use_bvh = !groups.instances.is_empty() || build.acceleration.uses_bvh(&bounded);
     let num_unbounded = unbounded.len() as u32;
-    let (mut primitives, bvh, bvh_depth) = order(unbounded, bounded, &boxes, use_bvh);
+    let (mut primitives, mut bvh, mut bvh_depth) = order(unbounded, bounded, &boxes, use_bvh);
+    if !groups.trees.is_empty() {
+        // a walk into an instance holds the scene's stack entries, the child nodes still
+        // to visit of the node whose leaf holds the instance, and then the group's
+        bvh_depth += 1 + groups.depth;
+        if bvh_depth > records::BVH_STACK_SIZE {
+            return Err(FlattenError::Depth(bvh_depth));
+        }
+        append_groups(&mut primitives, &mut bvh, groups);
+    }
 
     // the scene's bounding radius, for the background's power
     let env = env_dist.map(|integral| (integral, bounding_sphere(&boxes).1));
@@ -726,38 +757,140 @@ fn bounding_sphere(boxes: &[Aabb]) -> (Vec3, f32) {
     )
 }
 
-/// Every object's primitives (planes apart) and shape data; errors with the indices of
-/// objects whose records degenerate in f32 (see `record_ok`).
+/// Every object's primitives (planes apart) and shape data, a group's apart from the
+/// scene's, and the instances; errors with the indices of objects whose records
+/// degenerate in f32 (see `record_ok`).
 fn build_primitives(
     file: &SceneFile,
     files: &SceneFiles,
     material_names: &[String],
 ) -> Result<Builder, Vec<usize>> {
     let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
-    let mut builder = Builder::default();
+    let mut builder = Builder {
+        groups: vec![Vec::new(); file.members.len()],
+        ..Default::default()
+    };
     let mut degenerate = Vec::new();
     // the glTF objects' materials follow the file's, in object order
     let mut next_gltf_material = file.materials.len() as u32;
     for (i, obj) in file.objects.iter().enumerate() {
         let o = obj.get_ref();
         let (u, b) = (builder.unbounded.len(), builder.bounded.len());
-        match (&files.imported[i], o.material()) {
-            (Some(g), _) => {
+        match (&files.imported[i], o.material(), o) {
+            (_, _, ObjectDesc::Instance { group, transform }) => {
+                let g = file.members.iter().position(|(n, _)| n == group);
+                let m = transform_matrix(&transform.unwrap_or_default());
+                let inverse = m.inverse();
+                let finite = |m: Affine3A| m.to_cols_array().iter().all(|x| x.is_finite());
+                if !(finite(m) && finite(inverse)) {
+                    degenerate.push(i);
+                }
+                builder.instances.push((g.expect("validated"), m));
+                continue;
+            }
+            (Some(g), _, _) => {
                 builder.push_imported(o, g, next_gltf_material);
                 next_gltf_material += g.materials.len() as u32;
             }
-            (None, Some(m)) => builder.push_object(o, files.meshes[i].as_ref(), material_index(m)),
-            (None, None) => unreachable!("an object without a material is a glTF file"),
+            (None, Some(m), _) => {
+                builder.push_object(o, files.meshes[i].as_ref(), material_index(m))
+            }
+            (None, None, _) => unreachable!("an object without a material is a glTF file"),
         }
         let added = builder.unbounded[u..].iter().chain(&builder.bounded[b..]);
         if !added.clone().all(|p| record_ok(p, &builder.shape_data)) {
             degenerate.push(i);
+        }
+        if let Some(g) = file.group_of(i) {
+            let members: Vec<Primitive> = builder.bounded.drain(b..).collect();
+            builder.groups[g].extend(members);
         }
     }
     if degenerate.is_empty() {
         Ok(builder)
     } else {
         Err(degenerate)
+    }
+}
+
+/// The groups' BVHs and the instances over them: each group's primitives (in its BVH's
+/// leaf order) and nodes, as `order` leaves them numbered from 0 and to be moved after the
+/// scene's own (`append_groups`); an instance record per instance, with its box, for the
+/// scene's BVH.
+struct Groups {
+    trees: Vec<(Vec<Primitive>, bvh::WideBvh)>,
+    instances: Vec<(Primitive, Aabb)>,
+    /// The deepest group's BVH (0 without groups).
+    depth: u32,
+}
+
+fn build_groups(builder: &mut Builder) -> Groups {
+    let mut trees = Vec::new();
+    let mut bounds = Vec::new();
+    for prims in &builder.groups {
+        let boxes: Vec<Aabb> = prims
+            .iter()
+            .map(|p| world_bounds(p, &builder.shape_data))
+            .collect();
+        let tree = bvh::collapse(&bvh::build(&boxes), &boxes);
+        let ordered = tree.order.iter().map(|&i| prims[i as usize]).collect();
+        bounds.push(boxes.iter().fold(Aabb::empty(), |a, b| a.union(b)));
+        trees.push((ordered, tree));
+    }
+    let instances = std::mem::take(&mut builder.instances)
+        .into_iter()
+        .map(|(g, m)| {
+            let prim = Primitive {
+                tag: records::PRIM_INSTANCE,
+                data: builder.push_transform(m),
+                // the root's index is known once the nodes are placed (append_groups)
+                a: [0.0, f32::from_bits(g as u32), 0.0, 0.0],
+                ..Default::default()
+            };
+            (prim, transformed_box(&bounds[g], m))
+        })
+        .collect();
+    let depth = trees.iter().map(|t| t.1.depth).max().unwrap_or(0);
+    Groups {
+        trees,
+        instances,
+        depth,
+    }
+}
+
+/// The box of `b`'s eight corners under `m`.
+fn transformed_box(b: &Aabb, m: Affine3A) -> Aabb {
+    let mut out = Aabb::empty();
+    for k in 0..8 {
+        let corner = Vec3::select(
+            glam::BVec3::new(k & 1 != 0, k & 2 != 0, k & 4 != 0),
+            b.hi,
+            b.lo,
+        );
+        out.grow(m.transform_point3(corner));
+    }
+    out
+}
+
+/// The groups' primitives and nodes after the scene's, their nodes' indices moved with
+/// them, and each instance pointed at its group's root (`a.x`, the bits of the index).
+fn append_groups(primitives: &mut Vec<Primitive>, nodes: &mut Vec<BvhNode>, groups: Groups) {
+    let mut roots = Vec::new();
+    for (prims, tree) in groups.trees {
+        let (first_prim, first_node) = (primitives.len() as u32, nodes.len() as u32);
+        roots.push(first_node);
+        primitives.extend(prims);
+        nodes.extend(tree.nodes.into_iter().map(|mut n| {
+            n.child += first_node;
+            n.prim += first_prim;
+            n
+        }));
+    }
+    for p in primitives
+        .iter_mut()
+        .filter(|p| p.tag == records::PRIM_INSTANCE)
+    {
+        p.a[0] = f32::from_bits(roots[p.a[1].to_bits() as usize]);
     }
 }
 

@@ -1,6 +1,7 @@
 //! The TOML scene format: a serde model of what a user writes. Unknown keys are rejected.
 
 use std::collections::BTreeMap;
+use std::ops::Range;
 
 use serde::Deserialize;
 use toml::Spanned;
@@ -26,6 +27,54 @@ pub struct SceneFile {
     pub objects: Vec<Spanned<ObjectDesc>>,
     #[serde(default)]
     pub lights: Vec<Spanned<LightDesc>>,
+    /// `[groups.NAME]`: objects stored once and drawn only where `instance` objects place
+    /// them (each instance walks the group's own BVH, in the group's space).
+    #[serde(default)]
+    pub groups: BTreeMap<String, Spanned<GroupDesc>>,
+    /// Set by [`SceneFile::gather_groups`]: the groups' objects follow the scene's own in
+    /// `objects`, each group's at its range, so that every object is validated, read and
+    /// flattened by the same code.
+    #[serde(skip)]
+    pub members: Vec<(String, Range<usize>)>,
+}
+
+/// `[groups.NAME]`: the objects of a group (bounded shapes and meshes, none emitting).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroupDesc {
+    pub objects: Vec<Spanned<ObjectDesc>>,
+}
+
+impl SceneFile {
+    /// Appends every group's objects to `objects` and records where (`members`); done
+    /// once, after parsing.
+    pub fn gather_groups(&mut self) {
+        if !self.members.is_empty() {
+            return;
+        }
+        for (name, g) in &self.groups {
+            let start = self.objects.len();
+            self.objects.extend(g.get_ref().objects.iter().cloned());
+            self.members.push((name.clone(), start..self.objects.len()));
+        }
+    }
+
+    /// The group object i belongs to (after `gather_groups`), by its index in `members`.
+    pub fn group_of(&self, i: usize) -> Option<usize> {
+        self.members.iter().position(|(_, r)| r.contains(&i))
+    }
+
+    /// The key of object i in the file: `objects[i]`, or `groups.NAME.objects[j]` for a
+    /// group's.
+    pub fn object_key(&self, i: usize) -> String {
+        match self.group_of(i) {
+            Some(g) => {
+                let (name, r) = &self.members[g];
+                format!("groups.{name}.objects[{}]", i - r.start)
+            }
+            None => format!("objects[{i}]"),
+        }
+    }
 }
 
 /// `[render]`: image size, sample count, path length, seed.
@@ -780,6 +829,12 @@ pub enum ObjectDesc {
         path: String,
         transform: Option<TransformDesc>,
     },
+    /// The objects of `[groups.NAME]` (`group`), placed by `transform` (after the
+    /// group's own): stored once however many instances place them.
+    Instance {
+        group: String,
+        transform: Option<TransformDesc>,
+    },
 }
 
 fn yes() -> bool {
@@ -800,6 +855,7 @@ impl ObjectDesc {
             ObjectDesc::Disk { .. } => "disk",
             ObjectDesc::Mesh { .. } => "mesh",
             ObjectDesc::Gltf { .. } => "gltf",
+            ObjectDesc::Instance { .. } => "instance",
         }
     }
 
@@ -815,7 +871,7 @@ impl ObjectDesc {
             | ObjectDesc::Cylinder { material, .. }
             | ObjectDesc::Disk { material, .. } => material,
             ObjectDesc::Mesh { material, .. } => return material.as_deref(),
-            ObjectDesc::Gltf { .. } => return None,
+            ObjectDesc::Gltf { .. } | ObjectDesc::Instance { .. } => return None,
         })
     }
 
@@ -830,7 +886,8 @@ impl ObjectDesc {
             | ObjectDesc::Cylinder { transform, .. }
             | ObjectDesc::Disk { transform, .. }
             | ObjectDesc::Mesh { transform, .. }
-            | ObjectDesc::Gltf { transform, .. } => *transform,
+            | ObjectDesc::Gltf { transform, .. }
+            | ObjectDesc::Instance { transform, .. } => *transform,
         }
     }
 }

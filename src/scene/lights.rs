@@ -277,6 +277,9 @@ pub fn light_list(
 ) -> (Vec<Emitter>, u32) {
     let mut lights = Vec::new();
     for (i, p) in primitives.iter_mut().enumerate().skip(num_unbounded) {
+        if p.tag == records::PRIM_INSTANCE {
+            continue;
+        }
         let mat = &materials[p.material as usize];
         let sides = if mat.flags & records::MAT_FLAG_TWO_SIDED != 0 {
             2.0

@@ -171,6 +171,7 @@ pub fn load_str(
         };
         invalid(vec![Problem::at(src, offset, "", message)])
     })?;
+    file.gather_groups();
     if overrides.camera.is_some() {
         return Err(invalid(vec![Problem::at(
             src,
@@ -186,6 +187,24 @@ pub fn load_str(
     }
     let dir = path.parent().unwrap_or(Path::new(""));
     let files = read_files(&file, src, dir).map_err(invalid)?;
+    // a group's OBJ file with its own .mtl may bring an emitting material
+    let emitting: Vec<Problem> = (0..file.objects.len())
+        .filter(|&i| file.group_of(i).is_some())
+        .filter(|&i| files.imported[i].as_ref().is_some_and(|g| g.emits()))
+        .map(|i| {
+            Problem::at(
+                src,
+                file.objects[i].span().start,
+                file.object_key(i),
+                "an emitting .mtl material in a group (a light is sampled on its own \
+                 surface, which an instance does not place): make it an object",
+            )
+        })
+        .collect();
+    if !emitting.is_empty() {
+        return Err(invalid(emitting));
+    }
+    let scene_file = &file;
     let warnings = files
         .imported
         .iter()
@@ -198,7 +217,7 @@ pub fn load_str(
             };
             g.warnings
                 .iter()
-                .map(move |w| format!("objects[{i}] ({path}): {w}"))
+                .map(move |w| format!("{} ({path}): {w}", scene_file.object_key(i)))
         })
         .collect();
     let mut scene = flatten::flatten(&file, &files, build).map_err(|e| {
@@ -209,17 +228,27 @@ pub fn load_str(
                     Problem::at(
                         src,
                         file.objects[i].span().start,
-                        format!("objects[{i}]"),
+                        file.object_key(i),
                         "degenerates in f32 under its transform (a size, normal or matrix \
                          becomes zero, infinite or NaN)",
                     )
                 })
                 .collect(),
             FlattenError::Texels(why) => vec![Problem::at(src, 0, "textures", why)],
+            FlattenError::Depth(d) => vec![Problem::at(src, 0, "groups", depth_problem(d))],
         })
     })?;
     scene.warnings = warnings;
     Ok(scene)
+}
+
+/// Why a scene whose BVH and a group's are too deep together is refused.
+fn depth_problem(depth: u32) -> String {
+    format!(
+        "the scene's BVH and a group's are {depth} levels deep together, more than the \
+         walk's stack holds ({}): make the deepest group's objects objects",
+        crate::scene::records::BVH_STACK_SIZE
+    )
 }
 
 /// The error of a scene at `path` with `problems`.
@@ -268,6 +297,8 @@ fn load_gltf_scene(
             },
         )],
         lights: Vec::new(),
+        groups: Default::default(),
+        members: Vec::new(),
     };
     let overridden = apply_overrides(&mut file, overrides);
     let aspect = file.render.width.max(1) as f32 / file.render.height.max(1) as f32;
@@ -343,6 +374,7 @@ fn load_gltf_scene(
                 "a mesh degenerates in f32 under its node's transform".to_string()
             }
             FlattenError::Texels(why) => why,
+            FlattenError::Depth(d) => depth_problem(d),
         };
         invalid(vec![Problem::at("", 0, "", why)])
     })?;
@@ -401,9 +433,9 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
             } => read_relative(
                 (src, dir, path),
                 obj.span().start,
-                format!("objects[{i}].path"),
+                format!("{}.path", file.object_key(i)),
                 |p| {
-                    let prefix = format!("objects[{i}]/");
+                    let prefix = format!("{}/", file.object_key(i));
                     let g: ImportedScene = if let ObjectDesc::Mesh {
                         face_normals,
                         smooth_normals,
@@ -465,7 +497,7 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
             } => read_relative(
                 (src, dir, path),
                 obj.span().start,
-                format!("objects[{i}].path"),
+                format!("{}.path", file.object_key(i)),
                 |p| {
                     let mut m = mesh::load_mesh_at(p, *shape_index)?;
                     mesh::adjust(

@@ -57,6 +57,12 @@ shared_constants! {
     /// second uv set, if any) hold each corner's vertex colour (linear rgb, alpha), which
     /// multiplies the material's colour and opacity.
     PRIM_FLAG_COLORS: u32 = 64;
+    /// The tag of an instance of a group (`[groups.NAME]`): not a shape of the type list
+    /// but a place where the BVH walk goes on into the group's own BVH, in the group's
+    /// space. `data` indexes its world-to-object transform in `shape_data` (the rows of
+    /// `PRIM_FLAG_TRANSFORM`'s, without the flag); `a.x` holds the bits of its group's
+    /// root node index (`instance_root`).
+    PRIM_INSTANCE: u32 = 15;
     /// Most surfaces a ray passes through where they are transparent (alpha) before it
     /// stops at the next one, whatever it is: a bound on the loop, never met in practice.
     MAX_ALPHA_SKIPS: u32 = 16;
@@ -610,7 +616,8 @@ pub struct KernelHit {
     pub ns: [f32; 4],
     /// uv in `.xy`, the candidate's own (u, v) in `.zw`.
     pub uv: [f32; 4],
-    /// The second uv set in `.xy`.
+    /// The second uv set in `.xy`; `.z`: the instance the hit was found through, plus 1
+    /// (0: none).
     pub uv1: [f32; 4],
     /// The vertex colour.
     pub color: [f32; 4],

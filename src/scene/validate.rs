@@ -66,6 +66,7 @@ pub fn validate(file: &SceneFile, src: &str, overridden: &[&str]) -> Vec<Problem
     for (i, obj) in file.objects.iter().enumerate() {
         v.object(i, obj, file);
     }
+    v.groups(file);
     for (i, light) in file.lights.iter().enumerate() {
         v.light(i, light);
     }
@@ -431,21 +432,14 @@ impl Validator<'_> {
     /// One `[[objects]]` entry: its material, transform and shape.
     fn object(&mut self, i: usize, obj: &Spanned<ObjectDesc>, file: &SceneFile) {
         let at = obj.span().start;
-        let key = format!("objects[{i}]");
+        let key = file.object_key(i);
         let o = obj.get_ref();
         if let Some(material) = o.material().filter(|m| !file.materials.contains_key(*m)) {
-            let known: Vec<&str> = file.materials.keys().map(String::as_str).collect();
+            let known = names(file.materials.keys().map(String::as_str));
             self.push(
                 at,
                 &format!("{key}.material"),
-                format!(
-                    "unknown material \"{material}\" (defined: {})",
-                    if known.is_empty() {
-                        "none".to_string()
-                    } else {
-                        known.join(", ")
-                    }
-                ),
+                format!("unknown material \"{material}\" (defined: {known})"),
             );
         }
         if let Some(t) = o.transform() {
@@ -663,6 +657,55 @@ impl Validator<'_> {
                     self.push(at, &format!("{key}.path"), "must name a glTF file".into());
                 }
             }
+            // its group is checked with the groups (`groups`)
+            ObjectDesc::Instance { .. } => {}
+        }
+    }
+
+    /// `[groups.NAME]` and the instances of them: an instance names a group; a group holds
+    /// at least one object, each bounded, drawn by a material that does not emit (lights
+    /// are sampled on their own surfaces, which an instance does not place), and no
+    /// instance or glTF file (groups do not nest; a glTF file brings lights and cameras).
+    fn groups(&mut self, file: &SceneFile) {
+        for (name, g) in &file.groups {
+            if g.get_ref().objects.is_empty() {
+                self.push(
+                    g.span().start,
+                    &format!("groups.{name}.objects"),
+                    "a group needs at least one object".into(),
+                );
+            }
+        }
+        for (i, obj) in file.objects.iter().enumerate() {
+            let at = obj.span().start;
+            let key = file.object_key(i);
+            let in_group = file.group_of(i).is_some();
+            let why = match obj.get_ref() {
+                ObjectDesc::Instance { group, .. } if !file.groups.contains_key(group) => {
+                    let known = names(file.groups.keys().map(String::as_str));
+                    self.push(
+                        at,
+                        &format!("{key}.group"),
+                        format!("unknown group \"{group}\" (defined: {known})"),
+                    );
+                    continue;
+                }
+                _ if !in_group => continue,
+                ObjectDesc::Instance { .. } => "an instance in a group: groups do not nest",
+                ObjectDesc::Plane { .. } => "a plane has no bounds, so no group can hold it",
+                ObjectDesc::Gltf { .. } => {
+                    "a glTF file in a group (its lights and cameras are placed once): make it \
+                     an object"
+                }
+                o => match o.material().and_then(|m| file.materials.get(m)) {
+                    Some(m) if m.get_ref().emits() => {
+                        "an emitting material in a group (a light is sampled on its own \
+                         surface, which an instance does not place): make it an object"
+                    }
+                    _ => continue,
+                },
+            };
+            self.push(at, &key, why.into());
         }
     }
 
@@ -738,12 +781,7 @@ impl Validator<'_> {
             ColorDesc::Rgb(rgb) => self.nonnegative3(key, *rgb, at),
             ColorDesc::Texture(name) => {
                 if !self.textures.iter().any(|(n, _)| n == name) {
-                    let known: Vec<&str> = self.textures.iter().map(|(n, _)| n.as_str()).collect();
-                    let known = if known.is_empty() {
-                        "none".to_string()
-                    } else {
-                        known.join(", ")
-                    };
+                    let known = names(self.textures.iter().map(|(n, _)| n.as_str()));
                     self.push(
                         at,
                         key,
@@ -875,5 +913,15 @@ impl Validator<'_> {
                 return;
             }
         }
+    }
+}
+
+/// Defined names for a message: `a, b`, or `none`.
+fn names<'a>(list: impl Iterator<Item = &'a str>) -> String {
+    let list: Vec<&str> = list.collect();
+    if list.is_empty() {
+        "none".to_string()
+    } else {
+        list.join(", ")
     }
 }

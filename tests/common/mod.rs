@@ -747,3 +747,92 @@ pub mod shapes {
         p.intersect(r, t_max)
     }
 }
+
+/// A group of objects and its instances, as TOML (the kernel and render tests of
+/// instancing).
+#[allow(dead_code)]
+pub mod instances {
+    /// A group's objects (analytic shapes with and without their own transforms, a mesh) as
+    /// TOML, each under `m` after its own matrix (the identity for none): the instance
+    /// tests' group, and, placed by hand, their expanded scene.
+    pub fn group_objects(m: glam::Affine3A) -> String {
+        use glam::{Affine3A, Mat3};
+        let own = [
+            ("type = \"sphere\"\ncenter = [0, 0.3, 0]\nradius = 0.4", Affine3A::from_scale(glam::Vec3::new(1.0, 1.6, 0.8))),
+            ("type = \"box\"\nmin = [-0.5, -0.4, -0.3]\nmax = [0.4, 0.0, 0.5]", Affine3A::from_rotation_y(0.5)),
+            ("type = \"cylinder\"\nbase = [0.6, -0.4, 0]\ntop = [0.7, 0.4, 0.1]\nradius = 0.2", Affine3A::IDENTITY),
+            ("type = \"disk\"\ncenter = [-0.6, 0.2, 0.3]\nnormal = [0.2, 1, 0.1]\nradius = 0.3", Affine3A::IDENTITY),
+            ("type = \"tetrahedron\"\nvertices = [[0.2, 0.5, 0], [0.6, 0.5, 0.2], [0.4, 0.9, 0.1], [0.4, 0.5, 0.5]]", Affine3A::IDENTITY),
+            ("type = \"mesh\"\npath = \"meshes/icosphere.obj\"", Affine3A::from_mat3_translation(Mat3::from_diagonal(glam::Vec3::splat(0.3)), glam::Vec3::new(-0.3, -0.7, -0.4))),
+        ];
+        own.iter()
+            .map(|(shape, t)| {
+                let a = m * *t;
+                let rows: Vec<String> = (0..3)
+                    .map(|r| {
+                        let l = Mat3::from(a.matrix3).row(r);
+                        format!("[{}, {}, {}, {}]", l.x, l.y, l.z, a.translation[r])
+                    })
+                    .collect();
+                format!(
+                    "{shape}\nmaterial = \"m\"\ntransform = {{ matrix = [{}, [0, 0, 0, 1]] }}\n",
+                    rows.join(", ")
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("")
+    }
+
+    /// The instances' placements: a translation, a rotation with a uniform scale, a
+    /// non-uniform scale with a shear's worth of rotation, and a mirror.
+    pub fn placements() -> Vec<glam::Affine3A> {
+        use glam::{Affine3A, Quat};
+        vec![
+            Affine3A::from_translation(glam::Vec3::new(-1.6, 0.0, 0.0)),
+            Affine3A::from_scale_rotation_translation(
+                glam::Vec3::splat(1.3),
+                Quat::from_rotation_y(0.8),
+                glam::Vec3::new(1.5, 0.2, 0.3),
+            ),
+            Affine3A::from_translation(glam::Vec3::new(0.0, 1.6, -0.5))
+                * Affine3A::from_rotation_z(0.4)
+                * Affine3A::from_scale(glam::Vec3::new(1.5, 0.7, 1.1)),
+            Affine3A::from_translation(glam::Vec3::new(0.1, -1.5, 0.4))
+                * Affine3A::from_scale(glam::Vec3::new(-1.0, 1.0, 1.0)),
+        ]
+    }
+
+    pub fn matrix_toml(a: glam::Affine3A) -> String {
+        let rows: Vec<String> = (0..3)
+            .map(|r| {
+                let l = glam::Mat3::from(a.matrix3).row(r);
+                format!("[{}, {}, {}, {}]", l.x, l.y, l.z, a.translation[r])
+            })
+            .collect();
+        format!("{{ matrix = [{}, [0, 0, 0, 1]] }}", rows.join(", "))
+    }
+
+    /// The same objects as TOML after `head` (which names a material `m`): as a group placed
+    /// by instances, and expanded, every object written once per placement under the
+    /// placement's matrix times its own.
+    pub fn instanced_and_expanded(head: &str) -> (String, String) {
+        let mut instanced = head.to_string();
+        let mut expanded = head.to_string();
+        for m in placements() {
+            instanced += &format!(
+                "[[objects]]\ntype = \"instance\"\ngroup = \"g\"\ntransform = {}\n",
+                matrix_toml(m)
+            );
+            for obj in group_objects(m).split("type = ").skip(1) {
+                expanded += &format!("[[objects]]\ntype = {obj}");
+            }
+        }
+        for obj in group_objects(glam::Affine3A::IDENTITY)
+            .split("type = ")
+            .skip(1)
+        {
+            instanced += &format!("[[groups.g.objects]]\ntype = {obj}");
+        }
+        (instanced, expanded)
+    }
+}

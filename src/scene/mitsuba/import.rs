@@ -64,6 +64,9 @@ pub fn import(tree: &SceneTree, base: &Path) -> Result<Imported, XmlError> {
         materials: Vec::new(),
         objects: Vec::new(),
         lights: Vec::new(),
+        groups: Vec::new(),
+        group_names: HashMap::new(),
+        in_group: None,
         names: HashSet::new(),
         texture_names: HashMap::new(),
         material_names: HashMap::new(),
@@ -100,7 +103,13 @@ struct Importer<'a> {
     materials: Vec<Entry>,
     objects: Vec<Entry>,
     lights: Vec<Entry>,
-    /// Texture and material names taken.
+    /// The objects of `[groups.NAME]`: each shapegroup's shapes, written once.
+    groups: Vec<Entry>,
+    /// shapegroup object -> its group's name.
+    group_names: HashMap<usize, String>,
+    /// While a shapegroup's shapes are read: the group's name (they go to `groups`).
+    in_group: Option<String>,
+    /// Texture, material and group names taken.
     names: HashSet<String>,
     texture_names: HashMap<usize, String>,
     /// (BSDF object or none, emitter object or none) -> material name.
@@ -1275,12 +1284,16 @@ impl<'a> Importer<'a> {
         let material = |s: &mut Self| s.material(bsdfs.first().copied(), emitter, &o.pos);
         let ignorable = ["id"];
         let push = |s: &mut Self, t: Table| {
-            s.objects.push(Entry {
-                name: "objects".into(),
+            let entry = |name: String| Entry {
+                name,
                 table: t,
                 pos: origin.clone(),
                 what: origin_what.clone(),
-            })
+            };
+            match &s.in_group {
+                Some(g) => s.groups.push(entry(format!("groups.{g}.objects"))),
+                None => s.objects.push(entry("objects".into())),
+            }
         };
         let with_transform = |mut t: Table, m: DMat4| {
             if m != DMat4::IDENTITY {
@@ -1406,15 +1419,47 @@ impl<'a> Importer<'a> {
                     return err(&o.pos, "shape instance: needs a reference to a shapegroup");
                 };
                 let group = self.obj(g);
+                let mut shapes = Vec::new();
                 for p in &group.props {
                     match p.value {
-                        Value::Object(s) if self.obj(s).tag == "shape" => {
-                            self.shape(s, to_world, Some(via.unwrap_or(i)))?
-                        }
+                        Value::Object(s) if self.obj(s).tag == "shape" => shapes.push(s),
                         // the group's own BSDFs and textures are read where its shapes use them
                         Value::Object(_) => {}
                         _ => return err(&p.pos, "shape shapegroup: holds shapes only"),
                     }
+                }
+                let emits = shapes
+                    .iter()
+                    .any(|&s| children(self.tree, self.obj(s), "emitter").next().is_some());
+                if emits || via.is_some() || self.in_group.is_some() {
+                    // a light is sampled on its own surface, which an instance does not
+                    // place: the group's shapes are written out at each instance
+                    if emits && self.group_names.insert(g, String::new()).is_none() {
+                        self.notes.push(format!(
+                            "{}: holds an emitter, so its shapes are written out at each \
+                             instance rather than instanced",
+                            what(group)
+                        ));
+                    }
+                    for s in shapes {
+                        self.shape(s, to_world, Some(via.unwrap_or(i)))?;
+                    }
+                } else {
+                    let name = match self.group_names.get(&g) {
+                        Some(name) => name.clone(),
+                        None => {
+                            let name = self.name(group, "group");
+                            self.group_names.insert(g, name.clone());
+                            self.in_group = Some(name.clone());
+                            for s in shapes {
+                                self.shape(s, DMat4::IDENTITY, None)?;
+                            }
+                            self.in_group = None;
+                            name
+                        }
+                    };
+                    let t = table([("type", text("instance")), ("group", T::String(name))]);
+                    push(self, with_transform(t, to_world));
                 }
             }
             other => {
@@ -1599,7 +1644,7 @@ impl<'a> Importer<'a> {
                 w.section(&format!("[{kind}.{}]", e.name), &e.pos, &e.what, &e.table);
             }
         }
-        for e in self.objects.iter().chain(&self.lights) {
+        for e in self.objects.iter().chain(&self.lights).chain(&self.groups) {
             w.section(&format!("[[{}]]", e.name), &e.pos, &e.what, &e.table);
         }
         Imported {
