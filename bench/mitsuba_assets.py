@@ -1,6 +1,6 @@
 """The generated assets of tests/mitsuba's scenes, written with the values
-tests/mitsuba_import.rs writes: generated/sky.exr, generated/pyramid.serialized and
-generated/octahedron.obj. Used by
+tests/mitsuba_import.rs writes: generated/sky.exr, generated/pyramid.serialized,
+generated/octahedron.obj and generated/waves.exr. Used by
 bench/mitsuba_refs.py and bench/mitsuba_import_report.py."""
 import math
 import os
@@ -21,6 +21,23 @@ def sky():
             spot = math.exp(-((u - 0.3) ** 2 + (v - 0.3) ** 2) / 0.005)
             img[y, x] = [0.1 + 0.5 * (1 - v) + 0.35 * spot, 0.1 + 0.45 * (1 - v) + 0.3 * spot,
                          0.15 + 0.6 * (1 - v) + 0.2 * spot]
+    return img
+
+
+def waves():
+    """The normal map of tests/mitsuba/normalmap.xml (as tests/mitsuba_import.rs writes
+    it): 64 x 64, the normals of a height 0.015 sin(2 pi 3 u) sin(2 pi 2 v) as colours
+    (n + 1) / 2."""
+    w = h = 64
+    img = np.zeros((h, w, 3), dtype=np.float32)
+    for y in range(h):
+        for x in range(w):
+            u, v = (x + 0.5) / w, (y + 0.5) / h
+            du = 0.015 * 2 * math.pi * 3 * math.cos(2 * math.pi * 3 * u) * math.sin(2 * math.pi * 2 * v)
+            dv = 0.015 * 2 * math.pi * 2 * math.sin(2 * math.pi * 3 * u) * math.cos(2 * math.pi * 2 * v)
+            n = np.array([-du, -dv, 1.0])
+            n /= np.linalg.norm(n)
+            img[y, x] = (n + 1) / 2
     return img
 
 
@@ -48,6 +65,7 @@ def write_assets(folder, write_exr):
     """Writes the assets under folder/generated; write_exr(path, float32 array) writes EXR."""
     os.makedirs(os.path.join(folder, "generated"), exist_ok=True)
     write_exr(os.path.join(folder, "generated", "sky.exr"), sky())
+    write_exr(os.path.join(folder, "generated", "waves.exr"), waves())
     with open(os.path.join(folder, "generated", "pyramid.serialized"), "wb") as f:
         f.write(serialized(PYRAMID))
     with open(os.path.join(folder, "generated", "octahedron.obj"), "w") as f:

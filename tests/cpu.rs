@@ -338,6 +338,18 @@ material = "m"
             "bad.toml:10:5: materials.m.albedo: unknown texture \"tt\"",
         ),
         (
+            "bump and normal map",
+            "albedo = \"t\"",
+            "albedo = \"t\", bump = \"t\", normal_map = \"t\"",
+            "bad.toml:10:5: materials.m.normal_map: a material takes a bump map or a normal map, not both",
+        ),
+        (
+            "unknown normal map",
+            "albedo = \"t\"",
+            "albedo = \"t\", normal_map = \"tt\"",
+            "bad.toml:10:5: materials.m.normal_map: unknown texture \"tt\"",
+        ),
+        (
             "missing mesh",
             sphere,
             "type = \"mesh\"\npath = \"gone.obj\"",

@@ -31,6 +31,26 @@ fn sky() -> Vec<f32> {
     img
 }
 
+/// The normal map of normalmap.xml, as bench/mitsuba_assets.py writes it: the normals of a
+/// height 0.015 sin(2 pi 3 u) sin(2 pi 2 v) as colours (n + 1) / 2.
+fn waves() -> Vec<f32> {
+    use std::f64::consts::PI;
+    let (w, h) = (64, 64);
+    let mut img = Vec::with_capacity(w * h * 3);
+    for y in 0..h {
+        for x in 0..w {
+            let (u, v) = ((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64);
+            let du =
+                0.015 * 2.0 * PI * 3.0 * (2.0 * PI * 3.0 * u).cos() * (2.0 * PI * 2.0 * v).sin();
+            let dv =
+                0.015 * 2.0 * PI * 2.0 * (2.0 * PI * 3.0 * u).sin() * (2.0 * PI * 2.0 * v).cos();
+            let len = (du * du + dv * dv + 1.0).sqrt();
+            img.extend([-du / len, -dv / len, 1.0 / len].map(|c| ((c + 1.0) / 2.0) as f32));
+        }
+    }
+    img
+}
+
 /// The .serialized file of shapes.xml: a decoy triangle, then a square pyramid.
 fn pyramid() -> Vec<u8> {
     write_serialized(&[
@@ -93,6 +113,7 @@ fn scenes(name: &str) -> PathBuf {
     let generated = dir.join("generated");
     std::fs::create_dir_all(&generated).unwrap();
     wgtrace::image_io::write_image(&generated.join("sky.exr"), 128, 64, &sky()).unwrap();
+    wgtrace::image_io::write_image(&generated.join("waves.exr"), 64, 64, &waves()).unwrap();
     std::fs::write(generated.join("pyramid.serialized"), pyramid()).unwrap();
     std::fs::write(generated.join("octahedron.obj"), octahedron()).unwrap();
     dir
@@ -208,6 +229,11 @@ fn materials_agree_with_mitsuba() {
 #[test]
 fn shapes_and_instances_agree_with_mitsuba() {
     agrees_with_mitsuba("shapes", 256);
+}
+
+#[test]
+fn normal_maps_agree_with_mitsuba() {
+    agrees_with_mitsuba("normalmap", 256);
 }
 
 #[test]

@@ -76,7 +76,8 @@ fn material_at(m: Material, hit: Hit) -> Material {
 
 #ifdef HAS_NORMAL_MAP
 // The hit with its shading normal taken from the surface's tangent-space normal map
-// (map_normal), or from its bump map (MAT_FLAG_BUMP: bump_normal).
+// (map_normal; in the frame of dp/du with MAT_FLAG_UV_NORMAL_MAP, Mitsuba's normalmap),
+// or from its bump map (MAT_FLAG_BUMP: bump_normal).
 fn normal_mapped(mat: Material, hit: Hit) -> Hit {
     var h = hit;
 #ifdef HAS_TEXTURES
@@ -85,6 +86,12 @@ fn normal_mapped(mat: Material, hit: Hit) -> Hit {
 #ifdef HAS_BUMP
         if ((mat.flags & MAT_FLAG_BUMP) != 0u) {
             h.ns = bump_normal(s.normal_texture, s.normal_scale, hit);
+            return h;
+        }
+        if ((mat.flags & MAT_FLAG_UV_NORMAL_MAP) != 0u) {
+            var uv_frame = hit;
+            uv_frame.tangent = vec4<f32>(hit.dpdu, 1.0);
+            h.ns = map_normal(s.normal_texture, s.normal_scale, uv_frame);
             return h;
         }
 #endif

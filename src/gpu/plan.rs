@@ -395,7 +395,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
             scene
                 .materials
                 .iter()
-                .any(|m| m.flags & r::MAT_FLAG_BUMP != 0),
+                .any(|m| m.flags & (r::MAT_FLAG_BUMP | r::MAT_FLAG_UV_NORMAL_MAP) != 0),
         )
         .with(Feature::MeshAttribute, texture(r::TEX_MESH_ATTRIBUTE))
         .with(

@@ -89,6 +89,7 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
                         opacity: None,
                         bump: None,
                         bump_scale: 1.0,
+                        normal_map: None,
                         one_sided: false,
                     }),
                 ));

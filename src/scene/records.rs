@@ -131,6 +131,10 @@ shared_constants! {
     /// Material flag: its microfacet lobes are compensated for the energy they lose to
     /// multiple scattering (`energy_compensation`; the tables at `Params::ms_tables`).
     MAT_FLAG_ENERGY: u32 = 4096;
+    /// Material flag: the surface view's `normal_texture` is a normal map in the frame of
+    /// the hit's dp/du (made orthogonal to the shading normal n), n x dp/du and n
+    /// (Mitsuba's `normalmap`), not in the frame of the vertex tangents.
+    MAT_FLAG_UV_NORMAL_MAP: u32 = 8192;
     /// The tag `material_at` gives the back of a one-sided surface: no type has it, so
     /// the dispatch's default absorbs, with no BSDF and no density.
     MAT_BLACK: u32 = u32::MAX;

@@ -28,7 +28,7 @@ use crate::scene::records::{
     Material, MAT_BLACK, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_ANISOTROPIC,
     MAT_FLAG_BUMP, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_ONE_SIDED,
     MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
-    NO_TEXTURE, SHADING_LIFT,
+    MAT_FLAG_UV_NORMAL_MAP, NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -140,7 +140,8 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     mat
 }
 
-/// The hit with its shading normal from the surface's tangent-space normal map
+/// The hit with its shading normal from the surface's normal map (in the frame of the
+/// vertex tangents, or of dp/du with `MAT_FLAG_UV_NORMAL_MAP`) or bump map
 /// (materials.wgsl's `normal_mapped`).
 pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
     let mut h = *hit;
@@ -148,6 +149,13 @@ pub fn normal_mapped(b: &Bindings, mat: &Material, hit: &Hit) -> Hit {
     if s.normal_texture != NO_TEXTURE {
         h.ns = if mat.flags & MAT_FLAG_BUMP != 0 {
             bump_normal(b, s.normal_texture, s.normal_scale, hit)
+        } else if mat.flags & MAT_FLAG_UV_NORMAL_MAP != 0 {
+            // Mitsuba's normalmap: the frame of dp/du, not the vertex tangents
+            let uv_frame = Hit {
+                tangent: hit.dpdu.extend(1.0),
+                ..*hit
+            };
+            map_normal(b, s.normal_texture, s.normal_scale, &uv_frame)
         } else {
             map_normal(b, s.normal_texture, s.normal_scale, hit)
         };

@@ -285,6 +285,11 @@ pub trait Model {
     fn bump(&self) -> Option<(&str, f32)> {
         None
     }
+    /// Its normal map in the frame of dp/du (`normal_map` of the types that take a bump
+    /// map: Mitsuba's `normalmap`), for the types that take one.
+    fn uv_normal_map(&self) -> Option<&str> {
+        None
+    }
     /// Whether its back side is black (`one_sided`), for the types that only reflect.
     fn one_sided(&self) -> bool {
         false

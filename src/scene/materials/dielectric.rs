@@ -51,6 +51,9 @@ pub struct Desc {
     pub bump: Option<String>,
     #[serde(default = "one")]
     pub bump_scale: f32,
+    /// A normal map (Mitsuba's `normalmap`): a texture's raw colour c as the normal
+    /// 2c - 1 in the frame of the surface's dp/du, n x dp/du and shading normal n.
+    pub normal_map: Option<String>,
     /// Give rough glass back the energy its microfacets lose to multiple scattering,
     /// reflected and transmitted (Kulla and Conty); default: `[render]
     /// energy_compensation`.
@@ -174,6 +177,10 @@ impl Model for Desc {
 
     fn bump(&self) -> Option<(&str, f32)> {
         Some((self.bump.as_deref()?, self.bump_scale))
+    }
+
+    fn uv_normal_map(&self) -> Option<&str> {
+        self.normal_map.as_deref()
     }
 
     fn anisotropic(&self) -> bool {
@@ -300,6 +307,7 @@ pub fn from_gltf(
         opacity: None,
         bump: None,
         bump_scale: 1.0,
+        normal_map: None,
         energy_compensation: None,
     })
 }
@@ -331,6 +339,7 @@ pub fn from_mtl(m: &tobj::Material) -> std::result::Result<Desc, String> {
         opacity: None,
         bump: None,
         bump_scale: 1.0,
+        normal_map: None,
         energy_compensation: None,
     })
 }

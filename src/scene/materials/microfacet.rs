@@ -33,6 +33,9 @@ pub struct Desc {
     pub bump: Option<String>,
     #[serde(default = "one")]
     pub bump_scale: f32,
+    /// A normal map (Mitsuba's `normalmap`): a texture's raw colour c as the normal
+    /// 2c - 1 in the frame of the surface's dp/du, n x dp/du and shading normal n.
+    pub normal_map: Option<String>,
     /// The back side is black (Mitsuba's BSDFs without `twosided`); by default it
     /// reflects as the front does.
     #[serde(default)]
@@ -90,6 +93,10 @@ impl Model for Desc {
 
     fn bump(&self) -> Option<(&str, f32)> {
         Some((self.bump.as_deref()?, self.bump_scale))
+    }
+
+    fn uv_normal_map(&self) -> Option<&str> {
+        self.normal_map.as_deref()
     }
 
     fn one_sided(&self) -> bool {

@@ -29,7 +29,7 @@ use serde::Deserialize;
 use crate::scene::records::{
     Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_BUMP, MAT_FLAG_DELTA, MAT_FLAG_ENERGY, MAT_FLAG_NEE,
     MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_TRANSMITS,
-    MAT_FLAG_TWO_SIDED,
+    MAT_FLAG_TWO_SIDED, MAT_FLAG_UV_NORMAL_MAP,
 };
 use common::{Check, Lobes, Model, OpacityDesc, Surface, TextureNames, View};
 
@@ -175,6 +175,15 @@ impl MaterialDesc {
             c.texture("bump", name);
             c.finite("bump_scale", scale);
         }
+        if let Some(name) = model.uv_normal_map() {
+            c.texture("normal_map", name);
+            if model.bump().is_some() {
+                c.push(
+                    "normal_map",
+                    "a material takes a bump map or a normal map, not both".into(),
+                );
+            }
+        }
         if let Some(o) = model.opacity() {
             o.check("opacity", &mut c);
             if self.emits() {
@@ -254,6 +263,12 @@ impl MaterialDesc {
             surface.normal_texture = names.index(name);
             surface.normal_scale = scale;
             record.flags |= MAT_FLAG_BUMP;
+        }
+        // a normal map in the frame of dp/du, in the same place (a type has one of the two)
+        if let Some(name) = model.uv_normal_map() {
+            surface.normal_texture = names.index(name);
+            surface.normal_scale = 1.0;
+            record.flags |= MAT_FLAG_UV_NORMAL_MAP;
         }
         surface.write(&mut record);
         record

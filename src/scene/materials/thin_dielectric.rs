@@ -39,6 +39,9 @@ pub struct Desc {
     pub bump: Option<String>,
     #[serde(default = "one")]
     pub bump_scale: f32,
+    /// A normal map (Mitsuba's `normalmap`): a texture's raw colour c as the normal
+    /// 2c - 1 in the frame of the surface's dp/du, n x dp/du and shading normal n.
+    pub normal_map: Option<String>,
 }
 
 material_view! {
@@ -79,6 +82,10 @@ impl Model for Desc {
 
     fn bump(&self) -> Option<(&str, f32)> {
         Some((self.bump.as_deref()?, self.bump_scale))
+    }
+
+    fn uv_normal_map(&self) -> Option<&str> {
+        self.normal_map.as_deref()
     }
 
     fn lobes(&self) -> Lobes {

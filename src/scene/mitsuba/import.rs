@@ -1218,7 +1218,20 @@ impl<'a> Importer<'a> {
                 let weight = self.scalar(o, "weight")?.unwrap_or(float(0.5));
                 table([("type", text("blend")), ("first", T::String(first)), ("second", T::String(second)), ("weight", weight)])
             }
-            "normalmap" => return err(&o.pos, "bsdf normalmap: not rendered yet (bumpmap is)"),
+            "normalmap" => {
+                self.check_known(o, &["normalmap"], &[])?;
+                let inner = only_child_bsdf(self, o)?;
+                let Some(tex) = children(self.tree, o, "texture").next() else {
+                    return err(&o.pos, "bsdf normalmap: needs a nested normalmap texture");
+                };
+                let mut t = self.bsdf(inner)?;
+                if t.contains_key("bump") {
+                    return err(&o.pos, "bsdf normalmap: around a bumpmap: wgtrace takes one of the two");
+                }
+                let tex = self.texture(tex)?;
+                t.insert("normal_map".into(), T::String(tex));
+                t
+            }
             "null" => return err(&o.pos, format!("bsdf null: index-matched boundaries come with media; {MEDIA}")),
             other => {
                 return err(
@@ -1226,7 +1239,7 @@ impl<'a> Importer<'a> {
                     format!(
                         "bsdf {other}: not rendered (wgtrace reads diffuse, conductor, roughconductor, dielectric, \
                          roughdielectric, thindielectric, plastic, roughplastic, principled, twosided, mask, \
-                         bumpmap, blendbsdf)"
+                         bumpmap, normalmap, blendbsdf)"
                     ),
                 )
             }
@@ -1358,26 +1371,59 @@ impl<'a> Importer<'a> {
                 if flip {
                     return err(&o.pos, "shape cube: flip_normals is not read");
                 }
-                let t = table([
-                    ("type", text("box")),
-                    ("min", vec3(DVec3::splat(-1.0))),
-                    ("max", vec3(DVec3::splat(1.0))),
-                    ("material", T::String(material(self)?)),
-                ]);
-                push(self, with_transform(t, to_world));
+                // Mitsuba's cube is a mesh whose every face has the uv square (its texture,
+                // bump and normal maps' frame): its 24 corners and 12 triangles, as Mitsuba's
+                // cube plugin lists them (uv with v down: wgtrace's v is 1 - that)
+                const CORNERS: [([f64; 3], [f64; 2]); 24] = [
+                    ([1.0, -1.0, -1.0], [0.0, 1.0]), ([1.0, -1.0, 1.0], [1.0, 1.0]), ([-1.0, -1.0, 1.0], [1.0, 0.0]), ([-1.0, -1.0, -1.0], [0.0, 0.0]),
+                    ([1.0, 1.0, -1.0], [0.0, 1.0]), ([-1.0, 1.0, -1.0], [1.0, 1.0]), ([-1.0, 1.0, 1.0], [1.0, 0.0]), ([1.0, 1.0, 1.0], [0.0, 0.0]),
+                    ([1.0, -1.0, -1.0], [0.0, 1.0]), ([1.0, 1.0, -1.0], [1.0, 1.0]), ([1.0, 1.0, 1.0], [1.0, 0.0]), ([1.0, -1.0, 1.0], [0.0, 0.0]),
+                    ([1.0, -1.0, 1.0], [0.0, 1.0]), ([1.0, 1.0, 1.0], [1.0, 1.0]), ([-1.0, 1.0, 1.0], [1.0, 0.0]), ([-1.0, -1.0, 1.0], [0.0, 0.0]),
+                    ([-1.0, -1.0, 1.0], [0.0, 1.0]), ([-1.0, 1.0, 1.0], [1.0, 1.0]), ([-1.0, 1.0, -1.0], [1.0, 0.0]), ([-1.0, -1.0, -1.0], [0.0, 0.0]),
+                    ([1.0, 1.0, -1.0], [0.0, 1.0]), ([1.0, -1.0, -1.0], [1.0, 1.0]), ([-1.0, -1.0, -1.0], [1.0, 0.0]), ([-1.0, 1.0, -1.0], [0.0, 0.0]),
+                ];
+                let name = material(self)?;
+                let swap = DMat3::from_mat4(to_world).determinant() < 0.0;
+                for face in 0..6 {
+                    for tri in [[0, 1, 2], [3, 0, 2]] {
+                        let tri = if swap { [tri[0], tri[2], tri[1]] } else { tri };
+                        let corner = |k: usize| CORNERS[4 * face + tri[k]];
+                        let t = table([
+                            ("type", text("triangle")),
+                            ("vertices", T::Array((0..3).map(|k| vec3(to_world.transform_point3(DVec3::from(corner(k).0)))).collect())),
+                            ("uvs", T::Array((0..3).map(|k| T::Array(vec![float(corner(k).1[0]), float(1.0 - corner(k).1[1])])).collect())),
+                            ("material", T::String(name.clone())),
+                        ]);
+                        push(self, t);
+                    }
+                }
             }
             "sphere" => {
                 self.check_known(o, &["to_world", "center", "radius"], &ignorable)?;
                 if flip {
                     return err(&o.pos, "shape sphere: flip_normals (a sphere seen from inside) is not read");
                 }
+                // Mitsuba's sphere has its pole along z and u = atan2(y, x) / 2 pi, v = acos(z) /
+                // pi; wgtrace's its pole along y and u = atan2(-z, x) / 2 pi + 1/2, v = acos(-y)
+                // / pi, which is 1 - Mitsuba's v (wgtrace's v is up) where wgtrace's point is
+                // Mitsuba's turned by (x, y, z) -> (-x, z, y): placed through that rotation (its
+                // own inverse), textures, bump and normal maps land where Mitsuba puts them
+                let center = self.point(o, "center", DVec3::ZERO)?;
+                let radius = self.float(o, "radius", 1.0)?;
+                let turn = DMat4::from_cols(
+                    glam::DVec4::new(-1.0, 0.0, 0.0, 0.0),
+                    glam::DVec4::new(0.0, 0.0, 1.0, 0.0),
+                    glam::DVec4::new(0.0, 1.0, 0.0, 0.0),
+                    glam::DVec4::W,
+                );
+                let m = to_world * DMat4::from_translation(center) * turn;
                 let t = table([
                     ("type", text("sphere")),
-                    ("center", vec3(self.point(o, "center", DVec3::ZERO)?)),
-                    ("radius", float(self.float(o, "radius", 1.0)?)),
+                    ("center", vec3(DVec3::ZERO)),
+                    ("radius", float(radius)),
                     ("material", T::String(material(self)?)),
                 ]);
-                push(self, with_transform(t, to_world));
+                push(self, with_transform(t, m));
             }
             "disk" => {
                 self.check_known(o, &["to_world", "flip_normals"], &ignorable)?;
