@@ -64,7 +64,8 @@ enum Command {
     Convert {
         /// The Mitsuba 3 scene file.
         scene: PathBuf,
-        /// The TOML file to write (default: the scene's name with .toml, beside it).
+        /// The TOML file to write (default: the scene's name with .toml, beside it, where
+        /// no such file is yet).
         #[arg(short, long)]
         output: Option<PathBuf>,
         /// A `<default>` replaced, as Mitsuba's -D (repeatable).
@@ -325,7 +326,21 @@ fn convert(
             scene.display()
         );
     }
-    let output = output.unwrap_or_else(|| scene.with_extension("toml"));
+    let output = match output {
+        Some(o) => o,
+        // the file beside the scene, which a user may have edited: never replaced unasked
+        None => {
+            let beside = scene.with_extension("toml");
+            if beside.exists() {
+                anyhow::bail!(
+                    "{}: exists; convert writes beside the scene only where nothing is: \
+                     name the output with -o (the same path replaces it)",
+                    beside.display()
+                );
+            }
+            beside
+        }
+    };
     if output == scene {
         anyhow::bail!(
             "{}: the output would overwrite the scene file",

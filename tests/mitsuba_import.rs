@@ -290,6 +290,23 @@ fn convert_writes_toml_that_loads_and_names_its_origins() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let toml = std::fs::read_to_string(&out).unwrap();
     assert!(toml.contains("spp = 7"), "{toml}");
+    // without -o it writes beside the scene, and never over a file there
+    let xml = dir.join("shapes.xml");
+    std::fs::remove_file(&out).unwrap();
+    let beside = common::wgtrace(&["convert", xml.to_str().unwrap()]);
+    assert!(
+        beside.status.success(),
+        "{}",
+        String::from_utf8_lossy(&beside.stderr)
+    );
+    assert!(out.exists());
+    std::fs::write(&out, "# edited\n").unwrap();
+    let again = common::wgtrace(&["convert", xml.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(1), "{err}");
+    assert!(err.contains("shapes.toml: exists"), "{err}");
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "# edited\n");
+    std::fs::write(&out, &toml).unwrap();
     // the shapegroup is written once, as a group, and each instance places it
     assert_eq!(toml.matches("type = \"instance\"").count(), 3, "{toml}");
     assert!(toml.contains("group = \"pair\""), "{toml}");
