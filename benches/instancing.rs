@@ -4,9 +4,9 @@
 //! triangle written out), from 1 to 100,000 copies. For each: the records a render uploads
 //! (primitives, BVH nodes, shape data), the time to load and flatten the scene, and the
 //! render's steady rate on the first Vulkan adapter (256 x 256, 16 spp, medians of 3
-//! after the pipeline's compile), in one run. The flattened scene is rendered while its
-//! primitives fit a storage binding of the device; past that it is loaded only (or not at
-//! all past the scene's 2^24 triangles). Writes `docs/bench/instancing.md`.
+//! after the pipeline's compile), in one run. A scene whose records the renderer refuses
+//! (over the device's storage bindings) is loaded only, and one of more than the scene
+//! format's 2^24 triangles not at all. Writes `docs/bench/instancing.md`.
 //!
 //! Run: `cargo bench --bench instancing`.
 
@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use wgtrace::gpu::{GpuContext, GpuRenderer};
+use wgtrace::scene::mesh::MAX_TRIANGLES;
 use wgtrace::scene::records::{BvhNode, Primitive};
 use wgtrace::{FlatScene, Overrides, Tuning};
 
@@ -23,8 +24,6 @@ const SPP: u32 = 16;
 const ROUNDS: usize = 3;
 const COUNTS: [usize; 6] = [1, 16, 256, 1_000, 10_000, 100_000];
 const MESH_TRIANGLES: usize = 5_856;
-/// The scene format's limit on triangles (`mesh::MAX_TRIANGLES`).
-const MAX_TRIANGLES: usize = 1 << 24;
 
 fn median(mut v: Vec<Duration>) -> Duration {
     v.sort();

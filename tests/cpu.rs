@@ -220,6 +220,16 @@ fn load_err(src: &str) -> String {
     }
 }
 
+/// Each (what, from, to, expected) of `table`, one edit of `base` (`from` replaced by `to`),
+/// fails to load with an error containing `expected`.
+fn each_edit_fails(base: &str, table: &[(&str, &str, &str, &str)]) {
+    for (what, from, to, expected) in table {
+        assert!(base.contains(from), "{what}: the edit does not apply");
+        let e = load_err(&base.replacen(from, to, 1));
+        assert!(e.contains(expected), "{what}: {e}");
+    }
+}
+
 #[test]
 fn scene_errors_name_file_line_and_key_and_collect_all() {
     let src = r#"[camera]
@@ -417,11 +427,7 @@ material = "m"
         ),
     ];
     assert!(wgtrace::load_scene_str(base, Path::new("bad.toml"), &Overrides::default()).is_ok());
-    for (what, from, to, expected) in table {
-        assert!(base.contains(from), "{what}: the edit does not apply");
-        let e = load_err(&base.replacen(from, to, 1));
-        assert!(e.contains(expected), "{what}: {e}");
-    }
+    each_edit_fails(base, table);
     // every problem at once, each with its own place
     let many = base
         .replacen("width = 8", "width = 0", 1)
@@ -707,9 +713,5 @@ material = "m"
         2,
         "an instance and the group's sphere"
     );
-    for (what, from, to, expected) in table {
-        assert!(base.contains(from), "{what}: the edit does not apply");
-        let e = load_err(&base.replacen(from, to, 1));
-        assert!(e.contains(expected), "{what}: {e}");
-    }
+    each_edit_fails(base, table);
 }
