@@ -390,6 +390,12 @@ material = "m"
             "bad.toml:5:1: render.width: must be in 1..=16384, got 0",
         ),
         (
+            "crop",
+            "height = 8",
+            "height = 8\ncrop = [2, 0, 7, 8]",
+            "bad.toml:7:1: render.crop: [x, y, width, height] = [2, 0, 7, 8] must be a rectangle of at least one pixel inside the 8 x 8 film",
+        ),
+        (
             "roughness",
             "roughness = 0.3",
             "roughness = 1.5",

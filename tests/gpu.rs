@@ -2122,3 +2122,66 @@ fn instances_render_as_the_expanded_scene_and_on_the_cpu() {
         eprintln!("against {what}: {:.4} of pixels agree", c.agree_fraction);
     }
 }
+
+/// The pixels `[x, y, width, height]` of an accumulation, as one of that size.
+fn window(a: &wgtrace::Accumulation, [x, y, w, h]: [u32; 4]) -> wgtrace::Accumulation {
+    let e = a.entries();
+    let mut out = wgtrace::Accumulation::zeros(w, h, a.aovs);
+    for row in 0..h {
+        let from = ((y + row) * a.width + x) as usize * e;
+        let to = (row * w) as usize * e;
+        out.data[to..to + w as usize * e].copy_from_slice(&a.data[from..from + w as usize * e]);
+    }
+    out
+}
+
+/// `[render] crop` renders that rectangle of the film: its image agrees, tile by tile,
+/// with the same rectangle cut from the whole film's image, for a thin-lens camera under
+/// a Gaussian filter whose samples leave the rectangle (`sample_border`, so the crop's
+/// edge pixels weigh what lies beyond it) and for an orthographic one; `--width` and
+/// `--height` scale the rectangle with the film.
+#[test]
+fn crop_windows_render_that_part_of_the_film() {
+    let body = "[background]\ncolor = [0.4, 0.5, 0.7]\n\
+        [textures]\nc = { type = \"checker\", even = [0.9, 0.9, 0.9], odd = [0.1, 0.2, 0.5], scale = 6 }\n\
+        [materials]\nm = { type = \"lambertian\", albedo = \"c\" }\n\
+        shiny = { type = \"metal\", albedo = [0.9, 0.7, 0.5], fuzz = 0.2 }\n\
+        [[objects]]\ntype = \"plane\"\npoint = [0, -1, 0]\nnormal = [0, 1, 0]\nmaterial = \"m\"\n\
+        [[objects]]\ntype = \"sphere\"\ncenter = [-0.6, 0, 0]\nradius = 1\nmaterial = \"shiny\"\n\
+        [[objects]]\ntype = \"sphere\"\ncenter = [1.2, -0.5, 1]\nradius = 0.5\nmaterial = \"m\"\n\
+        [[lights]]\ntype = \"directional\"\ndirection = [-0.3, -1, -0.5]\nirradiance = [2, 2, 2]\n";
+    let cameras = [
+        "[camera]\nlook_from = [1, 1.5, 6]\nlook_at = [0, 0, 0]\nvfov = 45\naperture = 0.2\nfocus_distance = 5.5\n",
+        "[camera]\nprojection = \"orthographic\"\nheight = 5\nlook_from = [1, 2, 6]\nlook_at = [0, 0, 0]\n",
+    ];
+    let crop = [13, 5, 22, 27];
+    for camera in cameras {
+        let render = "[render]\nwidth = 48\nheight = 40\nspp = 64\nseed = 3\nmax_depth = 3\n\
+            filter = \"gaussian\"\n";
+        let whole = common::scene_from_str(&format!("{render}{camera}{body}"));
+        let cropped = common::scene_from_str(&format!("{render}crop = {crop:?}\n{camera}{body}"));
+        assert_eq!((cropped.width, cropped.height), (22, 27));
+        let (a, b) = (render_gpu(&cropped), window(&render_gpu(&whole), crop));
+        let c = compare(&a, &b, 4);
+        assert!(
+            c.failed_tiles.is_empty(),
+            "{camera}: {} tiles outside the bound (first: {:?})",
+            c.failed_tiles.len(),
+            c.failed_tiles.first()
+        );
+    }
+    let halved = wgtrace::load_scene_str(
+        &format!(
+            "[render]\nwidth = 48\nheight = 40\ncrop = {crop:?}\n{}{body}",
+            cameras[0]
+        ),
+        std::path::Path::new("test.toml"),
+        &Overrides {
+            width: Some(24),
+            height: Some(20),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!((halved.width, halved.height), (11, 13));
+}

@@ -241,6 +241,11 @@ fn environment_and_thin_lens_agree_with_mitsuba() {
     agrees_with_mitsuba("environment", 256);
 }
 
+#[test]
+fn film_crop_windows_agree_with_mitsuba() {
+    agrees_with_mitsuba("crop", 256);
+}
+
 /// The z-test can fail: a reflectance changed by 5% is caught.
 #[test]
 fn a_changed_scene_fails_the_z_test() {
@@ -375,6 +380,15 @@ fn bad_files_are_one_error_with_the_position() {
             scene("<medium type=\"homogeneous\"/>"),
             "3:1",
             "issue 43",
+        ),
+        (
+            "crop",
+            "<scene version=\"3.0.0\">\n<sensor type=\"perspective\">\n<film type=\"hdrfilm\">\
+             <integer name=\"width\" value=\"8\"/><integer name=\"crop_width\" value=\"9\"/>\
+             </film></sensor>\n</scene>\n"
+                .to_string(),
+            "3:1",
+            "crop window",
         ),
         (
             "bad-value",

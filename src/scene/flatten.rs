@@ -704,16 +704,21 @@ pub fn flatten(
     let rotation = bg.rotation.unwrap_or(0.0).to_radians();
 
     let r = &file.render;
+    let crop = r.crop.unwrap_or([0, 0, r.width, r.height]);
     Ok(FlatScene {
         warnings: Vec::new(),
-        width: r.width,
-        height: r.height,
+        width: crop[2],
+        height: crop[3],
         spp: r.spp,
         max_depth: r.max_depth,
         seed: r.seed,
         sampler: r.sampler,
         filter: PixelFilter::of(r),
-        camera: camera_frame(file, r.width as f32 / r.height as f32),
+        camera: cropped(
+            camera_frame(file, r.width as f32 / r.height as f32),
+            [r.width, r.height],
+            crop,
+        ),
         rr_depth: if build.russian_roulette { RR_DEPTH } else { 0 },
         hide_emitters: r.hide_emitters,
         light_sampling: r.light_sampling,
@@ -946,5 +951,45 @@ fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
         lens_radius: if orthographic { 0.0 } else { c.aperture * 0.5 },
         orthographic,
         near_clip: c.near_clip,
+    }
+}
+
+/// The camera of the rectangle `crop` (`[x, y, width, height]` in pixels from the top
+/// left) of a `film` (`[width, height]`) seen by `c`: the same rays for the same film
+/// positions, each pixel of the crop being that pixel of the film. The view rectangle
+/// shrinks to the crop's share and its centre moves to the crop's: a perspective camera
+/// looks through the crop's centre (forward times the focus distance becomes the vector
+/// to it, right and up stay the film's), an orthographic one moves its origin there.
+fn cropped(c: CameraFrame, film: [u32; 2], crop: [u32; 4]) -> CameraFrame {
+    if crop == [0, 0, film[0], film[1]] {
+        return c;
+    }
+    let (w, h) = (film[0] as f32, film[1] as f32);
+    // the crop's centre in the view rectangle, from -1 to 1 (right, up)
+    let sx = 2.0 * (crop[0] as f32 + 0.5 * crop[2] as f32) / w - 1.0;
+    let sy = 1.0 - 2.0 * (crop[1] as f32 + 0.5 * crop[3] as f32) / h;
+    let shift = c.right * (sx * c.half_width) + c.up * (sy * c.half_height);
+    let half_width = c.half_width * crop[2] as f32 / w;
+    let half_height = c.half_height * crop[3] as f32 / h;
+    if c.orthographic {
+        return CameraFrame {
+            origin: c.origin + shift,
+            half_width,
+            half_height,
+            ..c
+        };
+    }
+    let to_centre = c.forward * c.focus_distance + shift;
+    let forward = to_centre.normalize();
+    CameraFrame {
+        forward,
+        focus_distance: to_centre.length(),
+        half_width,
+        half_height,
+        // rays start on the plane square to the crop's central ray through the point
+        // where that ray crosses the film's clip plane (the shader's plane is square to
+        // forward): the film's plane there, tilted from it by the angle between the two
+        near_clip: c.near_clip / forward.dot(c.forward),
+        ..c
     }
 }

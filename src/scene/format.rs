@@ -110,6 +110,10 @@ pub struct RenderDesc {
     /// Camera rays see no emitter and no background (Mitsuba's `hide_emitters`); the
     /// lights still light what they see.
     pub hide_emitters: bool,
+    /// `[x, y, width, height]`: only this rectangle of the `width` x `height` film is
+    /// rendered and written, the image it makes being its size (Mitsuba's film crop
+    /// window); x, y from the film's top left corner.
+    pub crop: Option<[u32; 4]>,
 }
 
 /// `[render] filter` (and `--filter`): how a pixel weighs the image plane around it. Each
@@ -294,6 +298,7 @@ impl Default for RenderDesc {
             energy_compensation: false,
             sample_border: true,
             hide_emitters: false,
+            crop: None,
         }
     }
 }

@@ -604,6 +604,25 @@ fn read_relative<T>(
 /// problems then belong to the command line.
 fn apply_overrides(file: &mut SceneFile, o: &Overrides) -> Vec<&'static str> {
     let r = &mut file.render;
+    if let Some(c) = &mut r.crop {
+        // the crop window keeps its place on a film of another size
+        let scale = |v: u32, from: u32, to: Option<u32>| match to {
+            Some(to) if from > 0 => (v as u64 * to as u64 + from as u64 / 2) / from as u64,
+            _ => v as u64,
+        } as u32;
+        let (x1, y1) = (c[0].saturating_add(c[2]), c[1].saturating_add(c[3]));
+        let (x0, y0) = (
+            scale(c[0], r.width, o.width),
+            scale(c[1], r.height, o.height),
+        );
+        let (x1, y1) = (scale(x1, r.width, o.width), scale(y1, r.height, o.height));
+        *c = [
+            x0,
+            y0,
+            x1.saturating_sub(x0).max(1),
+            y1.saturating_sub(y0).max(1),
+        ];
+    }
     r.width = o.width.unwrap_or(r.width);
     r.height = o.height.unwrap_or(r.height);
     r.spp = o.spp.unwrap_or(r.spp);

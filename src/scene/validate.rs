@@ -94,6 +94,20 @@ impl Validator<'_> {
         self.range_u32("render.height", r.height, 1, MAX_IMAGE_SIDE, 0);
         self.range_u32("render.spp", r.spp, 1, MAX_SPP, 0);
         self.range_u32("render.max_depth", r.max_depth, 1, MAX_DEPTH_LIMIT, 0);
+        if let Some([x, y, w, h]) = r.crop {
+            let fits =
+                |o: u32, n: u32, side: u32| n >= 1 && o.checked_add(n).is_some_and(|e| e <= side);
+            if !fits(x, w, r.width) || !fits(y, h, r.height) {
+                self.push(
+                    0,
+                    "render.crop",
+                    format!(
+                        "[x, y, width, height] = [{x}, {y}, {w}, {h}] must be a rectangle of at least one pixel inside the {} x {} film",
+                        r.width, r.height
+                    ),
+                );
+            }
+        }
         let kind = r.filter;
         if let Some(radius) = r.filter_radius {
             if kind == FilterKind::Box {

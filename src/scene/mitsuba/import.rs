@@ -748,9 +748,24 @@ impl<'a> Importer<'a> {
             self.integer(f, "crop_height", height)?,
         );
         if crop != (0, 0, width, height) {
-            return err(
-                &f.pos,
-                "film hdrfilm: a crop window is not rendered yet (render the whole image)",
+            let c = [crop.0, crop.1, crop.2, crop.3];
+            if c.iter().any(|&v| v < 0)
+                || c[2] < 1
+                || c[3] < 1
+                || c[0] + c[2] > width
+                || c[1] + c[3] > height
+            {
+                return err(
+                    &f.pos,
+                    format!(
+                        "film hdrfilm: the crop window (offset {}, {}; size {} x {}) is not inside the {width} x {height} film",
+                        c[0], c[1], c[2], c[3]
+                    ),
+                );
+            }
+            self.render.insert(
+                "crop".into(),
+                T::Array(c.iter().map(|&v| T::Integer(v)).collect()),
             );
         }
         match children(self.tree, f, "rfilter").next() {
