@@ -6,9 +6,15 @@ each, each run with its own seed; judged pixel by pixel as Mitsuba's render test
 significance 0.01 over all of them, at least 99.75% within). Writes
 docs/bench/mitsuba-import.md; files wgtrace refuses are listed with its message.
 
-usage: python bench/mitsuba_import_report.py [RUNS] [SPP]   (default 16 runs of 128 spp;
-build target/release/wgtrace first). Needs `pip install mitsuba==3.9.1 numpy` and an LLVM
-named by DRJIT_LIBLLVM_PATH.
+With folders after RUNS and SPP, the scene files found in them instead: every
+`test_*.xml` below each folder, Mitsuba's render tests' naming (its own test scenes are
+mitsuba-data's tests/scenes), and every `*.xml` that holds a <sensor> where no test_ file
+is found; writes docs/bench/mitsuba-own-scenes.md, naming files relative to the folder's
+parent. Nothing is copied: the scenes and their assets stay where they are.
+
+usage: python bench/mitsuba_import_report.py [RUNS] [SPP] [FOLDER...]   (default 16 runs of
+128 spp; build target/release/wgtrace first). Needs `pip install mitsuba==3.9.1 numpy` and
+an LLVM named by DRJIT_LIBLLVM_PATH.
 """
 import datetime
 import glob
@@ -32,12 +38,28 @@ spp = int(sys.argv[2]) if len(sys.argv) > 2 else 128
 wgtrace = os.path.join(root, "target", "release", "wgtrace")
 tmp = tempfile.mkdtemp()
 
-# the tests' scenes with their generated assets
-tests_dir = os.path.join(tmp, "tests")
-shutil.copytree(os.path.join(root, "tests", "mitsuba"), tests_dir, ignore=shutil.ignore_patterns("refs"))
-write_assets(tests_dir, lambda path, img: mi.Bitmap(img).write(path))
+folders = [os.path.abspath(f) for f in sys.argv[3:]]
 
-files = sorted(glob.glob(os.path.join(root, "bench", "*.xml"))) + sorted(glob.glob(os.path.join(tests_dir, "*.xml")))
+
+def scene_files(folder):
+    tests = sorted(glob.glob(os.path.join(folder, "**", "test_*.xml"), recursive=True))
+    if tests:
+        return tests
+    return sorted(f for f in glob.glob(os.path.join(folder, "**", "*.xml"), recursive=True)
+                  if "<sensor" in open(f, errors="replace").read())
+
+
+if folders:
+    files = [f for d in folders for f in scene_files(d)]
+    shown_of = {f: os.path.relpath(f, os.path.dirname(d)) for d in folders for f in scene_files(d)}
+else:
+    # the tests' scenes with their generated assets
+    tests_dir = os.path.join(tmp, "tests")
+    shutil.copytree(os.path.join(root, "tests", "mitsuba"), tests_dir, ignore=shutil.ignore_patterns("refs"))
+    write_assets(tests_dir, lambda path, img: mi.Bitmap(img).write(path))
+    files = sorted(glob.glob(os.path.join(root, "bench", "*.xml"))) + sorted(glob.glob(os.path.join(tests_dir, "*.xml")))
+    shown_of = {f: os.path.relpath(f, root) if f.startswith(root) else "tests/mitsuba/" + os.path.basename(f)
+                for f in files}
 
 
 def sidak(alpha, n):
@@ -54,13 +76,14 @@ def sidak(alpha, n):
 
 rows, refused = [], []
 for path in files:
-    shown = os.path.relpath(path, root) if path.startswith(root) else "tests/mitsuba/" + os.path.basename(path)
+    shown = shown_of[path]
     out = os.path.join(tmp, "w.exr")
     w_runs, t_w = [], 0.0
     error = None
     for s in range(runs):
         t0 = time.time()
-        r = subprocess.run([wgtrace, "render", path, "--spp", str(spp), "--seed", str(s), "-o", out],
+        # -D spp as mi.load_file(path, spp=...) sets it (for files whose $spp has no default)
+        r = subprocess.run([wgtrace, "render", path, "--spp", str(spp), "-D", f"spp={spp}", "--seed", str(s), "-o", out],
                            capture_output=True, text=True)
         t_w += time.time() - t0
         if r.returncode != 0:
@@ -77,7 +100,7 @@ for path in files:
         m_runs = [np.array(mi.render(scene, spp=spp, seed=1000 + s))[..., :3].astype(np.float64) for s in range(runs)]
         t_m = time.time() - t0
     except Exception as e:
-        refused.append((shown, f"Mitsuba: {e}"))
+        refused.append((shown, f"Mitsuba: {str(e).splitlines()[-1]}"))
         continue
     w, m = np.stack(w_runs), np.stack(m_runs)
     wm, ws = w.mean(0), w.std(0, ddof=1) / math.sqrt(runs)
@@ -98,10 +121,12 @@ WHY = {
     "no variance on wgtrace's side (docs/bench/filter-gaussian.md); the whole image agrees.",
 }
 agree = sum("agrees" in r for r in rows)
+source = ("every Mitsuba 3\nscene file of `bench/` and `tests/mitsuba/`" if not folders else
+          "the scene files of\n" + ", ".join(f"`{os.path.basename(d)}/`" for d in folders) + " (named from there)")
+command = " ".join(["bench/mitsuba_import_report.py", str(runs), str(spp)] + [os.path.basename(d) for d in folders])
 report = f"""# The Mitsuba importer against Mitsuba 3
 
-Written by `bench/mitsuba_import_report.py {runs} {spp}` on {datetime.date.today()}: every Mitsuba 3
-scene file of `bench/` and `tests/mitsuba/`, rendered by wgtrace from the file itself
+Written by `{command}` on {datetime.date.today()}: {source}, rendered by wgtrace from the file itself
 (`wgtrace render scene.xml`, default backend) and by Mitsuba {mi.__version__} (`llvm_ad_rgb`) from the
 same file, {runs} runs of {spp} spp each, each run with its own seed. *Pixels within*: the share of
 pixels and channels whose difference of the two means is within the Sidak bound (significance
@@ -118,5 +143,6 @@ if known:
     report += "\nWhy a file differs:\n\n" + "".join(known)
 if refused:
     report += "\nRefused (wgtrace's message):\n\n" + "".join(f"- `{n}`: {e}\n" for n, e in refused)
-open(os.path.join(root, "docs", "bench", "mitsuba-import.md"), "w").write(report)
+name = "mitsuba-own-scenes.md" if folders else "mitsuba-import.md"
+open(os.path.join(root, "docs", "bench", name), "w").write(report)
 print(report)

@@ -539,3 +539,67 @@ fn near_clip_is_the_cameras_and_far_clip_a_note() {
         .to_string();
     assert!(e.contains("clip.xml:2:1") && e.contains("near_clip"), "{e}");
 }
+
+/// What Mitsuba's own test scenes write: a colour as a `<spectrum type="srgb">` or
+/// `type="uniform"` object (read as the same constant), a normalmap BSDF with a constant
+/// map (the identity (0.5, 0.5, 1) leaves the nested BSDF alone, another colour becomes a
+/// constant texture), and a mesh named in an included file found in the scene file's
+/// folder, where Mitsuba's file resolver finds it, not beside the included file.
+#[test]
+fn spectrum_objects_constant_normal_maps_and_includes_read_as_mitsuba_reads_them() {
+    let dir = common::tmp_dir("mitsuba-own-forms");
+    std::fs::create_dir_all(dir.join("include")).unwrap();
+    std::fs::create_dir_all(dir.join("meshes")).unwrap();
+    std::fs::write(
+        dir.join("meshes/tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("include/shapes.xml"),
+        "<scene version=\"3.0.0\">\n<shape type=\"obj\"><string name=\"filename\" \
+         value=\"meshes/tri.obj\"/></shape>\n</scene>\n",
+    )
+    .unwrap();
+    let scene = |map: &str| {
+        format!(
+            "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"/>\n\
+             <include filename=\"include/shapes.xml\"/>\n\
+             <bsdf type=\"diffuse\" id=\"a\"><spectrum name=\"reflectance\" type=\"srgb\">\
+             <rgb name=\"color\" value=\"0.2, 0.4, 0.6\"/></spectrum></bsdf>\n\
+             <bsdf type=\"diffuse\" id=\"b\"><spectrum name=\"reflectance\" type=\"uniform\">\
+             <float name=\"value\" value=\"0.3\"/></spectrum></bsdf>\n\
+             <bsdf type=\"normalmap\" id=\"n\"><spectrum name=\"normalmap\" type=\"srgb\">\
+             <rgb name=\"color\" value=\"{map}\"/></spectrum><bsdf type=\"diffuse\"/></bsdf>\n\
+             <shape type=\"sphere\"><ref id=\"a\"/></shape>\n\
+             <shape type=\"sphere\"><ref id=\"b\"/></shape>\n\
+             <shape type=\"sphere\"><ref id=\"n\"/></shape>\n</scene>\n"
+        )
+    };
+    let path = dir.join("scene.xml");
+    let toml = |map: &str| {
+        std::fs::write(&path, scene(map)).unwrap();
+        let out = dir.join("scene.toml");
+        let o = common::wgtrace(&[
+            "convert",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        std::fs::read_to_string(&out).unwrap()
+    };
+    let identity = toml("0.5, 0.5, 1.0");
+    assert!(identity.contains("albedo = [0.2, 0.4, 0.6]"), "{identity}");
+    assert!(identity.contains("albedo = [0.3, 0.3, 0.3]"), "{identity}");
+    assert!(!identity.contains("normal_map"), "{identity}");
+    assert!(identity.contains("tri.obj"), "{identity}");
+    let tilted = toml("0.6, 0.5, 0.9");
+    assert!(tilted.contains("normal_map = \"normalmap"), "{tilted}");
+    assert!(tilted.contains("type = \"constant\""), "{tilted}");
+    // the scene's folder before the included file's: a decoy beside the include loses
+    std::fs::create_dir_all(dir.join("include/meshes")).unwrap();
+    std::fs::write(dir.join("include/meshes/tri.obj"), "not an obj\n").unwrap();
+    std::fs::write(&path, scene("0.5, 0.5, 1.0")).unwrap();
+    wgtrace::load_scene(&path, &Overrides::default()).unwrap();
+}

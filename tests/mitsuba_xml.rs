@@ -254,7 +254,8 @@ fn includes_splice_a_scene_in_place_and_paths_find_files() {
     )
     .unwrap();
     let t = wgtrace::scene::mitsuba::parse_file(&xml, &[]).unwrap();
-    assert_eq!(t.search_paths, vec![dir.join("parts")]);
+    // the <path> folders first, then the scene file's own (Mitsuba's file resolver)
+    assert_eq!(t.search_paths, vec![dir.join("parts"), dir.clone()]);
     let bsdf = child(&t, t.root, "_arg_0");
     assert_eq!(t.objects[bsdf].id.as_deref(), Some("white"));
     assert_eq!(t.objects[child(&t, t.root, "_arg_1")].plugin, "constant");

@@ -278,12 +278,39 @@ impl<'a> Importer<'a> {
             Value::Integer(v) => Ok(rgb([*v as f64; 3])),
             Value::Rgb(c) => Ok(rgb(c.to_array())),
             Value::Spectrum(s) => Ok(rgb(spectrum::to_rgb(s, use_))),
+            Value::Object(i) if self.obj(*i).tag == "spectrum" => self.spectrum_object(*i).map(rgb),
             Value::Object(i) => self.texture(*i).map(T::String),
             _ => err(
                 &p.pos,
                 format!(
                     "{}: `{name}` must be a colour, spectrum or texture",
                     what(o)
+                ),
+            ),
+        }
+    }
+
+    /// A `<spectrum type="...">` object's constant colour in RGB mode: `srgb` its `color`
+    /// as written, `uniform` its `value` (Mitsuba's RGB variants read both so).
+    fn spectrum_object(&mut self, i: usize) -> Result<[f64; 3]> {
+        let o = self.obj(i);
+        match o.plugin.as_str() {
+            "srgb" => {
+                self.check_known(o, &["color"], &[])?;
+                match o.get("color").map(|p| &p.value) {
+                    Some(Value::Rgb(c)) => Ok(c.to_array()),
+                    Some(Value::Float(v)) => Ok([*v; 3]),
+                    _ => err(&o.pos, "spectrum srgb: needs an rgb `color`"),
+                }
+            }
+            "uniform" => {
+                self.check_known(o, &["value"], &[])?;
+                Ok([self.float(o, "value", 1.0)?; 3])
+            }
+            other => err(
+                &o.pos,
+                format!(
+                    "spectrum {other}: not read (wgtrace reads srgb and uniform spectrum objects)"
                 ),
             ),
         }
@@ -1236,15 +1263,36 @@ impl<'a> Importer<'a> {
             "normalmap" => {
                 self.check_known(o, &["normalmap"], &[])?;
                 let inner = only_child_bsdf(self, o)?;
-                let Some(tex) = children(self.tree, o, "texture").next() else {
+                let unnamed = children(self.tree, o, "texture").next();
+                if o.get("normalmap").is_none() && unnamed.is_none() {
                     return err(&o.pos, "bsdf normalmap: needs a nested normalmap texture");
-                };
+                }
                 let mut t = self.bsdf(inner)?;
                 if t.contains_key("bump") {
                     return err(&o.pos, "bsdf normalmap: around a bumpmap: wgtrace takes one of the two");
                 }
-                let tex = self.texture(tex)?;
-                t.insert("normal_map".into(), T::String(tex));
+                let map = match (o.get("normalmap"), unnamed) {
+                    (None, Some(tex)) => T::String(self.texture(tex)?),
+                    _ => self.color(o, "normalmap", 0.0, Use::Unbounded)?,
+                };
+                let tex = match map {
+                    T::String(tex) => Some(tex),
+                    // a constant map: (0.5, 0.5, 1) leaves every normal as it is
+                    T::Array(c) if c.iter().zip([0.5, 0.5, 1.0]).all(|(v, e)| v.as_float().is_some_and(|v| (v - e).abs() < 1e-6)) => None,
+                    c => {
+                        let name = format!("normalmap{}", self.textures.len() + 1);
+                        self.textures.push(Entry {
+                            name: name.clone(),
+                            table: table([("type", text("constant")), ("color", c)]),
+                            pos: o.pos.clone(),
+                            what: what(o),
+                        });
+                        Some(name)
+                    }
+                };
+                if let Some(tex) = tex {
+                    t.insert("normal_map".into(), T::String(tex));
+                }
                 t
             }
             "null" => return err(&o.pos, format!("bsdf null: index-matched boundaries come with media; {MEDIA}")),

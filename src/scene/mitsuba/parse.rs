@@ -164,7 +164,9 @@ pub fn parse_str(
         params: defines.to_vec(),
         ids: HashMap::new(),
         refs: Vec::new(),
-        search_paths: Vec::new(),
+        // Mitsuba's file resolver starts with the scene file's folder: a file named in an
+        // included file is found beside that file or, as Mitsuba finds it, beside the scene
+        search_paths: vec![path.parent().unwrap_or(Path::new("")).to_path_buf()],
         include_depth: 0,
     };
     let file = Arc::new(path.to_path_buf());
@@ -921,17 +923,16 @@ impl Source<'_, '_> {
     }
 }
 
-/// A file named in `file`: absolute, else beside `file`, else in the `search_paths` (the
-/// first that has it; beside `file` when none does).
+/// A file named in `file`, found as Mitsuba's file resolver finds it: absolute, else in
+/// the first of the `search_paths` that has it (the `<path>` folders, latest first, then
+/// the scene file's folder), else beside `file` (an included file's folder; also the name
+/// errors give when no folder has it).
 fn find_in(search_paths: &[PathBuf], file: &Path, name: &str) -> PathBuf {
     let name = Path::new(name);
     if name.is_absolute() {
         return name.to_path_buf();
     }
     let beside = resolve(file, name);
-    if beside.exists() {
-        return beside;
-    }
     search_paths
         .iter()
         .map(|d| d.join(name))
