@@ -43,12 +43,19 @@ def sphere_obj():
             ph = 2 * math.pi * j / segs
             x, y, z = math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)
             lines += [f"v {x:.6f} {y:.6f} {z:.6f}", f"vn {x:.6f} {y:.6f} {z:.6f}", f"vt {j / segs:.6f} {1 - i / rings:.6f}"]
-    for i in range(rings):
-        for j in range(segs):
-            a, b = i * (segs + 1) + j + 1, (i + 1) * (segs + 1) + j + 1
+    return "\n".join(lines + grid_faces(rings, segs)) + "\n"
+
+
+def grid_faces(rows, cols):
+    """The OBJ faces of a (rows + 1) x (cols + 1) grid of vertices (each with its normal
+    and uv of the same index), two triangles a cell."""
+    faces = []
+    for i in range(rows):
+        for j in range(cols):
+            a, b = i * (cols + 1) + j + 1, (i + 1) * (cols + 1) + j + 1
             for t in ((a, b, b + 1), (a, b + 1, a + 1)):
-                lines.append("f " + " ".join(f"{k}/{k}/{k}" for k in t))
-    return "\n".join(lines) + "\n"
+                faces.append("f " + " ".join(f"{k}/{k}/{k}" for k in t))
+    return faces
 
 
 def quad_obj(s=1.0):
@@ -89,12 +96,7 @@ def torus_obj(R=1.0, r=0.3):
             p = [R * math.cos(a) + r * c[0], R * math.sin(a) + r * c[1], r * c[2]]
             lines += [f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}", f"vn {c[0]:.6f} {c[1]:.6f} {c[2]:.6f}",
                       f"vt {i / nu:.6f} {j / nv:.6f}"]
-    for i in range(nu):
-        for j in range(nv):
-            a, b = i * (nv + 1) + j + 1, (i + 1) * (nv + 1) + j + 1
-            for t in ((a, b, b + 1), (a, b + 1, a + 1)):
-                lines.append("f " + " ".join(f"{k}/{k}/{k}" for k in t))
-    return "\n".join(lines) + "\n"
+    return "\n".join(lines + grid_faces(nu, nv)) + "\n"
 
 
 def quad_ply():
