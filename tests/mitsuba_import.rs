@@ -242,6 +242,11 @@ fn environment_and_thin_lens_agree_with_mitsuba() {
 }
 
 #[test]
+fn checkerboards_read_as_scalars_agree_with_mitsuba() {
+    agrees_with_mitsuba("checker-scalars", 256);
+}
+
+#[test]
 fn film_crop_windows_agree_with_mitsuba() {
     agrees_with_mitsuba("crop", 256);
 }

@@ -111,7 +111,9 @@ struct Importer<'a> {
     in_group: Option<String>,
     /// Texture, material and group names taken.
     names: HashSet<String>,
-    texture_names: HashMap<usize, String>,
+    /// By texture object and whether it is read as a scalar (a checkerboard's colours
+    /// swap there).
+    texture_names: HashMap<(usize, bool), String>,
     /// (BSDF object or none, emitter object or none) -> material name.
     material_names: HashMap<(Option<usize>, Option<usize>), String>,
     notes: Vec<String>,
@@ -339,7 +341,7 @@ impl<'a> Importer<'a> {
         match &p.value {
             Value::Float(v) => Ok(Some(float(*v))),
             Value::Integer(v) => Ok(Some(float(*v as f64))),
-            Value::Object(i) => self.texture(*i).map(|n| Some(T::String(n))),
+            Value::Object(i) => self.scalar_texture(*i).map(|n| Some(T::String(n))),
             Value::Spectrum(Spectrum::Uniform(v)) => Ok(Some(float(*v))),
             _ => err(
                 &p.pos,
@@ -866,9 +868,22 @@ impl<'a> Importer<'a> {
 
     // ---- textures --------------------------------------------------------------------
 
-    /// The texture object `i` as a `[textures]` entry (once), by its name.
+    /// The texture object `i` as a `[textures]` entry (once), by its name: read as a
+    /// colour (Mitsuba's `eval`).
     fn texture(&mut self, i: usize) -> Result<String> {
-        if let Some(n) = self.texture_names.get(&i) {
+        self.texture_read(i, false)
+    }
+
+    /// [`Self::texture`] read as a scalar (Mitsuba's `eval_1`: a principled BSDF's
+    /// scalars, a mask's opacity, a blend's weight).
+    fn scalar_texture(&mut self, i: usize) -> Result<String> {
+        self.texture_read(i, true)
+    }
+
+    fn texture_read(&mut self, i: usize, scalar: bool) -> Result<String> {
+        // only a checkerboard reads otherwise as a scalar
+        let scalar = scalar && self.obj(i).plugin == "checkerboard";
+        if let Some(n) = self.texture_names.get(&(i, scalar)) {
             return Ok(n.clone());
         }
         let o = self.obj(i);
@@ -919,6 +934,10 @@ impl<'a> Importer<'a> {
                     return err(&o.get("to_uv").unwrap().pos, "texture checkerboard: wgtrace's checker takes a to_uv that is a uniform scale by a multiple of 0.5 only");
                 };
                 let (even, odd) = if (2.0 * s) as i64 % 2 == 0 { (c1, c0) } else { (c0, c1) };
+                // Mitsuba's checkerboard read as a scalar (eval_1) gives color0 where the
+                // halves differ, the other cells than as a colour (eval): measured against
+                // Mitsuba 3.9.1, a principled metallic checker agrees only so
+                let (even, odd) = if scalar { (odd, even) } else { (even, odd) };
                 table([("type", text("checker")), ("even", even), ("odd", odd), ("scale", float(2.0 * s))])
             }
             "mesh_attribute" => {
@@ -934,7 +953,7 @@ impl<'a> Importer<'a> {
             }
         };
         let name = self.name(o, &format!("texture{}", self.textures.len() + 1));
-        self.texture_names.insert(i, name.clone());
+        self.texture_names.insert((i, scalar), name.clone());
         self.textures.push(Entry {
             name: name.clone(),
             table: t,
