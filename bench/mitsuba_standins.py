@@ -3,10 +3,12 @@ every scene file below FOLDER, each file it names (`<string name="filename">`, i
 a file it includes) that no folder Mitsuba would search holds is written, generated here,
 where Mitsuba looks first (the scene's latest `<path>` folder, else the scene's folder):
 
-- OBJ: a UV sphere of radius 1 (names with "sphere", and any other name), the rectangle
+- OBJ: a UV sphere of radius 1 (names with "sphere", and any other name; with "base", one
+  of radius 0.5 at y = -1.2, so that a scene's sphere and its base do not coincide), the rectangle
   [-1, 1]^2 at z = 0 facing +z ("rectangle", "background" the same, 10 times larger), a
   cube of side 1 ("cube"), a torus ("torus"); each with normals and uv;
-- ASCII PLY: the rectangle with normals and uv; `.serialized`: the rectangle (positions);
+- ASCII PLY: the rectangle with normals and uv; `.serialized`: 8 shapes (for any
+  `shape_index`), each the rectangle ("rectangle") or the sphere (positions);
 - PNG/JPG/BMP: a 64 x 64 pattern of colour gradients and checks (names with "normalmap": a
   wave normal map; with "mask": a soft-edged disk pattern in grey);
 - EXR/HDR: a 64 x 32 equirectangular sky, a gradient with a small bright sun.
@@ -35,14 +37,15 @@ from mitsuba_assets import serialized
 mi.set_variant("scalar_rgb")
 
 
-def sphere_obj():
+def sphere_obj(radius=1.0, centre=(0.0, 0.0, 0.0)):
     lines, rings, segs = [], 24, 48
     for i in range(rings + 1):
         th = math.pi * i / rings
         for j in range(segs + 1):
             ph = 2 * math.pi * j / segs
             x, y, z = math.sin(th) * math.cos(ph), math.sin(th) * math.sin(ph), math.cos(th)
-            lines += [f"v {x:.6f} {y:.6f} {z:.6f}", f"vn {x:.6f} {y:.6f} {z:.6f}", f"vt {j / segs:.6f} {1 - i / rings:.6f}"]
+            p = [radius * a + c for a, c in zip((x, y, z), centre)]
+            lines += [f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}", f"vn {x:.6f} {y:.6f} {z:.6f}", f"vt {j / segs:.6f} {1 - i / rings:.6f}"]
     return "\n".join(lines + grid_faces(rings, segs)) + "\n"
 
 
@@ -148,13 +151,21 @@ def write(path):
     os.makedirs(os.path.dirname(path), exist_ok=True)
     if ext == ".obj":
         text = (quad_obj(10.0) if "background" in name else quad_obj() if "rectangle" in name
-                else cube_obj() if "cube" in name else torus_obj() if "torus" in name else sphere_obj())
+                else cube_obj() if "cube" in name else torus_obj() if "torus" in name
+                # a "base" beside a sphere of the same scene: below it, not in its place
+                else sphere_obj(0.5, (0.0, -1.2, 0.0)) if "base" in name else sphere_obj())
         open(path, "w").write(text)
     elif ext == ".ply" and "attribute" not in name:
         open(path, "w").write(quad_ply())
     elif ext == ".serialized":
-        quad = ([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [(0, 1, 2), (0, 2, 3)])
-        open(path, "wb").write(serialized([quad]))
+        if "rectangle" in name:
+            mesh = ([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [(0, 1, 2), (0, 2, 3)])
+        else:
+            v = [tuple(map(float, l.split()[1:])) for l in sphere_obj().splitlines() if l.startswith("v ")]
+            f = [tuple(int(k.split("/")[0]) - 1 for k in l.split()[1:]) for l in sphere_obj().splitlines() if l.startswith("f ")]
+            mesh = (v, f)
+        # as many shapes as a file's shape_index may name, each the same mesh
+        open(path, "wb").write(serialized([mesh] * 8))
     elif ext in (".png", ".jpg", ".jpeg", ".bmp"):
         img = pattern(name)
         bmp = mi.Bitmap(img).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, True)

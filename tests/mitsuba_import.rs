@@ -608,3 +608,48 @@ fn spectrum_objects_constant_normal_maps_and_includes_read_as_mitsuba_reads_them
     std::fs::write(&path, scene("0.5, 0.5, 1.0")).unwrap();
     wgtrace::load_scene(&path, &Overrides::default()).unwrap();
 }
+
+/// Forms Mitsuba's own documentation scenes use, which Mitsuba renders: a perspective
+/// camera with a focus_distance (every projective camera reads it; only thinlens uses
+/// it), a shape's BSDF given by a named reference (`<ref name="bsdf" id=...>`), and an
+/// area emitter declared at the top with an id and referenced from a shape (before its
+/// declaration). An area emitter that no shape references is still refused.
+#[test]
+fn documentation_scene_forms_read_as_mitsuba_reads_them() {
+    let dir = common::tmp_dir("mitsuba-doc-forms");
+    let scene = |extra: &str| {
+        format!(
+            "<scene version=\"3.0.0\">\n\
+             <sensor type=\"perspective\"><float name=\"focus_distance\" value=\"6\"/></sensor>\n\
+             <bsdf type=\"diffuse\" id=\"grey\"/>\n\
+             <shape type=\"sphere\"><ref name=\"bsdf\" id=\"grey\"/><ref id=\"glow\"/></shape>\n\
+             <emitter type=\"area\" id=\"glow\"><rgb name=\"radiance\" value=\"2, 3, 4\"/></emitter>\n\
+             {extra}</scene>\n"
+        )
+    };
+    let path = dir.join("doc.xml");
+    std::fs::write(&path, scene("")).unwrap();
+    let out = dir.join("doc.toml");
+    let o = common::wgtrace(&[
+        "convert",
+        path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let toml = std::fs::read_to_string(&out).unwrap();
+    assert!(toml.contains("emission = [2.0, 3.0, 4.0]"), "{toml}");
+    assert!(!toml.contains("focus_distance"), "{toml}");
+    std::fs::write(
+        &path,
+        scene("<emitter type=\"area\"><rgb name=\"radiance\" value=\"1\"/></emitter>\n"),
+    )
+    .unwrap();
+    let e = wgtrace::load_scene(&path, &Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("doc.xml:6:1") && e.contains("belongs inside a shape"),
+        "{e}"
+    );
+}

@@ -251,7 +251,16 @@ impl<'a> Importer<'a> {
     /// Properties the mapping does not read: refused unless `ignorable`.
     fn check_known(&self, o: &Object, known: &[&str], ignorable: &[&str]) -> Result<()> {
         for p in &o.props {
-            let nested_ok = matches!(p.value, Value::Object(_)) && p.name.starts_with("_arg_");
+            // a nested object without a name; a shape's BSDF or emitter under any name (Mitsuba
+            // reads them by their kind)
+            let nested_ok = match p.value {
+                Value::Object(i) => {
+                    p.name.starts_with("_arg_")
+                        || o.tag == "shape"
+                            && matches!(self.obj(i).tag.as_str(), "bsdf" | "emitter")
+                }
+                _ => false,
+            };
             if !(nested_ok
                 || known.contains(&p.name.as_str())
                 || ignorable.contains(&p.name.as_str()))
@@ -591,7 +600,8 @@ impl<'a> Importer<'a> {
         if up.cross(dir).dot(left) < 0.0 {
             cam.insert("mirror".into(), T::Boolean(true));
         }
-        let known_projective = ["to_world", "near_clip", "far_clip"];
+        // Mitsuba's projective cameras all read focus_distance; only thinlens uses it
+        let known_projective = ["to_world", "near_clip", "far_clip", "focus_distance"];
         // rays start at the near clip plane, near_clip along the camera's z axis (its
         // length under to_world too, as Mitsuba's ray.o + to_world(d) near_clip / d.z)
         let near = self.float(o, "near_clip", 1e-2)?;
@@ -623,7 +633,7 @@ impl<'a> Importer<'a> {
                 let mut known = vec!["fov", "fov_axis", "focal_length"];
                 known.extend(known_projective);
                 if o.plugin == "thinlens" {
-                    known.extend(["aperture_radius", "focus_distance"]);
+                    known.push("aperture_radius");
                     let r = self.float(o, "aperture_radius", 0.03)?;
                     cam.insert("aperture".into(), float(2.0 * r));
                     let d = self.float(o, "focus_distance", 1e4)?;
@@ -1728,7 +1738,16 @@ impl<'a> Importer<'a> {
                     ]),
                 );
             }
-            "area" => return err(&o.pos, "emitter area: belongs inside a shape"),
+            "area" => {
+                // declared at the top with an id and referenced from a shape (which reads
+                // it as its own): nothing to do here
+                let referenced = self.tree.objects.iter().any(|s| {
+                    s.tag == "shape" && s.props.iter().any(|p| matches!(p.value, Value::Object(t) if t == i))
+                });
+                if !referenced {
+                    return err(&o.pos, "emitter area: belongs inside a shape");
+                }
+            }
             other => {
                 return err(
                     &o.pos,
