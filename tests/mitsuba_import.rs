@@ -285,6 +285,45 @@ fn a_mirrored_camera_shows_the_mirror_image() {
     assert!(share >= 0.9975, "{:.2}%: {worst}", share * 100.0);
 }
 
+/// A z-up scene: environment.xml with every to_world, the envmap's too, followed by a
+/// quarter turn about x (the environment's up is then +z, a turn wgtrace's environment
+/// cannot make about +y alone). The importer turns the whole scene back so the environment
+/// turns about +y: the image is environment.xml's, judged against its Mitsuba reference.
+/// Turning the envmap alone (not the scene) stays an image of another scene, and a to_world
+/// that shears is refused at the envmap.
+#[test]
+fn an_environment_turned_with_a_z_up_scene_renders_as_the_y_up_one() {
+    let dir = scenes("mitsuba-zup");
+    let text = std::fs::read_to_string(dir.join("environment.xml")).unwrap();
+    let quarter = "<rotate x=\"1\" angle=\"90\"/>";
+    let mut zup = text.replace("</transform>", &format!("{quarter}</transform>"));
+    // to_uv is a texture's, not a placement: as it was
+    zup = zup.replace(
+        &format!("<translate x=\"0.25\" y=\"0.1\"/>\n                {quarter}"),
+        "<translate x=\"0.25\" y=\"0.1\"/>\n                ",
+    );
+    zup = zup.replace(
+        "<float name=\"radius\" value=\"0.5\"/>",
+        &format!("<float name=\"radius\" value=\"0.5\"/><transform name=\"to_world\">{quarter}</transform>"),
+    );
+    assert_eq!(zup.matches(quarter).count(), 6, "{zup}");
+    std::fs::write(dir.join("zup.xml"), &zup).unwrap();
+    let (share, worst) = z_test_against(&dir, "zup", "environment", false, 256, common::render_cpu);
+    assert!(share >= 0.9975, "{:.2}%: {worst}", share * 100.0);
+    let sheared = zup.replace(
+        "<rotate y=\"1\" angle=\"60\"/>",
+        "<rotate y=\"1\" angle=\"60\"/><matrix value=\"1 0.3 0 0 0 1 0 0 0 0 1 0 0 0 0 1\"/>",
+    );
+    std::fs::write(dir.join("sheared.xml"), sheared).unwrap();
+    let e = wgtrace::load_scene(&dir.join("sheared.xml"), &Overrides::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("sheared.xml:") && e.contains("emitter envmap"),
+        "{e}"
+    );
+}
+
 #[test]
 fn convert_writes_toml_that_loads_and_names_its_origins() {
     let dir = scenes("mitsuba-convert");

@@ -71,6 +71,7 @@ pub fn import(tree: &SceneTree, base: &Path) -> Result<Imported, XmlError> {
         texture_names: HashMap::new(),
         material_names: HashMap::new(),
         notes: Vec::new(),
+        world: DMat4::IDENTITY,
     };
     im.scene()?;
     Ok(im.write())
@@ -95,6 +96,11 @@ struct Entry {
 
 struct Importer<'a> {
     tree: &'a SceneTree,
+    /// A rotation of the whole scene (shapes, camera, lights, environment) applied as it is
+    /// read: the inverse of an envmap's turn about another axis than +y, so that the
+    /// environment turns about +y only, as wgtrace's does; the image is the same (the
+    /// camera turns with the scene). The identity otherwise.
+    world: DMat4,
     base: PathBuf,
     render: Table,
     camera: Option<Entry>,
@@ -443,6 +449,7 @@ impl<'a> Importer<'a> {
 
     fn scene(&mut self) -> Result<()> {
         let root = self.obj(self.tree.root);
+        self.world = self.world_turn()?;
         let mut sensors = 0;
         let mut integrator = None;
         for p in &root.props {
@@ -457,7 +464,7 @@ impl<'a> Importer<'a> {
             };
             let o = self.obj(i);
             match o.tag.as_str() {
-                "shape" => self.shape(i, DMat4::IDENTITY, None)?,
+                "shape" => self.shape(i, self.world, None)?,
                 "emitter" => self.emitter(i)?,
                 "sensor" => {
                     sensors += 1;
@@ -483,6 +490,37 @@ impl<'a> Importer<'a> {
         }
         self.integrator(integrator)?;
         Ok(())
+    }
+
+    /// [`Importer::world`]: for an envmap whose to_world turns it about another axis than
+    /// +y (a rotation times a uniform scale, as a z-up scene's), the inverse of that
+    /// rotation; else the identity.
+    fn world_turn(&self) -> Result<DMat4> {
+        let root = self.obj(self.tree.root);
+        let envmap = root.props.iter().find_map(|p| match p.value {
+            Value::Object(i) if self.obj(i).tag == "emitter" && self.obj(i).plugin == "envmap" => {
+                Some(i)
+            }
+            _ => None,
+        });
+        let Some(e) = envmap else {
+            return Ok(DMat4::IDENTITY);
+        };
+        let m = self.transform(self.obj(e), "to_world")?;
+        if y_rotation(m).is_some() {
+            return Ok(DMat4::IDENTITY);
+        }
+        let l = glam::DMat3::from_mat4(m);
+        let r = l * (1.0 / l.y_axis.length());
+        let orthonormal = (r.transpose() * r - glam::DMat3::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .all(|v| v.abs() <= 1e-6);
+        if !orthonormal || r.determinant() <= 0.0 {
+            // not a turn: refused where the envmap is read
+            return Ok(DMat4::IDENTITY);
+        }
+        Ok(DMat4::from_mat3(r.transpose()))
     }
 
     fn integrator(&mut self, i: Option<usize>) -> Result<()> {
@@ -583,7 +621,7 @@ impl<'a> Importer<'a> {
             return err(&self.obj(m).pos, format!("medium: {MEDIA}"));
         }
         let aspect = width as f64 / height as f64;
-        let m = self.transform(o, "to_world")?;
+        let m = self.world * self.transform(o, "to_world")?;
         let origin = m.transform_point3(DVec3::ZERO);
         let dir = m.transform_vector3(DVec3::Z).normalize();
         let up = m.transform_vector3(DVec3::Y);
@@ -1617,7 +1655,7 @@ impl<'a> Importer<'a> {
 
     fn emitter(&mut self, i: usize) -> Result<()> {
         let o = self.obj(i);
-        let m = self.transform(o, "to_world")?;
+        let m = self.world * self.transform(o, "to_world")?;
         let at = |v: DVec3| m.transform_point3(v);
         let axis = || m.transform_vector3(DVec3::Z).normalize();
         let light = |s: &mut Self, t: Table| {
@@ -1640,7 +1678,7 @@ impl<'a> Importer<'a> {
                     self.check_known(o, &["filename", "scale", "to_world"], &["sampling_weight", "mis_compensation"])?;
                     let rotation = y_rotation(m).ok_or_else(|| XmlError {
                         pos: o.pos.clone(),
-                        message: "emitter envmap: wgtrace turns an environment about +y only; this to_world does more".into(),
+                        message: "emitter envmap: wgtrace turns an environment about +y (or the whole scene with it); this to_world is not a turn times a uniform scale".into(),
                     })?;
                     let path = self.file(o, "filename")?;
                     let name = self.name_str("envmap");
@@ -1685,7 +1723,7 @@ impl<'a> Importer<'a> {
             "point" => {
                 self.check_known(o, &["intensity", "position", "to_world"], &["sampling_weight"])?;
                 let position = match o.get("position") {
-                    Some(_) => self.point(o, "position", DVec3::ZERO)?,
+                    Some(_) => self.world.transform_point3(self.point(o, "position", DVec3::ZERO)?),
                     None => at(DVec3::ZERO),
                 };
                 let intensity = self.color_const(o, "intensity", 1.0, Use::Emission)?;
@@ -1715,7 +1753,7 @@ impl<'a> Importer<'a> {
             "directional" => {
                 self.check_known(o, &["irradiance", "direction", "to_world"], &["sampling_weight"])?;
                 let direction = match o.get("direction") {
-                    Some(_) => self.point(o, "direction", DVec3::Z)?.normalize(),
+                    Some(_) => self.world.transform_vector3(self.point(o, "direction", DVec3::Z)?).normalize(),
                     None => axis(),
                 };
                 let irradiance = self.color_const(o, "irradiance", 1.0, Use::Emission)?;
