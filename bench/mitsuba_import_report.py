@@ -91,6 +91,8 @@ for path in files:
             break
         w_runs.append(np.array(mi.Bitmap(out))[..., :3].astype(np.float64))
     if error:
+        for d in folders:
+            error = error.replace(os.path.dirname(d) + "/", "")
         refused.append((shown, error.replace(tmp, "").replace(root + "/", "")))
         print(shown, "refused:", error)
         continue
@@ -138,10 +140,10 @@ WHY.update({
 agree = sum("agrees" in r for r in rows)
 STANDINS = """
 
-The folders' meshes and images that could not be had were written by
-`bench/mitsuba_standins.py` (spheres, rectangles, cubes, tori, patterns, a sky): both
-renderers read the same stand-ins, so a row judges how each reads the scene file, not the
-image Mitsuba's own assets would make."""
+Where the folders lacked meshes or images, `bench/mitsuba_standins.py` wrote stand-ins
+(spheres, rectangles, cubes, tori, patterns, a sky): both renderers read the same ones, so
+a row judges how each reads the scene file, not the image Mitsuba's own assets would
+make."""
 source = ("every Mitsuba 3\nscene file of `bench/` and `tests/mitsuba/`" if not folders else
           "the scene files of\n" + ", ".join(f"`{os.path.basename(d)}/`" for d in folders) + " (named from there)")
 command = " ".join(["bench/mitsuba_import_report.py", str(runs), str(spp)] + [os.path.basename(d) for d in folders])

@@ -15,8 +15,8 @@ where Mitsuba looks first (the scene's latest `<path>` folder, else the scene's 
 
 Both renderers then read the same stand-ins, so the comparison still judges how each
 reads the scene file; the stand-ins written are listed, and a report made from these
-scenes says the assets are stand-ins. Serialized meshes, PLY files with named attributes,
-volumes and other kinds are left missing (the scene is refused by the renderer that needs
+scenes says the assets are stand-ins. PLY files with named attributes, volumes and other
+kinds are left missing (the scene is refused by the renderer that needs
 them, with its message).
 
 usage: python bench/mitsuba_standins.py FOLDER   (Mitsuba 3's Python package writes the
@@ -210,8 +210,8 @@ for scene in xmls:
     for name, by in refs(scene, set()):
         if os.path.isabs(name) or name.endswith(".xml"):
             continue
-        places = search + [os.path.dirname(by)]
-        if any(os.path.exists(os.path.join(d, name)) for d in places):
+        # where Mitsuba's resolver looks (not beside an included file)
+        if any(os.path.exists(os.path.join(d, name)) for d in search):
             continue
         target = os.path.normpath(os.path.join(search[0], name))
         if write(target):

@@ -2184,4 +2184,33 @@ fn crop_windows_render_that_part_of_the_film() {
     )
     .unwrap();
     assert_eq!((halved.width, halved.height), (11, 13));
+    // in its place: the same pixels of the halved film, [7, 3, 11, 13]
+    let half_film = common::scene_from_str(&format!(
+        "[render]\nwidth = 24\nheight = 20\n{}{body}",
+        cameras[0]
+    ));
+    let c = compare(
+        &render_gpu(&halved),
+        &window(&render_gpu(&half_film), [7, 3, 11, 13]),
+        4,
+    );
+    assert!(
+        c.failed_tiles.is_empty(),
+        "halved: {:?}",
+        c.failed_tiles.first()
+    );
+    // a crop at the film's edge stays on a smaller film
+    let edge = wgtrace::load_scene_str(
+        &format!(
+            "[render]\nwidth = 100\nheight = 40\ncrop = [99, 0, 1, 40]\n{}{body}",
+            cameras[0]
+        ),
+        std::path::Path::new("test.toml"),
+        &Overrides {
+            width: Some(10),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert_eq!((edge.width, edge.height), (1, 40));
 }

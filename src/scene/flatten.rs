@@ -956,7 +956,8 @@ fn camera_frame(file: &SceneFile, aspect: f32) -> CameraFrame {
 
 /// The camera of the rectangle `crop` (`[x, y, width, height]` in pixels from the top
 /// left) of a `film` (`[width, height]`) seen by `c`: the same rays for the same film
-/// positions, each pixel of the crop being that pixel of the film. The view rectangle
+/// positions, each pixel of the crop being that pixel of the film (but for where a
+/// near_clip plane starts them, below). The view rectangle
 /// shrinks to the crop's share and its centre moves to the crop's: a perspective camera
 /// looks through the crop's centre (forward times the focus distance becomes the vector
 /// to it, right and up stay the film's), an orthographic one moves its origin there.

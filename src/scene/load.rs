@@ -605,23 +605,25 @@ fn read_relative<T>(
 fn apply_overrides(file: &mut SceneFile, o: &Overrides) -> Vec<&'static str> {
     let r = &mut file.render;
     if let Some(c) = &mut r.crop {
-        // the crop window keeps its place on a film of another size
-        let scale = |v: u32, from: u32, to: Option<u32>| match to {
-            Some(to) if from > 0 => (v as u64 * to as u64 + from as u64 / 2) / from as u64,
-            _ => v as u64,
-        } as u32;
-        let (x1, y1) = (c[0].saturating_add(c[2]), c[1].saturating_add(c[3]));
-        let (x0, y0) = (
-            scale(c[0], r.width, o.width),
-            scale(c[1], r.height, o.height),
-        );
-        let (x1, y1) = (scale(x1, r.width, o.width), scale(y1, r.height, o.height));
-        *c = [
-            x0,
-            y0,
-            x1.saturating_sub(x0).max(1),
-            y1.saturating_sub(y0).max(1),
-        ];
+        // a crop window inside the file's film keeps its place on a film of another size
+        // (one outside it is left for validation to name)
+        let inside = |o: u32, n: u32, side: u32| o as u64 + n as u64 <= side as u64;
+        if inside(c[0], c[2], r.width) && inside(c[1], c[3], r.height) {
+            // [start, size] of the span [o, o + n) of `from` pixels on `to`: at least one
+            // pixel, inside the new side
+            let span = |o: u32, n: u32, from: u32, to: Option<u32>| match to {
+                Some(to) if from > 0 && to > 0 => {
+                    let at =
+                        |v: u32| ((v as u64 * to as u64 + from as u64 / 2) / from as u64) as u32;
+                    let start = at(o).min(to - 1);
+                    (start, at(o + n).saturating_sub(start).clamp(1, to - start))
+                }
+                _ => (o, n),
+            };
+            let (x, w) = span(c[0], c[2], r.width, o.width);
+            let (y, h) = span(c[1], c[3], r.height, o.height);
+            *c = [x, y, w, h];
+        }
     }
     r.width = o.width.unwrap_or(r.width);
     r.height = o.height.unwrap_or(r.height);

@@ -313,7 +313,7 @@ impl<'a> Importer<'a> {
         let o = self.obj(i);
         match o.plugin.as_str() {
             "srgb" => {
-                self.check_known(o, &["color"], &[])?;
+                self.check_known(o, &["color"], &["unbounded"])?;
                 match o.get("color").map(|p| &p.value) {
                     Some(Value::Rgb(c)) => Ok(c.to_array()),
                     Some(Value::Float(v)) => Ok([*v; 3]),
@@ -356,6 +356,11 @@ impl<'a> Importer<'a> {
         match &p.value {
             Value::Float(v) => Ok(Some(float(*v))),
             Value::Integer(v) => Ok(Some(float(*v as f64))),
+            Value::Object(i) if self.obj(*i).tag == "spectrum" => {
+                // read as a scalar: its luminance (a uniform one's value)
+                let c = self.spectrum_object(*i)?;
+                Ok(Some(float(0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])))
+            }
             Value::Object(i) => self.scalar_texture(*i).map(|n| Some(T::String(n))),
             Value::Spectrum(Spectrum::Uniform(v)) => Ok(Some(float(*v))),
             _ => err(
@@ -826,12 +831,10 @@ impl<'a> Importer<'a> {
         );
         if crop != (0, 0, width, height) {
             let c = [crop.0, crop.1, crop.2, crop.3];
-            if c.iter().any(|&v| v < 0)
-                || c[2] < 1
-                || c[3] < 1
-                || c[0] + c[2] > width
-                || c[1] + c[3] > height
-            {
+            let fits = |o: i64, n: i64, side: i64| {
+                o >= 0 && n >= 1 && o.checked_add(n).is_some_and(|e| e <= side)
+            };
+            if !fits(c[0], c[2], width) || !fits(c[1], c[3], height) {
                 return err(
                     &f.pos,
                     format!(
@@ -1347,7 +1350,7 @@ impl<'a> Importer<'a> {
                     // a constant map: (0.5, 0.5, 1) leaves every normal as it is
                     T::Array(c) if c.iter().zip([0.5, 0.5, 1.0]).all(|(v, e)| v.as_float().is_some_and(|v| (v - e).abs() < 1e-6)) => None,
                     c => {
-                        let name = format!("normalmap{}", self.textures.len() + 1);
+                        let name = self.name_str("normalmap");
                         self.textures.push(Entry {
                             name: name.clone(),
                             table: table([("type", text("constant")), ("color", c)]),

@@ -102,7 +102,8 @@ impl Object {
     }
 }
 
-/// A whole file: its objects (the root's index is `root`) and the folders `<path>` named.
+/// A whole file: its objects (the root's index is `root`) and the folders its files are
+/// looked for in (the `<path>` folders, latest first, then the scene file's).
 #[derive(Debug, Clone)]
 pub struct SceneTree {
     pub objects: Vec<Object>,
@@ -111,8 +112,7 @@ pub struct SceneTree {
 }
 
 impl SceneTree {
-    /// A file named by a property at `at`, found as Mitsuba finds it: absolute, else beside
-    /// the file that names it, else in the `<path>` folders.
+    /// A file named by a property at `at`, found as Mitsuba finds it ([`find_in`]).
     pub fn find_file(&self, at: &Pos, name: &str) -> PathBuf {
         find_in(&self.search_paths, &at.file, name)
     }
@@ -832,8 +832,7 @@ impl Parser {
         result
     }
 
-    /// A file named in the scene: absolute, else beside the file naming it, else in the
-    /// `<path>` folders (the first that has it; beside the file when none does).
+    /// A file named in the scene ([`find_in`]).
     fn find(&self, file: &Path, name: &str) -> PathBuf {
         find_in(&self.search_paths, file, name)
     }
