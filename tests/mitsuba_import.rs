@@ -580,6 +580,20 @@ fn near_clip_is_the_cameras_and_far_clip_a_note() {
     assert!(e.contains("clip.xml:2:1") && e.contains("near_clip"), "{e}");
 }
 
+/// `wgtrace convert` of the scene file at `path`, as a user runs it: the TOML written
+/// beside it (replacing one there).
+fn converted(path: &Path) -> String {
+    let out = path.with_extension("toml");
+    let o = common::wgtrace(&[
+        "convert",
+        path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::read_to_string(&out).unwrap()
+}
+
 /// What Mitsuba's own test scenes write: a colour as a `<spectrum type="srgb">` or
 /// `type="uniform"` object (read as the same constant), a normalmap BSDF with a constant
 /// map (the identity (0.5, 0.5, 1) leaves the nested BSDF alone, another colour becomes a
@@ -619,15 +633,7 @@ fn spectrum_objects_constant_normal_maps_and_includes_read_as_mitsuba_reads_them
     let path = dir.join("scene.xml");
     let toml = |map: &str| {
         std::fs::write(&path, scene(map)).unwrap();
-        let out = dir.join("scene.toml");
-        let o = common::wgtrace(&[
-            "convert",
-            path.to_str().unwrap(),
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-        std::fs::read_to_string(&out).unwrap()
+        converted(&path)
     };
     let identity = toml("0.5, 0.5, 1.0");
     assert!(identity.contains("albedo = [0.2, 0.4, 0.6]"), "{identity}");
@@ -664,15 +670,7 @@ fn documentation_scene_forms_read_as_mitsuba_reads_them() {
     };
     let path = dir.join("doc.xml");
     std::fs::write(&path, scene("")).unwrap();
-    let out = dir.join("doc.toml");
-    let o = common::wgtrace(&[
-        "convert",
-        path.to_str().unwrap(),
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let toml = std::fs::read_to_string(&out).unwrap();
+    let toml = converted(&path);
     assert!(toml.contains("emission = [2.0, 3.0, 4.0]"), "{toml}");
     assert!(!toml.contains("focus_distance"), "{toml}");
     std::fs::write(
