@@ -13,42 +13,42 @@ use std::path::{Path, PathBuf};
 use wgtrace::scene::mesh::write_serialized;
 use wgtrace::Overrides;
 
-/// The environment image of environment.xml, as bench/mitsuba_refs.py writes it.
-fn sky() -> Vec<f32> {
-    let (w, h) = (128, 64);
+/// A w x h RGB image whose texel at (u, v) (its centre, from the top left, in [0, 1]) is
+/// `f(u, v)`.
+fn image(w: usize, h: usize, f: impl Fn(f64, f64) -> [f64; 3]) -> Vec<f32> {
     let mut img = Vec::with_capacity(w * h * 3);
     for y in 0..h {
         for x in 0..w {
-            let (u, v) = ((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64);
-            let spot = (-((u - 0.3).powi(2) + (v - 0.3).powi(2)) / 0.005).exp();
-            img.extend([
-                (0.1 + 0.5 * (1.0 - v) + 0.35 * spot) as f32,
-                (0.1 + 0.45 * (1.0 - v) + 0.3 * spot) as f32,
-                (0.15 + 0.6 * (1.0 - v) + 0.2 * spot) as f32,
-            ]);
+            let rgb = f((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64);
+            img.extend(rgb.map(|c| c as f32));
         }
     }
     img
+}
+
+/// The environment image of environment.xml, as bench/mitsuba_assets.py writes it: 128 x
+/// 64, a vertical gradient and a bright spot.
+fn sky() -> Vec<f32> {
+    image(128, 64, |u, v| {
+        let spot = (-((u - 0.3).powi(2) + (v - 0.3).powi(2)) / 0.005).exp();
+        [
+            0.1 + 0.5 * (1.0 - v) + 0.35 * spot,
+            0.1 + 0.45 * (1.0 - v) + 0.3 * spot,
+            0.15 + 0.6 * (1.0 - v) + 0.2 * spot,
+        ]
+    })
 }
 
 /// The normal map of normalmap.xml, as bench/mitsuba_assets.py writes it: the normals of a
 /// height 0.015 sin(2 pi 3 u) sin(2 pi 2 v) as colours (n + 1) / 2.
 fn waves() -> Vec<f32> {
     use std::f64::consts::PI;
-    let (w, h) = (64, 64);
-    let mut img = Vec::with_capacity(w * h * 3);
-    for y in 0..h {
-        for x in 0..w {
-            let (u, v) = ((x as f64 + 0.5) / w as f64, (y as f64 + 0.5) / h as f64);
-            let du =
-                0.015 * 2.0 * PI * 3.0 * (2.0 * PI * 3.0 * u).cos() * (2.0 * PI * 2.0 * v).sin();
-            let dv =
-                0.015 * 2.0 * PI * 2.0 * (2.0 * PI * 3.0 * u).sin() * (2.0 * PI * 2.0 * v).cos();
-            let len = (du * du + dv * dv + 1.0).sqrt();
-            img.extend([-du / len, -dv / len, 1.0 / len].map(|c| ((c + 1.0) / 2.0) as f32));
-        }
-    }
-    img
+    image(64, 64, |u, v| {
+        let du = 0.015 * 2.0 * PI * 3.0 * (2.0 * PI * 3.0 * u).cos() * (2.0 * PI * 2.0 * v).sin();
+        let dv = 0.015 * 2.0 * PI * 2.0 * (2.0 * PI * 3.0 * u).sin() * (2.0 * PI * 2.0 * v).cos();
+        let len = (du * du + dv * dv + 1.0).sqrt();
+        [-du / len, -dv / len, 1.0 / len].map(|c| (c + 1.0) / 2.0)
+    })
 }
 
 /// The .serialized file of shapes.xml: a decoy triangle, then a square pyramid.
