@@ -182,17 +182,17 @@ pub fn check(renderer: &mut GpuRenderer, scene: &FlatScene) -> Result<Verdict, G
 
 /// The GPU's entries for the pixels of `tiles` (tile by tile, row by row) after the
 /// first sample, rendered as the render renders it: a pass over the whole image, band by
-/// band, in the render's own dispatches, read back and then cleared. Rendering only the
-/// tiles, each its own small dispatch, missed the fault it is here for: Mesa 22.3.6's
-/// lavapipe on an AVX-512 CPU rendered 400 of 400 tile pixels of gltf-spheres right and
-/// 55% of the same image's pixels wrong in the render's dispatches.
+/// band, in the render's own dispatches, which the renderer keeps as the render's first
+/// sample ([`GpuRenderer::render_first_sample`]), so the check costs the render only the
+/// readback and the CPU's pixels. Rendering only the tiles, each its own small dispatch,
+/// missed the fault it is here for: Mesa 22.3.6's lavapipe on an AVX-512 CPU rendered
+/// 400 of 400 tile pixels of gltf-spheres right and 55% of the same image's pixels wrong
+/// in the render's dispatches.
 fn first_sample(
     renderer: &mut GpuRenderer,
     tiles: &[Band],
 ) -> Result<Vec<[[f32; 4]; 2]>, GpuError> {
-    renderer.render_pass(0)?;
-    let sums = renderer.accumulation()?;
-    renderer.set_accumulation(&vec![[0.0; 4]; sums.len()])?;
+    let sums = renderer.render_first_sample()?;
     let (width, height) = renderer.size();
     let entries = sums.len() / (width as usize * height as usize);
     Ok(tile_pixels(tiles)

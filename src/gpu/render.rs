@@ -44,6 +44,9 @@ pub struct GpuRenderer {
     /// A note for the user about how this renderer came to be (a spot check that fell
     /// back to safer record placements).
     note: Option<String>,
+    /// The sums hold sample 0 alone ([`GpuRenderer::render_first_sample`], the spot
+    /// check's pass): the next [`GpuRenderer::render_samples`] from 0 starts at 1.
+    first_sample_kept: bool,
 }
 
 /// A band of whole rows with an accumulation buffer of its own, so no buffer exceeds a
@@ -208,6 +211,7 @@ impl GpuRenderer {
                 count: 0,
             },
             note: None,
+            first_sample_kept: false,
         })
     }
 
@@ -278,12 +282,48 @@ impl GpuRenderer {
         self.render_samples(sample_index..sample_index + 1)
     }
 
+    /// Clears the sums and renders sample 0 of every pixel into them, in the dispatches a
+    /// render's first sample takes, and returns them (`entries` `[f32; 4]` per pixel,
+    /// row-major; what the spot check compares with the CPU reference). The sums keep it:
+    /// a later [`GpuRenderer::render_samples`] from 0 starts at 1 (bit for bit the sums of
+    /// a render without it, as each pixel adds its samples in index order), one from
+    /// elsewhere clears them first.
+    pub fn render_first_sample(&mut self) -> Result<Vec<[f32; 4]>, GpuError> {
+        self.clear()?;
+        self.render_samples(0..1)?;
+        self.first_sample_kept = true;
+        self.accumulation()
+    }
+
+    /// Zeroes the sums.
+    fn clear(&mut self) -> Result<(), GpuError> {
+        let mut encoder = self
+            .ctx
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+        for band in &self.bands {
+            encoder.clear_buffer(&band.accum, 0, None);
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        self.first_sample_kept = false;
+        self.ctx.wait()
+    }
+
     /// Adds the samples with indices `samples` to every pixel, band by band, a dispatch
     /// per group of samples ([`group_parts`]), in submissions sized by the time the
     /// earlier ones took: several groups of a band in one submission when it is quick, a
     /// few of its rows per submission when it is slow. Each pixel adds its samples in
     /// index order, so the sums do not depend on how the work was split.
     pub fn render_samples(&mut self, samples: Range<u32>) -> Result<(), GpuError> {
+        let mut samples = samples;
+        if self.first_sample_kept {
+            if samples.start == 0 {
+                samples.start = 1;
+                self.first_sample_kept = false;
+            } else {
+                self.clear()?;
+            }
+        }
         let parts = group_parts(samples, self.plan.sample_group);
         for b in 0..self.bands.len() {
             let band = self.bands[b].band;
@@ -410,6 +450,7 @@ impl GpuRenderer {
     /// Replaces the accumulation buffers' sums (a resumed render): `entries` `[f32; 4]`
     /// per pixel of the image, row-major.
     pub fn set_accumulation(&mut self, data: &[[f32; 4]]) -> Result<(), GpuError> {
+        self.first_sample_kept = false;
         let mut at = 0;
         for band in &self.bands {
             let n = self.entries() * band.band.width as usize * band.band.height as usize;
