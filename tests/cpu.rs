@@ -396,6 +396,12 @@ material = "m"
             "bad.toml:7:1: render.crop: [x, y, width, height] = [2, 0, 7, 8] must be a rectangle of at least one pixel inside the 8 x 8 film",
         ),
         (
+            "filter steps",
+            "height = 8",
+            "height = 8\nfilter = \"tent\"\nfilter_steps = 0",
+            "bad.toml:8:1: render.filter_steps: must be in [1, 256], got 0",
+        ),
+        (
             "roughness",
             "roughness = 0.3",
             "roughness = 1.5",

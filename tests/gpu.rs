@@ -1432,14 +1432,18 @@ fn gpu_matches_cpu_with_every_pixel_filter() {
 /// sample at i + 0.5 + offset lands past the edge, 1 - F(7.75 - i) for the filter's CDF F
 /// (integrated in f64 here): exactly 0 and 1 outside the filter's radius, and within
 /// 5 standard errors of a Bernoulli mean over the column's 4 x 256 samples inside it.
+/// The stepped filters (`filter_steps`: Mitsuba's table of 31 steps, and a tent of 3
+/// steps, 1, 2/3 and 1/3, far from the tent itself) render their step functions' CDFs.
 #[test]
 fn a_step_edge_renders_each_pixel_filters_cdf() {
-    for (filter, extra, r, sd) in [
-        ("box", "", 0.5f64, 0.0f64),
-        ("tent", "", 1.0, 0.0),
-        ("tent", "filter_radius = 2", 2.0, 0.0),
-        ("gaussian", "", 2.0, 0.5),
-        ("gaussian", "filter_radius = 1.5", 1.5, 0.5),
+    for (filter, extra, r, sd, steps) in [
+        ("box", "", 0.5f64, 0.0f64, 0u32),
+        ("tent", "", 1.0, 0.0, 0),
+        ("tent", "filter_radius = 2", 2.0, 0.0, 0),
+        ("gaussian", "", 2.0, 0.5, 0),
+        ("gaussian", "filter_radius = 1.5", 1.5, 0.5, 0),
+        ("gaussian", "filter_steps = 31", 2.0, 0.5, 31),
+        ("tent", "filter_radius = 2\nfilter_steps = 3", 2.0, 0.0, 3),
     ] {
         let src = format!(
             r#"
@@ -1467,12 +1471,18 @@ material = "light"
 "#
         );
         let scene = scene_from_str(&src);
+        // a stepped filter keeps its value at each step's inner end
+        let step = |x: f64| match steps {
+            0 => x,
+            n => (x.abs() * n as f64 / r).floor() * r / n as f64,
+        };
         let profile = |x: f64| match filter {
+            _ if x.abs() >= r && steps != 0 => 0.0,
             "box" => f64::from(x.abs() <= 0.5),
-            "tent" => (1.0 - x.abs() / r).max(0.0),
+            "tent" => (1.0 - step(x).abs() / r).max(0.0),
             _ => {
                 let g = |t: f64| (-t * t / (2.0 * sd * sd)).exp();
-                (g(x) - g(r)).max(0.0)
+                (g(step(x)) - g(r)).max(0.0)
             }
         };
         // the CDF by the midpoint rule on 20,000 steps

@@ -686,3 +686,43 @@ fn documentation_scene_forms_read_as_mitsuba_reads_them() {
         "{e}"
     );
 }
+
+/// Mitsuba's film weighs its samples by a table of its filter's values, 31 steps over the
+/// radius: a file's tent and Gaussian (the default) become `filter_steps = 31`, the box
+/// (which a table leaves as it is) none; the loaded scene hands the steps to both backends.
+#[test]
+fn mitsuba_filters_are_stepped_as_its_film_tabulates_them() {
+    let dir = common::tmp_dir("mitsuba-filter-steps");
+    for (rfilter, kind, steps) in [
+        ("", "gaussian", 31),
+        (
+            "<rfilter type=\"gaussian\"><float name=\"stddev\" value=\"0.25\"/></rfilter>",
+            "gaussian",
+            31,
+        ),
+        ("<rfilter type=\"tent\"/>", "tent", 31),
+        ("<rfilter type=\"box\"/>", "box", 0),
+    ] {
+        let path = dir.join(format!("{kind}-{steps}.xml"));
+        std::fs::write(
+            &path,
+            format!(
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\">\n\
+                 <film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/>\
+                 <integer name=\"height\" value=\"8\"/>{rfilter}</film>\n</sensor>\n\
+                 <shape type=\"sphere\"/>\n</scene>\n"
+            ),
+        )
+        .unwrap();
+        let toml = converted(&path);
+        assert!(toml.contains(&format!("filter = \"{kind}\"")), "{toml}");
+        assert_eq!(
+            toml.contains("filter_steps = 31"),
+            steps == 31,
+            "{rfilter}: {toml}"
+        );
+        let scene = wgtrace::load_scene(&path, &Overrides::default()).unwrap();
+        assert_eq!(scene.filter.steps, steps, "{rfilter}");
+        assert_eq!(scene.params(0, scene.full_band()).filter_steps, steps);
+    }
+}

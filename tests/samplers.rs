@@ -178,6 +178,7 @@ fn filters_kept_on_the_image_sample_the_restricted_profile() {
         radius: 1.0,
         stddev: 0.0,
         inside: true,
+        steps: 0,
     }
     .shape();
     let edge = offsets(&p, 0, 8);
@@ -191,6 +192,7 @@ fn filters_kept_on_the_image_sample_the_restricted_profile() {
         radius: 2.0,
         stddev: 0.5,
         inside: true,
+        steps: 0,
     }
     .shape();
     let last = offsets(&p, 3, 4);
@@ -246,6 +248,7 @@ fn pixel_filters_sample_their_profiles_by_the_inverse_cdf() {
             radius,
             stddev,
             inside: false,
+            steps: 0,
         };
         let s = scene(1);
         let mut p = params(&s);
@@ -293,4 +296,89 @@ fn pixel_filters_sample_their_profiles_by_the_inverse_cdf() {
             "{kind:?} radius {radius} stddev {stddev}: F(offset) is {worst} from u"
         );
     }
+}
+
+/// The stepped filters (`filter_steps`, Mitsuba's film's table of 31 steps) are sampled
+/// by their own inverse CDF: the profile is the filter's value at each step's inner end,
+/// k r / n for |x| in [k r / n, (k + 1) r / n), integrated exactly in f64 (a sum of
+/// rectangles); for u across [0, 1), F(offset) = u to 1e-5. Their CDF (which keeps
+/// samples on the image) is that F too, and a pixel at the image's last column draws no
+/// offset past its edge. The last step of Mitsuba's Gaussian holds 2.06 times the share
+/// of the samples that the exact Gaussian puts in the last 1/31 of its radius: the
+/// difference the table makes.
+#[test]
+fn stepped_filters_sample_their_steps_by_the_inverse_cdf() {
+    use wgtrace::cpu::samplers::{filter_cdf, filter_offset, filter_offset_on_image};
+    use wgtrace::scene::format::{FilterKind, PixelFilter};
+    use wgtrace::scene::records::{FILTER_GAUSSIAN, FILTER_TENT};
+    for (kind, tag, radius, stddev, steps) in [
+        (FilterKind::Tent, FILTER_TENT, 1.0f32, 0.0f32, 31u32),
+        (FilterKind::Gaussian, FILTER_GAUSSIAN, 2.0, 0.5, 31),
+        (FilterKind::Gaussian, FILTER_GAUSSIAN, 1.5, 0.5, 4),
+    ] {
+        let filter = PixelFilter {
+            kind,
+            radius,
+            stddev,
+            inside: false,
+            steps,
+        };
+        let s = scene(1);
+        let mut p = params(&s);
+        p.pixel_filter = tag;
+        p.filter_shape = filter.shape();
+        p.filter_steps = steps;
+        let (r, sd, n) = (radius as f64, stddev as f64, steps as usize);
+        let h = r / n as f64;
+        let value = |k: usize| {
+            let x = k as f64 * h;
+            match kind {
+                FilterKind::Tent => 1.0 - x / r,
+                _ => (-x * x / (2.0 * sd * sd)).exp() - (-r * r / (2.0 * sd * sd)).exp(),
+            }
+        };
+        // the stepped profile's integral from 0 to a in [0, r]
+        let half = |a: f64| {
+            (0..n)
+                .map(|k| value(k) * (a - k as f64 * h).clamp(0.0, h))
+                .sum::<f64>()
+        };
+        let cdf = |x: f64| 0.5 + x.signum() * 0.5 * half(x.abs().min(r)) / half(r);
+        let mut worst = 0.0f64;
+        for i in 0..4096 {
+            let u = (i as f32 + 0.5) / 4096.0;
+            let x = filter_offset(&p, u) as f64;
+            assert!(
+                x.abs() <= r,
+                "{kind:?} {steps}: offset {x} outside the radius"
+            );
+            worst = worst.max((cdf(x) - u as f64).abs());
+            let at = (i as f64 / 4096.0 - 0.5) * 2.0 * r;
+            worst = worst.max((filter_cdf(&p, at as f32) as f64 - cdf(at)).abs());
+        }
+        assert!(
+            worst < 1e-5,
+            "{kind:?} steps {steps}: F(offset) is {worst} from u"
+        );
+        p.filter_shape[3] = 1.0;
+        let last = (0..4096)
+            .map(|i| filter_offset_on_image(&p, (i as f32 + 0.5) / 4096.0, 7, 8))
+            .fold(f32::MIN, f32::max);
+        assert!(
+            last <= 0.5,
+            "{kind:?} {steps}: an offset {last} past the image"
+        );
+    }
+    // Mitsuba's Gaussian: the last step's share against the exact Gaussian's there
+    let g = |x: f64| (-2.0 * x * x).exp() - (-8.0f64).exp();
+    let h = 2.0 / 31.0;
+    let stepped = g(30.0 * h) * h / (0..31).map(|k| g(k as f64 * h) * h).sum::<f64>();
+    let m = 10_000;
+    let exact = (0..m)
+        .map(|i| g(30.0 * h + (i as f64 + 0.5) * h / m as f64) * h / m as f64)
+        .sum::<f64>()
+        / (0..m * 31)
+            .map(|i| g((i as f64 + 0.5) * h / m as f64) * h / m as f64)
+            .sum::<f64>();
+    assert!((stepped / exact - 2.06).abs() < 0.01, "{}", stepped / exact);
 }

@@ -137,9 +137,14 @@ fn pixel_position(pixel: u32, sample: u32) -> vec2<f32> {
 // every sample weighs 1 and the pixel stays the mean of its samples. The filters are
 // separable (Mitsuba 3's and pbrt-v4's). Tent of radius r, 1 - |x| / r: inverted in
 // closed form. Gaussian: g(x) = exp(-x^2 / (2 s^2)) less g(r), on [-r, r]
-// (gaussian_filter_offset).
+// (gaussian_filter_offset). Either as a step function (filter_steps): by walking its
+// steps (stepped_filter_offset).
 fn filter_offset(u: f32) -> f32 {
     let r = params.filter_shape.x;
+    if (params.filter_steps != 0u) {
+        let x = stepped_filter_offset(abs(2.0 * u - 1.0));
+        return select(-x, x, u >= 0.5);
+    }
     if (params.pixel_filter == FILTER_TENT) {
         return select(r * (1.0 - sqrt(2.0 - 2.0 * u)), r * (sqrt(2.0 * u) - 1.0), u < 0.5);
     }
@@ -165,6 +170,9 @@ fn filter_offset_on_image(u: f32, i: u32, n: u32) -> f32 {
 // from the integral of g - g(r) from 0, by symmetry.
 fn filter_cdf(x: f32) -> f32 {
     let r = params.filter_shape.x;
+    if (params.filter_steps != 0u) {
+        return 0.5 + sign(x) * 0.5 * stepped_filter_integral(min(abs(x), r)) / stepped_filter_integral(r);
+    }
     let t = clamp(x / r, -1.0, 1.0);
     if (params.pixel_filter == FILTER_TENT) {
         return select(1.0 - 0.5 * (1.0 - t) * (1.0 - t), 0.5 * (1.0 + t) * (1.0 + t), t < 0.0);
@@ -204,5 +212,48 @@ fn gaussian_filter_offset(u: f32) -> f32 {
         x = select(0.5 * (lo + hi), next, next >= lo && next <= hi);
     }
     return select(-x, x, u >= 0.5);
+}
+
+// The filter's profile at x in [0, r): the tent's 1 - x / r, the Gaussian's g(x) - g(r).
+fn filter_profile(x: f32) -> f32 {
+    if (params.pixel_filter == FILTER_TENT) {
+        return 1.0 - x / params.filter_shape.x;
+    }
+    let s = params.filter_shape.y;
+    return exp(-x * x / (2.0 * s * s)) - params.filter_shape.z;
+}
+
+// The stepped filter (filter_steps = n, Mitsuba 3's film's table): step k, |x| in
+// [k h, (k + 1) h) with h = r / n, keeps the profile's value at k h. Its integral from 0
+// to x in [0, r].
+fn stepped_filter_integral(x: f32) -> f32 {
+    let h = params.filter_shape.x / f32(params.filter_steps);
+    var sum = 0.0;
+    for (var k = 0u; k < params.filter_steps; k++) {
+        let lo = f32(k) * h;
+        sum += filter_profile(lo) * clamp(x - lo, 0.0, h);
+    }
+    return sum;
+}
+
+// The x in [0, r] where the stepped filter's integral from 0 is v times its integral up
+// to r: the step it falls in, found by walking the steps, then linear within it.
+fn stepped_filter_offset(v: f32) -> f32 {
+    let r = params.filter_shape.x;
+    let h = r / f32(params.filter_steps);
+    let goal = v * stepped_filter_integral(r);
+    var below = 0.0;
+    var x = r;
+    var found = false;
+    for (var k = 0u; k < params.filter_steps; k++) {
+        let lo = f32(k) * h;
+        let value = filter_profile(lo);
+        if (!found && below + value * h >= goal) {
+            x = lo + (goal - below) / value;
+            found = true;
+        }
+        below += value * h;
+    }
+    return min(x, r);
 }
 #endif

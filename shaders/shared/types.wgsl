@@ -179,7 +179,8 @@ struct Params {
     hide_emitters: u32,
     // camera rays start this far in front of the camera (along cam_forward); 0: none
     near_clip: f32,
-    pad1: u32,
+    // the tent or Gaussian as a step function of this many steps over [0, radius]; 0: itself
+    filter_steps: u32,
     pad2: u32,
     // the filter's radius (pixels), a Gaussian's standard deviation, its value at the
     // radius (subtracted), and 1 when samples stay on the image

@@ -132,6 +132,11 @@ pub fn filter_offset_on_image(p: &Params, u: f32, i: u32, n: u32) -> f32 {
 #[allow(clippy::excessive_precision)]
 pub fn filter_cdf(p: &Params, x: f32) -> f32 {
     let r = p.filter_shape[0];
+    if p.filter_steps != 0 {
+        return 0.5
+            + wgsl_sign(x) * 0.5 * stepped_filter_integral(p, x.abs().min(r))
+                / stepped_filter_integral(p, r);
+    }
     let t = (x / r).clamp(-1.0, 1.0);
     if p.pixel_filter == FILTER_TENT {
         return if t < 0.0 {
@@ -165,6 +170,10 @@ fn wgsl_sign(x: f32) -> f32 {
 /// [`gaussian_filter_offset`]).
 pub fn filter_offset(p: &Params, u: f32) -> f32 {
     let r = p.filter_shape[0];
+    if p.filter_steps != 0 {
+        let x = stepped_filter_offset(p, (2.0 * u - 1.0).abs());
+        return if u >= 0.5 { x } else { -x };
+    }
     if p.pixel_filter == FILTER_TENT {
         return if u < 0.5 {
             r * ((2.0 * u).sqrt() - 1.0)
@@ -207,4 +216,44 @@ pub fn gaussian_filter_offset(p: &Params, u: f32) -> f32 {
     } else {
         -x
     }
+}
+
+/// The filter's profile at x in [0, r) (samplers.wgsl's `filter_profile`).
+pub fn filter_profile(p: &Params, x: f32) -> f32 {
+    if p.pixel_filter == FILTER_TENT {
+        return 1.0 - x / p.filter_shape[0];
+    }
+    let s = p.filter_shape[1];
+    (-x * x / (2.0 * s * s)).exp() - p.filter_shape[2]
+}
+
+/// The stepped filter's integral from 0 to x in [0, r] (samplers.wgsl's
+/// `stepped_filter_integral`).
+pub fn stepped_filter_integral(p: &Params, x: f32) -> f32 {
+    let h = p.filter_shape[0] / p.filter_steps as f32;
+    let mut sum = 0.0;
+    for k in 0..p.filter_steps {
+        let lo = k as f32 * h;
+        sum += filter_profile(p, lo) * (x - lo).clamp(0.0, h);
+    }
+    sum
+}
+
+/// The x in [0, r] where the stepped filter's integral from 0 is v times its whole
+/// (samplers.wgsl's `stepped_filter_offset`).
+pub fn stepped_filter_offset(p: &Params, v: f32) -> f32 {
+    let r = p.filter_shape[0];
+    let h = r / p.filter_steps as f32;
+    let goal = v * stepped_filter_integral(p, r);
+    let (mut below, mut x, mut found) = (0.0, r, false);
+    for k in 0..p.filter_steps {
+        let lo = k as f32 * h;
+        let value = filter_profile(p, lo);
+        if !found && below + value * h >= goal {
+            x = lo + (goal - below) / value;
+            found = true;
+        }
+        below += value * h;
+    }
+    x.min(r)
 }

@@ -181,6 +181,7 @@ impl FlatScene {
             hide_emitters: self.hide_emitters as u32,
             near_clip: c.near_clip,
             filter_shape: self.filter.shape(),
+            filter_steps: self.filter.steps,
             ..Default::default()
         }
     }

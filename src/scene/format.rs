@@ -99,6 +99,10 @@ pub struct RenderDesc {
     pub filter_radius: Option<f32>,
     /// The Gaussian's standard deviation in pixels (default 0.5, Mitsuba's and pbrt's).
     pub filter_stddev: Option<f32>,
+    /// The tent or Gaussian as a step function of this many steps over [0, radius], each
+    /// step the filter's value at its inner end (Mitsuba 3's film weighs its samples by
+    /// such a table of 31 steps); none: the filter itself.
+    pub filter_steps: Option<u32>,
     /// Compensate every microfacet lobe for the energy it loses to multiple scattering
     /// (Kulla and Conty), but where a material's own `energy_compensation` says otherwise.
     pub energy_compensation: bool,
@@ -162,6 +166,8 @@ pub struct PixelFilter {
     pub stddev: f32,
     /// Samples kept on the image (`[render] sample_border = false`).
     pub inside: bool,
+    /// Steps of the stepped filter (`[render] filter_steps`); 0: the filter itself.
+    pub steps: u32,
 }
 
 impl PixelFilter {
@@ -181,6 +187,10 @@ impl PixelFilter {
             radius,
             stddev,
             inside: !r.sample_border && r.filter != FilterKind::Box,
+            steps: match r.filter {
+                FilterKind::Box => 0,
+                _ => r.filter_steps.unwrap_or(0),
+            },
         }
     }
 
@@ -295,6 +305,7 @@ impl Default for RenderDesc {
             filter: FilterKind::default(),
             filter_radius: None,
             filter_stddev: None,
+            filter_steps: None,
             energy_compensation: false,
             sample_border: true,
             hide_emitters: false,

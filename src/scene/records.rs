@@ -553,7 +553,10 @@ pub struct Params {
     /// (along `cam_forward`; `[camera] near_clip`, Mitsuba's): nearer surfaces are not
     /// seen. 0: from the camera.
     pub near_clip: f32,
-    pub pad1: u32,
+    /// The tent or Gaussian as a step function of this many steps over [0, radius], each
+    /// the filter's value at its inner end (`[render] filter_steps`, Mitsuba's film's
+    /// table); 0: the filter itself.
+    pub filter_steps: u32,
     pub pad2: u32,
     /// The filter's radius in pixels, a Gaussian's standard deviation, its value at the
     /// radius (subtracted, so it falls to 0 there), and 1 when samples stay on the image
@@ -896,7 +899,7 @@ shared_record!(Params {
     ms_tables,
     hide_emitters,
     near_clip,
-    pad1,
+    filter_steps,
     pad2,
     filter_shape
 });

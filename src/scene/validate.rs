@@ -24,6 +24,8 @@ pub const MAX_DEPTH_LIMIT: u32 = 1024;
 
 /// The widest pixel filter, in pixels from the pixel's centre.
 pub const MAX_FILTER_RADIUS: f32 = 16.0;
+/// The most steps a stepped filter has (`[render] filter_steps`): the shader walks them.
+pub const MAX_FILTER_STEPS: u32 = 256;
 
 /// Collects every problem of a parsed scene (not only the first). `overridden` names the
 /// `[render]` keys whose values came from the command line (`--spp` for `spp`), so their
@@ -121,6 +123,15 @@ impl Validator<'_> {
                     0,
                     "render.filter_radius",
                     format!("must be in (0, {MAX_FILTER_RADIUS}] pixels, got {radius}"),
+                );
+            }
+        }
+        if let Some(steps) = r.filter_steps {
+            if !(1..=MAX_FILTER_STEPS).contains(&steps) {
+                self.push(
+                    0,
+                    "render.filter_steps",
+                    format!("must be in [1, {MAX_FILTER_STEPS}], got {steps}"),
                 );
             }
         }

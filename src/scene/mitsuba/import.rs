@@ -175,6 +175,8 @@ fn children<'t>(
 }
 
 const MEDIA: &str = "participating media are not rendered yet (issue 43)";
+/// The steps of the table Mitsuba's film weighs samples by (its `MI_FILTER_RESOLUTION`).
+const MITSUBA_FILTER_STEPS: i64 = 31;
 
 impl<'a> Importer<'a> {
     fn obj(&self, i: usize) -> &'a Object {
@@ -848,9 +850,16 @@ impl<'a> Importer<'a> {
                 T::Array(c.iter().map(|&v| T::Integer(v)).collect()),
             );
         }
+        // Mitsuba's film weighs a sample by a table of its filter's values, 31 steps over
+        // the radius (MI_FILTER_RESOLUTION), not by the filter itself: near the radius the
+        // Gaussian's last step keeps 8 times its value.
+        let stepped = |render: &mut Table| {
+            render.insert("filter_steps".into(), T::Integer(MITSUBA_FILTER_STEPS));
+        };
         match children(self.tree, f, "rfilter").next() {
             None => {
                 self.render.insert("filter".into(), text("gaussian"));
+                stepped(&mut self.render);
             }
             Some(r) => {
                 let r = self.obj(r);
@@ -862,6 +871,7 @@ impl<'a> Importer<'a> {
                     "tent" => {
                         self.check_known(r, &["radius"], &[])?;
                         self.render.insert("filter".into(), text("tent"));
+                        stepped(&mut self.render);
                         if r.get("radius").is_some() {
                             self.render.insert("filter_radius".into(), float(self.float(r, "radius", 1.0)?));
                         }
@@ -869,6 +879,7 @@ impl<'a> Importer<'a> {
                     "gaussian" => {
                         self.check_known(r, &["stddev"], &[])?;
                         self.render.insert("filter".into(), text("gaussian"));
+                        stepped(&mut self.render);
                         if r.get("stddev").is_some() {
                             self.render.insert("filter_stddev".into(), float(self.float(r, "stddev", 0.5)?));
                         }
