@@ -225,6 +225,19 @@ fn filters_kept_on_the_image_sample_the_restricted_profile() {
     );
 }
 
+/// The largest |F(x) - u| of the pixel filter's offsets x (`filter_offset`) for 4096 u
+/// spread over [0, 1), F the filter's CDF from -r; every offset within the radius r.
+fn inverse_cdf_error(p: &Params, r: f64, cdf: impl Fn(f64) -> f64, label: &str) -> f64 {
+    (0..4096)
+        .map(|i| {
+            let u = (i as f32 + 0.5) / 4096.0;
+            let x = wgtrace::cpu::samplers::filter_offset(p, u) as f64;
+            assert!(x.abs() <= r, "{label}: offset {x} outside the radius");
+            (cdf(x) - u as f64).abs()
+        })
+        .fold(0.0, f64::max)
+}
+
 /// The pixel filters' samplers invert their CDFs: for u across [0, 1), the offset x the
 /// sampler returns has F(x) = u, where F is the filter's profile integrated from -radius
 /// in f64 (Simpson's rule, not the sampler's erf) and normalized; so the offsets follow
@@ -232,7 +245,6 @@ fn filters_kept_on_the_image_sample_the_restricted_profile() {
 /// pbrt-v4's 2) and Gaussian (Mitsuba's radius 4 deviations, pbrt-v4's 1.5, a wide one).
 #[test]
 fn pixel_filters_sample_their_profiles_by_the_inverse_cdf() {
-    use wgtrace::cpu::samplers::filter_offset;
     use wgtrace::scene::format::{FilterKind, PixelFilter};
     use wgtrace::scene::records::{FILTER_GAUSSIAN, FILTER_TENT};
     let filters = [
@@ -281,16 +293,8 @@ fn pixel_filters_sample_their_profiles_by_the_inverse_cdf() {
                 / 3.0
         };
         let total = integral(-r, r);
-        let mut worst = 0.0f64;
-        for i in 0..4096 {
-            let u = (i as f32 + 0.5) / 4096.0;
-            let x = filter_offset(&p, u) as f64;
-            assert!(
-                x.abs() <= r,
-                "{kind:?} {radius}: offset {x} outside the radius"
-            );
-            worst = worst.max((integral(-r, x) / total - u as f64).abs());
-        }
+        let label = format!("{kind:?} {radius}");
+        let worst = inverse_cdf_error(&p, r, |x| integral(-r, x) / total, &label);
         assert!(
             worst < 2e-4,
             "{kind:?} radius {radius} stddev {stddev}: F(offset) is {worst} from u"
@@ -308,7 +312,7 @@ fn pixel_filters_sample_their_profiles_by_the_inverse_cdf() {
 /// difference the table makes.
 #[test]
 fn stepped_filters_sample_their_steps_by_the_inverse_cdf() {
-    use wgtrace::cpu::samplers::{filter_cdf, filter_offset, filter_offset_on_image};
+    use wgtrace::cpu::samplers::{filter_cdf, filter_offset_on_image};
     use wgtrace::scene::format::{FilterKind, PixelFilter};
     use wgtrace::scene::records::{FILTER_GAUSSIAN, FILTER_TENT};
     for (kind, tag, radius, stddev, steps) in [
@@ -344,15 +348,8 @@ fn stepped_filters_sample_their_steps_by_the_inverse_cdf() {
                 .sum::<f64>()
         };
         let cdf = |x: f64| 0.5 + x.signum() * 0.5 * half(x.abs().min(r)) / half(r);
-        let mut worst = 0.0f64;
+        let mut worst = inverse_cdf_error(&p, r, cdf, &format!("{kind:?} {steps}"));
         for i in 0..4096 {
-            let u = (i as f32 + 0.5) / 4096.0;
-            let x = filter_offset(&p, u) as f64;
-            assert!(
-                x.abs() <= r,
-                "{kind:?} {steps}: offset {x} outside the radius"
-            );
-            worst = worst.max((cdf(x) - u as f64).abs());
             let at = (i as f64 / 4096.0 - 0.5) * 2.0 * r;
             worst = worst.max((filter_cdf(&p, at as f32) as f64 - cdf(at)).abs());
         }
