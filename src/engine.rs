@@ -95,6 +95,15 @@ impl Engine {
         }
     }
 
+    /// Whether the sums already hold sample 0 (the GPU's spot check renders it and keeps
+    /// it), so the next [`Engine::render_samples`] from 0 renders from 1.
+    pub fn holds_first_sample(&self) -> bool {
+        match self {
+            Engine::Gpu(g) => g.holds_first_sample(),
+            Engine::Cpu(_) => false,
+        }
+    }
+
     /// Adds one sample per pixel.
     pub fn render_pass(&mut self, sample_index: u32) -> Result<(), GpuError> {
         self.render_samples(sample_index..sample_index + 1)

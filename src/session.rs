@@ -115,11 +115,16 @@ pub struct Progress {
     /// Time and pixel samples of this run only.
     pub elapsed: Duration,
     pub samples: u64,
+    /// Of `samples`, those rendered before the run's time began: sample 0 when the GPU's
+    /// spot check rendered it and the render kept it.
+    pub untimed: u64,
 }
 
 impl Progress {
+    /// The samples rendered in `elapsed`, per second.
     pub fn samples_per_second(&self) -> f64 {
-        self.samples as f64 / self.elapsed.as_secs_f64().max(1e-9)
+        (self.samples - self.untimed.min(self.samples)) as f64
+            / self.elapsed.as_secs_f64().max(1e-9)
     }
 }
 
@@ -655,11 +660,18 @@ impl Session {
         let start = Instant::now();
         let first = self.next;
         let pixels = self.scene.pixels();
+        // sample 0 rendered before this began (the spot check's, kept) is not in its time
+        let untimed = if first == 0 && self.engine.holds_first_sample() {
+            pixels
+        } else {
+            0
+        };
         let mut progress = Progress {
             passes_done: first,
             passes_total: end,
             elapsed: Duration::ZERO,
             samples: 0,
+            untimed,
         };
         let mut estimate = None;
         let mut look_cost = Duration::ZERO;

@@ -82,7 +82,8 @@ fn the_spot_check_passes_exactly_where_the_whole_first_sample_agrees() {
 
 /// The spot check's pass is the render's first sample, kept in its sums: a render the
 /// check opened has the sums of one opened without it, bit for bit (AOVs and sample
-/// groups included), and samples that do not follow the kept one start from cleared sums.
+/// groups included), its rate leaves that sample out (it is not in the render's time), and
+/// samples that do not follow the kept one start from cleared sums.
 #[test]
 fn the_checked_first_sample_is_the_renders_own() {
     let o = Overrides {
@@ -97,6 +98,18 @@ fn the_checked_first_sample_is_the_renders_own() {
     let checked = common::render(engine(&scene, "").unwrap(), &scene);
     let unchecked = common::render(engine(&scene, "no-spot-check").unwrap(), &scene);
     assert!(checked == unchecked, "the checked render's sums differ");
+    // the kept sample is not in the render's time, nor in its rate
+    for (knobs, untimed) in [("", scene.pixels()), ("no-spot-check", 0)] {
+        let mut session = wgtrace::Session::with_engine(
+            scene.clone(),
+            engine(&scene, knobs).unwrap(),
+            wgtrace::SessionOptions::default(),
+        )
+        .unwrap();
+        let done = session.run(&wgtrace::StopRule::default(), |_| {}).unwrap();
+        assert_eq!(done.progress.samples, 12 * scene.pixels(), "{knobs}");
+        assert_eq!(done.progress.untimed, untimed, "{knobs}");
+    }
     let ctx = std::sync::Arc::new(common::gpu_context());
     let open = || wgtrace::gpu::GpuRenderer::new(ctx.clone(), &scene, &Tuning::default()).unwrap();
     let mut kept = open();

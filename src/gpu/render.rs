@@ -295,6 +295,11 @@ impl GpuRenderer {
         self.accumulation()
     }
 
+    /// Whether the sums hold sample 0 alone, kept from [`GpuRenderer::render_first_sample`].
+    pub fn holds_first_sample(&self) -> bool {
+        self.first_sample_kept
+    }
+
     /// Zeroes the sums.
     fn clear(&mut self) -> Result<(), GpuError> {
         let mut encoder = self
