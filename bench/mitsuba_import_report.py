@@ -116,27 +116,21 @@ for path in files:
     print(rows[-1])
 
 # why a file differs, where it is known
-WHY = {
-    "bench/filter.xml": "Mitsuba's film weighs its samples by a table of its Gaussian's values at 31 "
-    "steps of the radius, whose last step weighs about 8 times the exact tail wgtrace samples: "
-    "pixels just outside and inside the emitter's edge differ by about 2e-4 of its radiance, with "
-    "no variance on wgtrace's side (docs/bench/filter-gaussian.md); the whole image agrees.",
-}
-TABLE = ("Mitsuba's film weighs its default Gaussian filter's samples by a table of its values, whose "
-         "last step weighs about 8 times the exact tail wgtrace samples: the pixels that differ are those "
-         "just beside a hard edge next to black (wgtrace reads exactly 0 there in every run, Mitsuba about "
-         "1e-4), as in bench/filter.xml.")
+TABLE = ("Mitsuba's film weighs its samples by a table of its Gaussian's values in 31 steps over the "
+         "radius, which wgtrace samples too since its importer writes `filter_steps = 31` (without it "
+         "this file read 98.11% for texture_interp, 96.40% and 97.08% for the projectors); the "
+         "rest is not explained yet.")
 BENT = ("the normal map (a stand-in of tilts up to 19 degrees) turns shading normals away from the "
         "viewer toward the sphere's rim: Mitsuba's normalmap leaves those lobes black (a dark crescent), "
         "wgtrace bends such a normal toward the viewer (Keller et al. 2017), so the rim is lit.")
-WHY.update({
+WHY = {
     "scenes/texture_interp/test_texture_interp.xml": TABLE,
     "scenes/texture_interp/test_texture_interp_direct.xml": TABLE,
-    "scenes/projector/test_projector_constant_direct.xml": TABLE + " Here the edge of the projected square.",
-    "scenes/projector/test_projector_textured_direct.xml": TABLE + " Here the edge of the projected square.",
+    "scenes/projector/test_projector_constant_direct.xml": TABLE,
+    "scenes/projector/test_projector_textured_direct.xml": TABLE,
     "scenes/bsdf_spheres/test_normalmap.xml": BENT,
     "scenes/bsdf_spheres/test_normalmap_roughconductor_path.xml": BENT,
-})
+}
 agree = sum("agrees" in r for r in rows)
 STANDINS = """
 
