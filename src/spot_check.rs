@@ -184,10 +184,9 @@ pub fn check(renderer: &mut GpuRenderer, scene: &FlatScene) -> Result<Verdict, G
 /// first sample, rendered as the render renders it: a pass over the whole image, band by
 /// band, in the render's own dispatches, which the renderer keeps as the render's first
 /// sample ([`GpuRenderer::render_first_sample`]), so the check costs the render only the
-/// readback and the CPU's pixels. Rendering only the tiles, each its own small dispatch,
-/// missed the fault it is here for: Mesa 22.3.6's lavapipe on an AVX-512 CPU rendered
-/// 400 of 400 tile pixels of gltf-spheres right and 55% of the same image's pixels wrong
-/// in the render's dispatches.
+/// readback and the CPU's pixels. The render's own dispatches matter: a driver may
+/// render small dispatches of the tiles alone right and the render's wrong
+/// (docs/robustness.md).
 fn first_sample(
     renderer: &mut GpuRenderer,
     tiles: &[Band],
