@@ -120,16 +120,11 @@ TABLE = ("Mitsuba's film weighs its samples by a table of its Gaussian's values 
          "radius, which wgtrace samples too since its importer writes `filter_steps = 31` (without it "
          "this file read 98.11% for texture_interp, 96.40% and 97.08% for the projectors); the "
          "rest is not explained yet.")
-BENT = ("the normal map (a stand-in of tilts up to 19 degrees) turns shading normals away from the "
-        "viewer toward the sphere's rim: Mitsuba's normalmap leaves those lobes black (a dark crescent), "
-        "wgtrace bends such a normal toward the viewer (Keller et al. 2017), so the rim is lit.")
 WHY = {
     "scenes/texture_interp/test_texture_interp.xml": TABLE,
     "scenes/texture_interp/test_texture_interp_direct.xml": TABLE,
     "scenes/projector/test_projector_constant_direct.xml": TABLE,
     "scenes/projector/test_projector_textured_direct.xml": TABLE,
-    "scenes/bsdf_spheres/test_normalmap.xml": BENT,
-    "scenes/bsdf_spheres/test_normalmap_roughconductor_path.xml": BENT,
 }
 agree = sum("agrees" in r for r in rows)
 STANDINS = """

@@ -99,6 +99,8 @@ struct MaterialQuery {
     p: vec4<f32>,
     ng: vec4<f32>,
     ns: vec4<f32>,
+    // the shading normal before a normal map turned it to ns
+    unmapped: vec4<f32>,
     // the hit's uv in .xy, the sample in .zw
     uv: vec4<f32>,
     wi: vec4<f32>,
@@ -135,12 +137,12 @@ fn materials_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     let q = material_queries[i];
     let ray = Ray(q.origin.xyz, q.dir.xyz);
 #ifdef HAS_BUMP
-    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, vec4<f32>(q.uv.xy, q.uv1.xy), q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0), q.color, vec3<f32>(0.0), vec3<f32>(0.0));
+    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, q.unmapped.xyz, vec4<f32>(q.uv.xy, q.uv1.xy), q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0), q.color, vec3<f32>(0.0), vec3<f32>(0.0));
 #else
-    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, vec4<f32>(q.uv.xy, q.uv1.xy), q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0), q.color);
+    let hit = Hit(q.p.xyz, q.ng.xyz, q.ns.xyz, q.unmapped.xyz, vec4<f32>(q.uv.xy, q.uv1.xy), q.front_face != 0u, q.material, 0.0, vec4<f32>(0.0), q.color);
 #endif
     let mat = material_at(material_record(q.material), hit);
-    let s = scatter(mat, ray, hit, q.uv.zw);
+    let s = bsdf_scatter(mat, ray, hit, q.uv.zw);
     var flags = select(0u, 1u, s.ok) | select(0u, 2u, s.delta);
     flags |= select(0u, 4u, nee_applies(mat)) | select(0u, 8u, mixture_applies(mat));
     let f = bsdf_eval(mat, ray, hit, q.wi.xyz);

@@ -255,7 +255,7 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     let mapped = surface;
 #endif
 #ifdef HAS_SHADING_NORMALS
-    let hit = bent_normal(mapped, (*path).ray);
+    let hit = bent_normal(mat, mapped, (*path).ray);
 #else
     let hit = mapped;
 #endif
@@ -316,7 +316,7 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
             }
             dir = ls.dir;
         } else {
-            let s = scatter(mat, (*path).ray, hit, u);
+            let s = bsdf_scatter(mat, (*path).ray, hit, u);
             if (!s.ok) {
                 return false;
             }
@@ -339,7 +339,7 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
             return (*path).depth < params.max_depth;
     }
 #endif
-    let s = scatter(mat, (*path).ray, hit, u);
+    let s = bsdf_scatter(mat, (*path).ray, hit, u);
     if (!s.ok) {
         return false;
     }

@@ -1251,6 +1251,7 @@ fn textures_on_a_second_uv_set_and_the_specular_texture_are_read() {
         p: Vec3::ZERO,
         ng: Vec3::Z,
         ns: Vec3::Z,
+        unmapped: Vec3::Z,
         uv: glam::Vec4::splat(0.5),
         front_face: true,
         material: 0,

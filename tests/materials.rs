@@ -17,10 +17,10 @@ use glam::Vec3;
 use wgtrace::cpu::bsdf::{fresnel_conductor, fresnel_dielectric, ggx_d, schlick, smith_lambda};
 use wgtrace::cpu::materials::dielectric::rough_lobes;
 use wgtrace::cpu::materials::{
-    bent_normal, bsdf_eval, bsdf_pdf, material_eval, scatter, scatter_pdf,
+    bent_normal, bsdf_eval, bsdf_pdf, bsdf_scatter, material_eval, scatter, scatter_pdf,
 };
 use wgtrace::cpu::types::{Hit, Ray};
-use wgtrace::scene::records::{Material, MAT_FLAG_DELTA, MAT_FLAG_NEE};
+use wgtrace::scene::records::{Material, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_STRICT_VIEW};
 
 /// A hit on the plane z = 0 (front side +Z) at the origin, for a ray of direction d that
 /// started at `origin`.
@@ -33,6 +33,7 @@ fn hit_at_origin(d: Vec3, origin: Vec3) -> (Ray, Hit) {
         p: Vec3::ZERO,
         ng: Vec3::Z,
         ns: Vec3::Z,
+        unmapped: Vec3::Z,
         uv: glam::Vec4::ZERO,
         front_face: ray.dir.z < 0.0,
         material: 0,
@@ -315,7 +316,7 @@ fn shading_normals_sample_and_weigh_what_eval_and_pdf_say() {
         for theta in [-80.0f32, -50.0, 20.0, 70.0] {
             let (_, ray, mut hit) = view(theta);
             hit.ns = ns;
-            let hit = bent_normal(&hit, &ray);
+            let hit = bent_normal(&m, &hit, &ray);
             let label = format!("{}, tilted normal, {theta} deg", t.name);
             chi_square(
                 &label,
@@ -364,6 +365,143 @@ fn shading_normals_sample_and_weigh_what_eval_and_pdf_say() {
                 "{label}: mean weight {mean} +- {se} vs eval's integral {integral}"
             );
         }
+    }
+}
+
+/// Shading normals taken strictly (`[render] shading_normals = "strict"`, Mitsuba 3's
+/// way), a map turning the shading normal 35 degrees from the unmapped and geometric one
+/// (+Z), seen from views over and under its horizon, for every material of the table:
+/// `bsdf_scatter` keeps no direction on one side of the shading surface and the other of
+/// the unmapped one, a sample of a lobe with a density weighs `bsdf_eval / bsdf_pdf` with
+/// the pdf `bsdf_pdf`, and the mean weight of the chi-square rows is the integral of
+/// `bsdf_eval` over the sphere (5 standard errors, the map's shadowing in both): what the
+/// lobes send across is lost, not folded back, and eval says so. A material that only
+/// reflects is black to a viewer under the shading normal (Mitsuba's one-sided lobes).
+#[test]
+fn strict_shading_normals_lose_what_crosses_and_weigh_what_eval_says() {
+    let tilt = 35f32.to_radians();
+    let ns = Vec3::new(tilt.sin(), 0.0, tilt.cos());
+    let mut lost = 0;
+    for t in MATERIALS {
+        let desc: wgtrace::scene::materials::MaterialDesc = toml::from_str(t.keys).unwrap();
+        let mut m = material(t.keys);
+        m.flags |= desc.strict_shading_flags();
+        let reflects = m.flags & MAT_FLAG_STRICT_VIEW != 0;
+        let (density, _) = lobes(&m);
+        for theta in [-80.0f32, -50.0, 20.0, 70.0] {
+            let (wo, ray, mut hit) = view(theta);
+            hit.ns = ns;
+            let label = format!("{}, strict tilted normal, {theta} deg", t.name);
+            let viewer_under = wo.dot(ns) <= 0.0;
+            let (mut sum, mut sq, n) = (0.0f64, 0.0f64, 100_000);
+            let mut rng = 5u32;
+            for _ in 0..n {
+                let u = [common::random_f32(&mut rng), common::random_f32(&mut rng)];
+                let s = bsdf_scatter(&m, &ray, &hit, u);
+                let w = if s.ok { s.weight.x as f64 } else { 0.0 };
+                sum += w;
+                sq += w * w;
+                if !s.ok {
+                    lost += !viewer_under as usize;
+                    continue;
+                }
+                assert!(
+                    s.dir.z * s.dir.dot(ns) > 0.0,
+                    "{label}: {} crosses the surfaces",
+                    s.dir
+                );
+                assert!(
+                    !(reflects && viewer_under),
+                    "{label}: lit from under the shading normal"
+                );
+                if density && !s.delta {
+                    let (f, pdf) = (
+                        bsdf_eval(&m, &ray, &hit, s.dir),
+                        bsdf_pdf(&m, &ray, &hit, s.dir),
+                    );
+                    let rel = |a: f32, b: f32| (a - b).abs() <= 1e-3 * b.abs().max(1e-3);
+                    assert!(rel(s.pdf, pdf), "{label}: pdf {} vs {pdf}", s.pdf);
+                    assert!(
+                        rel(s.weight.x, f.x / pdf),
+                        "{label}: weight {} vs {}",
+                        s.weight,
+                        f / pdf
+                    );
+                }
+            }
+            if !t.chi2 {
+                continue;
+            }
+            let mean = sum / n as f64;
+            let se = ((sq / n as f64 - mean * mean) / n as f64).sqrt();
+            let (nt, np) = (512, 512);
+            let mut integral = 0.0f64;
+            for i in 0..nt {
+                let th = (i as f64 + 0.5) / nt as f64 * std::f64::consts::PI;
+                for j in 0..np {
+                    let ph = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
+                    let wi = Vec3::new(
+                        (th.sin() * ph.cos()) as f32,
+                        (th.sin() * ph.sin()) as f32,
+                        th.cos() as f32,
+                    );
+                    integral += bsdf_eval(&m, &ray, &hit, wi).x as f64 * th.sin();
+                }
+            }
+            integral *= std::f64::consts::PI / nt as f64 * std::f64::consts::TAU / np as f64;
+            assert!(
+                (mean - integral).abs() <= 5.0 * se + 3e-3,
+                "{label}: mean weight {mean} +- {se} vs eval's integral {integral}"
+            );
+        }
+    }
+    // the rule is not idle: lobes about the tilted normal reach under the geometric
+    // surface from views over both horizons, and what they send there is lost
+    assert!(lost > 0, "nothing crossed");
+}
+
+/// Strict shading normals' two closed forms, Mitsuba 3's normalmap and bumpmap: a mapped
+/// normal that leaves the viewer on its other side than the unmapped one's is mirrored
+/// about that (and kept where the viewer is on the same side of both), and a map's bumps
+/// weigh light toward wi by 2 / (1 + sqrt(1 + a2 tan^2 wi)), a2 = min(tan^2 n / 8, 1),
+/// both angles from the unmapped normal (Estevez et al. 2019), which `bsdf_eval` carries.
+#[test]
+fn strict_shading_normals_flip_and_shadow_as_mitsuba_does() {
+    let desc: wgtrace::scene::materials::MaterialDesc =
+        toml::from_str("type = \"lambertian\"\nalbedo = [1, 1, 1]").unwrap();
+    let mut m = material("type = \"lambertian\"\nalbedo = [1, 1, 1]");
+    m.flags |= desc.strict_shading_flags();
+    let tilt = 35f32.to_radians();
+    let ns = Vec3::new(tilt.sin(), 0.0, tilt.cos());
+    // the viewer at 70 degrees on the side the map turns the normal away from
+    let (wo, ray, mut hit) = view(-70.0);
+    hit.ns = ns;
+    assert!(wo.dot(ns) < 0.0);
+    let flipped = bent_normal(&m, &hit, &ray);
+    let mirror = Vec3::new(-tilt.sin(), 0.0, tilt.cos());
+    assert!((flipped.ns - mirror).length() < 1e-6, "{}", flipped.ns);
+    assert!(wo.dot(flipped.ns) > 0.0);
+    // from the other side, the map's normal is the viewer's side already: kept
+    let (_, ray, mut hit) = view(70.0);
+    hit.ns = ns;
+    assert_eq!(bent_normal(&m, &hit, &ray).ns, ns);
+    // the shadowing term against its closed form, over the light's angle
+    let a2 = (tilt.tan().powi(2) / 8.0).min(1.0);
+    let (_, ray, mut hit) = view(0.0);
+    hit.ns = ns;
+    let mut unmapped = hit;
+    unmapped.unmapped = ns;
+    for theta in [10.0f32, 45.0, 60.0, 80.0, 89.0] {
+        let wi = Vec3::new(0.0, theta.to_radians().sin(), theta.to_radians().cos());
+        let g = 2.0 / (1.0 + (1.0 + a2 * theta.to_radians().tan().powi(2)).sqrt());
+        // the same lobe without a map: the same normal, no bumps to shadow it
+        let f = bsdf_eval(&m, &ray, &hit, wi).x;
+        let lobe = bsdf_eval(&m, &ray, &unmapped, wi).x;
+        assert!(
+            (f - g * lobe).abs() <= 1e-5 * lobe.max(1e-3),
+            "{theta} deg: {f} vs {g} x {lobe}"
+        );
+        assert!(g < 1.0);
     }
 }
 

@@ -236,6 +236,13 @@ fn normal_maps_agree_with_mitsuba() {
     agrees_with_mitsuba("normalmap", 256);
 }
 
+/// normalmap-sphere.xml: a normal-mapped sphere whose terminator and rim show, where
+/// Mitsuba's normalmap flips, loses and shadows (`shading_normals = "strict"`).
+#[test]
+fn normal_maps_at_the_rim_and_the_terminator_agree_with_mitsuba() {
+    agrees_with_mitsuba("normalmap-sphere", 256);
+}
+
 #[test]
 fn environment_and_thin_lens_agree_with_mitsuba() {
     agrees_with_mitsuba("environment", 256);

@@ -470,6 +470,7 @@ fn microfacet_roughness_near_zero_is_finite_and_continuous() {
         p: Vec3::ZERO,
         ng: Vec3::Y,
         ns: Vec3::Y,
+        unmapped: Vec3::Y,
         uv: glam::Vec4::ZERO,
         front_face: true,
         material: 0,

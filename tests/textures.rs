@@ -262,6 +262,7 @@ fn pbr_specular_colour_textures_are_not_clamped_where_microfacet_ones_are() {
         p: Vec3::ZERO,
         ng: Vec3::Z,
         ns: Vec3::Z,
+        unmapped: Vec3::Z,
         uv: Vec4::splat(0.5),
         front_face: true,
         material: 0,

@@ -569,8 +569,8 @@ fn surface_at(ray: Ray, cand: Candidate) -> Hit {
     let uv1 = s.uv;
 #endif
 #ifdef HAS_BUMP
-    return Hit(s.p, s.ng, s.ns, vec4<f32>(s.uv, uv1), dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent, s.color, dp[0], dp[1]);
+    return Hit(s.p, s.ng, s.ns, s.ns, vec4<f32>(s.uv, uv1), dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent, s.color, dp[0], dp[1]);
 #else
-    return Hit(s.p, s.ng, s.ns, vec4<f32>(s.uv, uv1), dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent, s.color);
+    return Hit(s.p, s.ng, s.ns, s.ns, vec4<f32>(s.uv, uv1), dot(ray.dir, s.ng) < 0.0, prim.material, s.err, s.tangent, s.color);
 #endif
 }

@@ -154,8 +154,18 @@ fn alpha_u(u: f32, k: u32) -> f32 {
 // viewer is then over the shading horizon and a mirror reflects over the surface, where
 // the unbent normal would have absorbed the path. Continuous: at SHADING_LIFT the half
 // vector is the normal itself.
-fn bent_normal(hit: Hit, ray: Ray) -> Hit {
+// A material that takes shading normals strictly (MAT_FLAG_STRICT_SHADING) is not bent
+// but flipped: a mapped normal that leaves the viewer on the other side of it than of the
+// unmapped one is mirrored about that (Mitsuba 3's normalmap and bumpmap, after
+// Schuessler et al. 2017).
+fn bent_normal(mat: Material, hit: Hit, ray: Ray) -> Hit {
     var h = hit;
+    if ((mat.flags & MAT_FLAG_STRICT_SHADING) != 0u) {
+        if (dot(ray.dir, hit.unmapped) * dot(ray.dir, hit.ns) <= 0.0) {
+            h.ns = 2.0 * dot(hit.ns, hit.unmapped) * hit.unmapped - hit.ns;
+        }
+        return h;
+    }
     if (any(hit.ns != hit.ng)) {
         let side = select(-1.0, 1.0, hit.front_face);
         let ng = side * hit.ng;
@@ -174,9 +184,62 @@ fn bent_normal(hit: Hit, ray: Ray) -> Hit {
 
 // Whether shading normals send a material's directions over the geometric surface
 // (over_surface): where they differ from the geometric normal, for a material that does
-// not transmit.
+// not transmit and does not take shading normals strictly.
 fn folds(mat: Material, hit: Hit) -> bool {
-    return any(hit.ns != hit.ng) && (mat.flags & MAT_FLAG_TRANSMITS) == 0u;
+    return any(hit.ns != hit.ng) && (mat.flags & (MAT_FLAG_TRANSMITS | MAT_FLAG_STRICT_SHADING)) == 0u;
+}
+
+#ifdef HAS_SHADING_NORMALS
+// Where a material takes shading normals strictly (MAT_FLAG_STRICT_SHADING) and the hit's
+// differs from its geometric one, whether its lobes are black toward wi: wi on one side
+// of the shading surface and the other of the unmapped one (Mitsuba's normalmap and
+// bumpmap rule) or of the geometric one, or, with MAT_FLAG_STRICT_VIEW, the viewer under
+// the shading normal (Mitsuba's one-sided lobes).
+fn strictly_black(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> bool {
+    if ((mat.flags & MAT_FLAG_STRICT_SHADING) == 0u || all(hit.ns == hit.ng)) {
+        return false;
+    }
+    let side = select(-1.0, 1.0, hit.front_face);
+    let viewer_under = (mat.flags & MAT_FLAG_STRICT_VIEW) != 0u && side * dot(ray.dir, hit.ns) >= 0.0;
+    let c = dot(wi, hit.ns);
+    return viewer_under || dot(wi, hit.unmapped) * c <= 0.0 || dot(wi, hit.ng) * c <= 0.0;
+}
+
+// Where a material takes shading normals strictly and a normal or bump map turned the
+// shading normal, the share of light toward wi that the map's bumps shadow: Estevez et
+// al. 2019's microfacet shadowing, 2 / (1 + sqrt(1 + a2 tan^2 wi)), a2 = min(tan^2 n / 8,
+// 1), both angles from the unmapped normal (Mitsuba 3's normalmap and bumpmap); else 1.
+fn map_shadowing(mat: Material, hit: Hit, wi: vec3<f32>) -> f32 {
+    if ((mat.flags & MAT_FLAG_STRICT_SHADING) == 0u || all(hit.ns == hit.unmapped)) {
+        return 1.0;
+    }
+    let cn = dot(hit.ns, hit.unmapped);
+    let a2 = min(0.125 * max(1.0 - cn * cn, 0.0) / (cn * cn), 1.0);
+    let ci = dot(wi, hit.unmapped);
+    let t2 = max(1.0 - ci * ci, 0.0) / (ci * ci);
+    return 2.0 / (1.0 + sqrt(1.0 + a2 * t2));
+}
+#endif
+
+// scatter by the material's type, with shading normals taken strictly where its flags say:
+// its lobes drawn about the shading normal alone, with nothing folded over the geometric
+// surface, a direction strictly_black absorbed and the weight shadowed by the map's bumps
+// (map_shadowing).
+fn bsdf_scatter(mat: Material, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
+#ifdef HAS_SHADING_NORMALS
+    if ((mat.flags & MAT_FLAG_STRICT_SHADING) != 0u && any(hit.ns != hit.ng)) {
+        // the lobes' own tests of the side, and over_surface, read the shading normal
+        var shading = hit;
+        shading.ng = hit.ns;
+        var s = scatter(mat, ray, shading, u);
+        if (s.ok && strictly_black(mat, ray, hit, s.dir)) {
+            return absorbed();
+        }
+        s.weight *= map_shadowing(mat, hit, s.dir);
+        return s;
+    }
+#endif
+    return scatter(mat, ray, hit, u);
 }
 
 // BSDF x cos toward wi: what scatter's weight is the ratio of, and 0 under the geometric
@@ -184,14 +247,24 @@ fn folds(mat: Material, hit: Hit) -> bool {
 // (MAT_FLAG_TRANSMITS: rough glass) weighs directions under the surface too, where the
 // shading normal agrees that they are. Where shading normals differ from the geometric
 // one, what the lobes of a material that does not send to wi's mirror image under the
-// surface is sent to wi too (over_surface).
+// surface is sent to wi too (over_surface). A material that takes them strictly is black
+// where strictly_black says, and shadowed by a map's bumps (map_shadowing).
 fn bsdf_eval(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> vec3<f32> {
     let side = select(-1.0, 1.0, hit.front_face);
+#ifdef HAS_SHADING_NORMALS
+    if (strictly_black(mat, ray, hit, wi)) {
+        return vec3<f32>(0.0);
+    }
+#endif
     if (side * dot(wi, hit.ng) <= 0.0) {
         if ((mat.flags & MAT_FLAG_TRANSMITS) == 0u || side * dot(wi, hit.ns) >= 0.0) {
             return vec3<f32>(0.0);
         }
+#ifdef HAS_SHADING_NORMALS
+        return material_eval(mat, side * hit.ns, -ray.dir, wi) * map_shadowing(mat, hit, wi);
+#else
         return material_eval(mat, side * hit.ns, -ray.dir, wi);
+#endif
     }
     if ((mat.flags & MAT_FLAG_TRANSMITS) != 0u && side * dot(wi, hit.ns) <= 0.0) {
         // over the geometric surface, under the shading one: scatter absorbs it
@@ -202,6 +275,7 @@ fn bsdf_eval(mat: Material, ray: Ray, hit: Hit, wi: vec3<f32>) -> vec3<f32> {
     if (folds(mat, hit)) {
         f += material_eval(mat, side * hit.ns, -ray.dir, mirrored(wi, hit));
     }
+    f *= map_shadowing(mat, hit, wi);
 #endif
     return f;
 }

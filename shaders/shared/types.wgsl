@@ -236,8 +236,11 @@ struct Hit {
     // geometric normal on the front side (outward for closed shapes, right-hand rule for
     // triangles, the given normal for planes and disks)
     ng: vec3<f32>,
-    // shading normal, on the same side as ng (interpolated vertex normals, else ng)
+    // shading normal, on the same side as ng (interpolated vertex normals, else ng; then
+    // as a normal or bump map turns it: normal_mapped)
     ns: vec3<f32>,
+    // the shading normal before a normal or bump map turned it
+    unmapped: vec3<f32>,
     // surface coordinates for textures: uv set 0 in .xy, set 1 in .zw (set 0's where the
     // surface has one set)
     uv: vec4<f32>,

@@ -473,6 +473,7 @@ pub fn surface_own(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
         p: s.p,
         ng: s.ng,
         ns: s.ns,
+        unmapped: s.ns,
         uv: s.uv.extend(uv1.x).extend(uv1.y),
         front_face: ray.dir.dot(s.ng) < 0.0,
         material: prim.material,

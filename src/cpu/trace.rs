@@ -10,8 +10,8 @@ use super::lights::{
 };
 use super::materials::blend;
 use super::materials::{
-    alpha_u, bent_normal, bsdf_eval, bsdf_pdf, emitted, material_at, mixture_applies, nee_applies,
-    normal_mapped, scatter, scatter_pdf, transparent_at,
+    alpha_u, bent_normal, bsdf_eval, bsdf_pdf, bsdf_scatter, emitted, material_at, mixture_applies,
+    nee_applies, normal_mapped, scatter_pdf, transparent_at,
 };
 use super::rng::rand_2d;
 use super::samplers::{
@@ -299,7 +299,7 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         record = blend::choice(b, surface.material, &surface, u_blend);
     }
     let mat = &material_at(b, &record, &surface);
-    let hit = bent_normal(&normal_mapped(b, mat, &surface), &path.ray);
+    let hit = bent_normal(mat, &normal_mapped(b, mat, &surface), &path.ray);
     let mut le = emitted(mat, &hit);
     if path.depth == 0 {
         // prev_p is still the camera ray's origin (passing through alpha keeps it)
@@ -356,7 +356,7 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
             }
             ls.dir
         } else {
-            let s = scatter(mat, &path.ray, &hit, u);
+            let s = bsdf_scatter(mat, &path.ray, &hit, u);
             if !s.ok {
                 return false;
             }
@@ -377,7 +377,7 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         path.depth += 1;
         return path.depth < p.max_depth;
     }
-    let s = scatter(mat, &path.ray, &hit, u);
+    let s = bsdf_scatter(mat, &path.ray, &hit, u);
     if !s.ok {
         return false;
     }

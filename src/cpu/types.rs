@@ -58,8 +58,11 @@ pub struct Hit {
     pub p: Vec3,
     /// Geometric normal on the front side.
     pub ng: Vec3,
-    /// Shading normal, on the same side as `ng`.
+    /// Shading normal, on the same side as `ng` (interpolated vertex normals, else `ng`;
+    /// then as a normal or bump map turns it).
     pub ns: Vec3,
+    /// The shading normal before a normal or bump map turned it.
+    pub unmapped: Vec3,
     /// uv set 0 in `.xy`, set 1 in `.zw` (set 0's where the surface has one set).
     pub uv: Vec4,
     pub front_face: bool,

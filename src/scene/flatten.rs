@@ -8,7 +8,8 @@ use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
 use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
 use super::format::{
-    LightDesc, ObjectDesc, PixelFilter, Projection, SceneFile, TextureDesc, TransformDesc,
+    LightDesc, ObjectDesc, PixelFilter, Projection, SceneFile, ShadingNormals, TextureDesc,
+    TransformDesc,
 };
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
@@ -593,6 +594,12 @@ pub fn flatten(
         tables.extend(table.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
         for m in materials.iter_mut().filter(|m| is_pbr(m)) {
             pbr::point_at_sheen_table(m, offset);
+        }
+    }
+    // shading normals taken strictly, by every material
+    if file.render.shading_normals == ShadingNormals::Strict {
+        for (m, (_, desc)) in materials.iter_mut().zip(&material_list) {
+            m.flags |= desc.strict_shading_flags();
         }
     }
     // energy compensation: [render]'s choice for the materials without their own, and

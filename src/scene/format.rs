@@ -106,6 +106,10 @@ pub struct RenderDesc {
     /// Compensate every microfacet lobe for the energy it loses to multiple scattering
     /// (Kulla and Conty), but where a material's own `energy_compensation` says otherwise.
     pub energy_compensation: bool,
+    /// How shading normals (interpolated, normal-mapped, bumped) are taken where they
+    /// differ from the geometric one: bent and folded so nothing is lost (`bend`), or
+    /// strictly, as Mitsuba 3 and pbrt-v4 take them (`strict`).
+    pub shading_normals: ShadingNormals,
     /// Whether a wide filter's samples may land outside the image (true: every pixel
     /// weighs the filter's whole support, the border's included), or are kept on it
     /// (false: a border pixel weighs only the part of its filter over the image, as
@@ -118,6 +122,24 @@ pub struct RenderDesc {
     /// rendered and written, the image it makes being its size (Mitsuba's film crop
     /// window); x, y from the film's top left corner.
     pub crop: Option<[u32; 4]>,
+}
+
+/// `[render] shading_normals`: what a material does where the shading normal differs from
+/// the geometric one.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ShadingNormals {
+    /// A normal that would leave the viewer's mirror direction under the geometric
+    /// surface is bent toward the viewer (Keller et al. 2017), and a direction the lobes
+    /// send under the surface is mirrored over it: a smooth-shaded or normal-mapped
+    /// surface keeps the energy its shading gives it.
+    #[default]
+    Bend,
+    /// The lobes about the shading normal as they are (Mitsuba 3's and pbrt-v4's way):
+    /// a direction on one side of the geometric surface and the other of the shading
+    /// one is black (Mitsuba's `normalmap` and `bumpmap` rule), and so is a material that
+    /// only reflects to a viewer under the shading normal.
+    Strict,
 }
 
 /// `[render] filter` (and `--filter`): how a pixel weighs the image plane around it. Each
@@ -307,6 +329,7 @@ impl Default for RenderDesc {
             filter_stddev: None,
             filter_steps: None,
             energy_compensation: false,
+            shading_normals: ShadingNormals::default(),
             sample_border: true,
             hide_emitters: false,
             crop: None,

@@ -135,6 +135,16 @@ shared_constants! {
     /// the hit's dp/du (made orthogonal to the shading normal n), n x dp/du and n
     /// (Mitsuba's `normalmap`), not in the frame of the vertex tangents.
     MAT_FLAG_UV_NORMAL_MAP: u32 = 8192;
+    /// Material flag: shading normals are taken strictly, as Mitsuba 3 and pbrt-v4 take
+    /// them (`[render] shading_normals = "strict"`): none is bent toward the viewer, no
+    /// direction is folded over the surface, and a direction on one side of the geometric
+    /// surface and the other of the shading one is absorbed (Mitsuba's `normalmap` and
+    /// `bumpmap` rule): `bsdf_scatter`, `bsdf_eval`.
+    MAT_FLAG_STRICT_SHADING: u32 = 16384;
+    /// Material flag, with `MAT_FLAG_STRICT_SHADING` on a material that only reflects: a
+    /// viewer under the shading normal sees it black, as Mitsuba's one-sided lobes are in
+    /// their shading frame.
+    MAT_FLAG_STRICT_VIEW: u32 = 32768;
     /// The tag `material_at` gives the back of a one-sided surface: no type has it, so
     /// the dispatch's default absorbs, with no BSDF and no density.
     MAT_BLACK: u32 = u32::MAX;
@@ -655,6 +665,8 @@ pub struct MaterialQuery {
     pub p: [f32; 4],
     pub ng: [f32; 4],
     pub ns: [f32; 4],
+    /// The shading normal before a normal map turned it to `ns`.
+    pub unmapped: [f32; 4],
     /// The hit's uv in `.xy`, the sample in `.zw`.
     pub uv: [f32; 4],
     pub wi: [f32; 4],
@@ -927,6 +939,7 @@ shared_record!(MaterialQuery {
     p,
     ng,
     ns,
+    unmapped,
     uv,
     wi,
     uv1,

@@ -27,8 +27,8 @@ use crate::scene::materials::{for_each_material, MaterialKind};
 use crate::scene::records::{
     Material, MAT_BLACK, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ALPHA_MASK, MAT_FLAG_ANISOTROPIC,
     MAT_FLAG_BUMP, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_DELTA, MAT_FLAG_NEE, MAT_FLAG_ONE_SIDED,
-    MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED,
-    MAT_FLAG_UV_NORMAL_MAP, NO_TEXTURE, SHADING_LIFT,
+    MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_STRICT_SHADING, MAT_FLAG_STRICT_VIEW,
+    MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, MAT_FLAG_UV_NORMAL_MAP, NO_TEXTURE, SHADING_LIFT,
 };
 
 macro_rules! dispatch {
@@ -197,9 +197,18 @@ pub fn alpha_u(u: f32, k: u32) -> f32 {
 
 /// The hit with its shading normal bent where the viewer's mirror direction about it
 /// would come within `SHADING_LIFT` of the geometric surface or under it
-/// (materials.wgsl's `bent_normal`, which says why).
-pub fn bent_normal(hit: &Hit, ray: &Ray) -> Hit {
+/// (materials.wgsl's `bent_normal`, which says why). A material that takes shading
+/// normals strictly (`MAT_FLAG_STRICT_SHADING`) is flipped instead: a mapped normal that
+/// leaves the viewer on the other side of it than of the unmapped one is mirrored about
+/// that (Mitsuba 3's normalmap and bumpmap).
+pub fn bent_normal(mat: &Material, hit: &Hit, ray: &Ray) -> Hit {
     let mut h = *hit;
+    if mat.flags & MAT_FLAG_STRICT_SHADING != 0 {
+        if ray.dir.dot(hit.unmapped) * ray.dir.dot(hit.ns) <= 0.0 {
+            h.ns = 2.0 * hit.ns.dot(hit.unmapped) * hit.unmapped - hit.ns;
+        }
+        return h;
+    }
     if hit.ns != hit.ng {
         let side = if hit.front_face { 1.0 } else { -1.0 };
         let ng = side * hit.ng;
@@ -216,23 +225,74 @@ pub fn bent_normal(hit: &Hit, ray: &Ray) -> Hit {
 }
 
 /// Whether shading normals send the material's directions over the geometric surface
-/// (materials.wgsl's `folds`).
+/// (materials.wgsl's `folds`): not for a material that transmits or takes them strictly.
 pub fn folds(mat: &Material, hit: &Hit) -> bool {
-    hit.ns != hit.ng && mat.flags & MAT_FLAG_TRANSMITS == 0
+    hit.ns != hit.ng && mat.flags & (MAT_FLAG_TRANSMITS | MAT_FLAG_STRICT_SHADING) == 0
+}
+
+/// Where the material takes shading normals strictly and the hit's differs from its
+/// geometric one, whether its lobes are black toward wi (materials.wgsl's
+/// `strictly_black`): wi on one side of the shading surface and the other of the
+/// unmapped or the geometric one, or, with `MAT_FLAG_STRICT_VIEW`, the viewer under the
+/// shading normal.
+pub fn strictly_black(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> bool {
+    if mat.flags & MAT_FLAG_STRICT_SHADING == 0 || hit.ns == hit.ng {
+        return false;
+    }
+    let side = if hit.front_face { 1.0 } else { -1.0 };
+    let viewer_under = mat.flags & MAT_FLAG_STRICT_VIEW != 0 && side * ray.dir.dot(hit.ns) >= 0.0;
+    let c = wi.dot(hit.ns);
+    viewer_under || wi.dot(hit.unmapped) * c <= 0.0 || wi.dot(hit.ng) * c <= 0.0
+}
+
+/// Where the material takes shading normals strictly and a map turned the shading
+/// normal, the share of light toward wi the map's bumps shadow (materials.wgsl's
+/// `map_shadowing`: Estevez et al. 2019, as Mitsuba 3's normalmap and bumpmap); else 1.
+pub fn map_shadowing(mat: &Material, hit: &Hit, wi: Vec3) -> f32 {
+    if mat.flags & MAT_FLAG_STRICT_SHADING == 0 || hit.ns == hit.unmapped {
+        return 1.0;
+    }
+    let cn = hit.ns.dot(hit.unmapped);
+    let a2 = (0.125 * (1.0 - cn * cn).max(0.0) / (cn * cn)).min(1.0);
+    let ci = wi.dot(hit.unmapped);
+    let t2 = (1.0 - ci * ci).max(0.0) / (ci * ci);
+    2.0 / (1.0 + (1.0 + a2 * t2).sqrt())
+}
+
+/// `scatter` by the material's type, with shading normals taken strictly where its flags
+/// say (materials.wgsl's `bsdf_scatter`): its lobes drawn about the shading normal alone,
+/// nothing folded over the geometric surface, a direction `strictly_black` absorbed, the
+/// weight shadowed by a map's bumps.
+pub fn bsdf_scatter(mat: &Material, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
+    if mat.flags & MAT_FLAG_STRICT_SHADING != 0 && hit.ns != hit.ng {
+        // the lobes' own tests of the side, and over_surface, read the shading normal
+        let shading = Hit { ng: hit.ns, ..*hit };
+        let mut s = scatter(mat, ray, &shading, u);
+        if s.ok && strictly_black(mat, ray, hit, s.dir) {
+            return ABSORBED;
+        }
+        s.weight *= map_shadowing(mat, hit, s.dir);
+        return s;
+    }
+    scatter(mat, ray, hit, u)
 }
 
 /// BSDF x cos toward wi (materials.wgsl's `bsdf_eval`): 0 under the geometric surface
 /// (where scatter absorbs), unless the material transmits and the shading normal agrees,
 /// and for delta lobes; where shading normals fold, plus what the lobes send to wi's
-/// mirror image (which `over_surface` sends to wi).
+/// mirror image (which `over_surface` sends to wi). Taken strictly: black where
+/// `strictly_black` says, shadowed by a map's bumps (`map_shadowing`).
 pub fn bsdf_eval(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> Vec3 {
+    if strictly_black(mat, ray, hit, wi) {
+        return Vec3::ZERO;
+    }
     let side = if hit.front_face { 1.0 } else { -1.0 };
     let transmits = mat.flags & MAT_FLAG_TRANSMITS != 0;
     if side * wi.dot(hit.ng) <= 0.0 {
         if !transmits || side * wi.dot(hit.ns) >= 0.0 {
             return Vec3::ZERO;
         }
-        return material_eval(mat, side * hit.ns, -ray.dir, wi);
+        return material_eval(mat, side * hit.ns, -ray.dir, wi) * map_shadowing(mat, hit, wi);
     }
     if transmits && side * wi.dot(hit.ns) <= 0.0 {
         return Vec3::ZERO;
@@ -241,7 +301,7 @@ pub fn bsdf_eval(mat: &Material, ray: &Ray, hit: &Hit, wi: Vec3) -> Vec3 {
     if folds(mat, hit) {
         return f + material_eval(mat, side * hit.ns, -ray.dir, mirrored(wi, hit));
     }
-    f
+    f * map_shadowing(mat, hit, wi)
 }
 
 /// The density with which scatter draws wi (before it absorbs directions on the wrong

@@ -28,8 +28,8 @@ use serde::Deserialize;
 
 use crate::scene::records::{
     Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_BUMP, MAT_FLAG_DELTA, MAT_FLAG_ENERGY, MAT_FLAG_NEE,
-    MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_TRANSMITS,
-    MAT_FLAG_TWO_SIDED, MAT_FLAG_UV_NORMAL_MAP,
+    MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_STRICT_SHADING,
+    MAT_FLAG_STRICT_VIEW, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, MAT_FLAG_UV_NORMAL_MAP,
 };
 use common::{Check, Lobes, Model, OpacityDesc, Surface, TextureNames, View};
 
@@ -204,6 +204,18 @@ impl MaterialDesc {
             Some(own) => own.unwrap_or(render_default),
             None => false,
         }
+    }
+
+    /// The flags that take its shading normals strictly (`[render] shading_normals =
+    /// "strict"`): `MAT_FLAG_STRICT_SHADING`, and `MAT_FLAG_STRICT_VIEW` where all its
+    /// lobes reflect (not glass, smooth or rough, thin or not, nor a principled material
+    /// that transmits).
+    pub fn strict_shading_flags(&self) -> u32 {
+        let reflects = !matches!(
+            self.kind(),
+            MaterialKind::Dielectric | MaterialKind::ThinDielectric
+        ) && !self.model().lobes().transmission;
+        MAT_FLAG_STRICT_SHADING | if reflects { MAT_FLAG_STRICT_VIEW } else { 0 }
     }
 
     /// Whether it emits light: a texture or a colour above 0 (a record's `emits`).

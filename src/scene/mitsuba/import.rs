@@ -57,7 +57,8 @@ pub fn import(tree: &SceneTree, base: &Path) -> Result<Imported, XmlError> {
     let mut im = Importer {
         tree,
         base: base.to_path_buf(),
-        render: Table::new(),
+        // Mitsuba's BSDFs take shading normals strictly, its normalmap and bumpmap too
+        render: Table::from_iter([("shading_normals".to_string(), text("strict"))]),
         camera: None,
         background: None,
         textures: Vec::new(),
