@@ -531,7 +531,7 @@ fn gpu_materials_match_cpu_query_by_query() {
 /// the image background, points, spots and a directional light), sampled from random
 /// points (some inside a sphere light) toward random choices: the GPU's sample_light, the
 /// light_pdf of what it sampled, light_pdf_total and background_radiance of a random
-/// direction, and sample_punctual (point, spot, directional, projector) agree with the CPU's query by query (at most 1 in 1000
+/// direction, and sample_punctual (point, spot, textured spot, directional, projector) agree with the CPU's query by query (at most 1 in 1000
 /// may differ, as a choice within rounding of a CDF step may go either way).
 #[test]
 fn gpu_lights_match_cpu_query_by_query() {
@@ -577,6 +577,7 @@ fn gpu_lights_match_cpu_query_by_query() {
             "[textures]\nsky = { type = \"image\", path = \"textures/sky.hdr\" }\n\
              [[lights]]\ntype = \"projector\"\nposition = [0, 3, 1]\nlook_at = [0, 0, 0]\nfov = 70\nirradiance = \"sky\"\nscale = 3\n\
              [[lights]]\ntype = \"projector\"\nposition = [1, -1, 2]\nlook_at = [0, 0, 0]\nup = [1, 0, 0]\nfov = 30\nirradiance = [1, 0.5, 0.25]\n\
+             [[lights]]\ntype = \"spot\"\nposition = [-1, 2, 1]\nlook_at = [0, 0, 0]\nup = [1, 0, 0]\nintensity = [5, 4, 3]\nouter_angle = 50\nfalloff = \"mitsuba\"\ntexture = \"sky\"\n\
              [[objects]]\ntype = \"triangle\"\nvertices = [[-1, 2.5, -1], [1, 2.5, -1], [0, 2.5, 1]]\nmaterial = \"both\"\n",
         ),
     ];

@@ -888,6 +888,15 @@ fn light_mistakes_are_named_with_their_line_and_key() {
             vec!["bad.toml:4:1: lights[0].outer_angle: must be in (0, 90] degrees, got 120"],
         ),
         (
+            "[[lights]]\ntype = \"spot\"\nposition = [0, 1, 0]\ndirection = [0, -1, 0]\n\
+             intensity = [1, 1, 1]\nouter_angle = 90\ntexture = \"slides\"\nup = [0, 2, 0]\n",
+            vec![
+                "bad.toml:4:1: lights[0].texture: unknown texture \"slides\" (defined: none)",
+                "bad.toml:4:1: lights[0].up: must not be parallel to the spot's axis",
+                "bad.toml:4:1: lights[0].outer_angle: must be under 90 degrees with a texture, got 90",
+            ],
+        ),
+        (
             "[[lights]]\ntype = \"point\"\nposition = [0, 1, 0]\nintensity = [1, 1, 1]\n\
              [[lights]]\ntype = \"directional\"\ndirection = [0, 0, 0]\nirradiance = [1, 1, 1]\n",
             vec!["bad.toml:8:1: lights[1].direction: must be non-zero"],

@@ -243,6 +243,12 @@ fn normal_maps_at_the_rim_and_the_terminator_agree_with_mitsuba() {
     agrees_with_mitsuba("normalmap-sphere", 256);
 }
 
+/// spot-texture.xml: a spot projecting an image, turned about its axis, and a plain one.
+#[test]
+fn textured_spots_agree_with_mitsuba() {
+    agrees_with_mitsuba("spot-texture", 256);
+}
+
 #[test]
 fn environment_and_thin_lens_agree_with_mitsuba() {
     agrees_with_mitsuba("environment", 256);

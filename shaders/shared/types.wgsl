@@ -110,9 +110,11 @@ struct Emitter {
     c: vec4<f32>,
     area: f32,
     power: f32,
-    // a projector's irradiance texture
+    // a projector's irradiance texture or a spot's texture
     texture: u32,
     pad1: u32,
+    // a textured spot's up vector over the tangent of its outer angle
+    d: vec4<f32>,
 }
 
 // Per-dispatch constants: camera, image, pass and band.

@@ -179,8 +179,7 @@ pub fn spot_falloff(cos_theta: f32, cos_outer: f32, cos_inner: f32, mode: f32) -
     let sin_outer = (1.0 - cos_outer * cos_outer).max(0.0).sqrt();
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     let to_edge = (sin_outer * cos_theta - cos_outer * sin_theta)
-        .clamp(-1.0, 1.0)
-        .asin();
+        .atan2(cos_outer * cos_theta + sin_outer * sin_theta);
     let linear = if cos_theta >= cos_inner {
         1.0
     } else {
@@ -208,6 +207,16 @@ pub struct PunctualSample {
     /// Where it is, when it is somewhere (a directional light is not).
     pub position: Vec3,
     pub positioned: bool,
+}
+
+/// A textured spot's colour toward w (lights.wgsl's `spot_texture`): its texture at
+/// uv = (1 + (w . r, w . u) / (w . f)) / 2 for the axis f, the up vector over the tangent
+/// of the outer angle u (the record's `d`) and r = f x u.
+pub fn spot_texture(b: &Bindings, e: &Emitter, w: Vec3, p: Vec3) -> Vec3 {
+    let f = xyz(e.c);
+    let u = xyz(e.d);
+    let uv = 0.5 + 0.5 * Vec2::new(w.dot(f.cross(u)), w.dot(u)) / w.dot(f);
+    texture_value(b, e.texture, Vec4::new(uv.x, uv.y, uv.x, uv.y), p)
 }
 
 /// A projector's intensity toward w over its colour: pi x its texture at the frustum's uv
@@ -245,6 +254,9 @@ pub fn sample_punctual(b: &Bindings, p: Vec3, u: f32) -> PunctualSample {
         let mut falloff = 1.0;
         if e.kind == LIGHT_SPOT {
             falloff = spot_falloff(-dir.dot(xyz(e.c)), e.a[3], e.b[3], e.c[3]);
+            if e.texture != NO_TEXTURE && falloff > 0.0 {
+                le *= spot_texture(b, e, -v, p);
+            }
         }
         if e.kind == LIGHT_PROJECTOR {
             le *= projector_falloff(b, e, -v, p);

@@ -420,7 +420,7 @@ pub enum TextureDesc {
         #[serde(default)]
         mapping: CheckerMapping,
     },
-    /// An image file (PNG, JPEG, HDR, EXR, PPM), `path` relative to the scene file; 8- and
+    /// An image file (PNG, JPEG, HDR, EXR, PPM, BMP), `path` relative to the scene file; 8- and
     /// 16-bit images are sRGB-decoded to linear unless `color_space = "linear"` (data such
     /// as roughness); bilinear filtering, or the nearest texel. `factor` multiplies the
     /// texels; `transform` maps the surface's uv (of set `uv_set`) before the look-up;
@@ -661,7 +661,8 @@ pub enum LightDesc {
     },
     /// A point light in a cone about the axis `direction` (or toward `look_at`): the full
     /// `intensity` within `inner_angle` of the axis, none beyond `outer_angle` (degrees),
-    /// and between them `falloff`'s ramp.
+    /// and between them `falloff`'s ramp; with a `texture`, times that image spread over
+    /// the square the outer cone fits in, its top toward `up` (Mitsuba 3's spot).
     Spot {
         position: [f32; 3],
         direction: Option<[f32; 3]>,
@@ -673,6 +674,10 @@ pub enum LightDesc {
         outer_angle: f32,
         #[serde(default)]
         falloff: SpotFalloff,
+        #[serde(default)]
+        texture: Option<String>,
+        #[serde(default = "default_up")]
+        up: [f32; 3],
     },
     /// Parallel light travelling along `direction`: `irradiance` [r, g, b] in W/m^2 on a
     /// surface facing it, E cos(theta) on one tilted by theta.
@@ -723,6 +728,8 @@ impl LightDesc {
                 inner_angle,
                 outer_angle,
                 falloff,
+                texture,
+                up,
             } => LightDesc::Spot {
                 position: point(position),
                 direction: direction.map(dir),
@@ -731,6 +738,8 @@ impl LightDesc {
                 inner_angle,
                 outer_angle,
                 falloff,
+                texture,
+                up: dir(up),
             },
             LightDesc::Directional {
                 direction,

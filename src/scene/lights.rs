@@ -117,6 +117,8 @@ pub fn punctual_lights<'a>(
                 inner_angle,
                 outer_angle,
                 falloff,
+                texture: image,
+                up,
             } => {
                 let p = Vec3::from(*position);
                 let axis = match (direction, look_at) {
@@ -145,6 +147,16 @@ pub fn punctual_lights<'a>(
                         .to_array(),
                     power: (2.0 * PI * (1.0 - 0.5 * (cos_in + cos_out))).min(seen(p))
                         * lum(*intensity),
+                    // a texture's up, square to the axis, over the outer angle's tangent:
+                    // the outer cone's square spans the image
+                    texture: image.as_deref().map_or(NO_TEXTURE, |t| texture(t).0),
+                    d: if image.is_some() {
+                        let up = Vec3::from(*up);
+                        let up = (up - axis * up.dot(axis)).normalize();
+                        (up / outer_angle.to_radians().tan()).extend(0.0).to_array()
+                    } else {
+                        [0.0; 4]
+                    },
                     ..Default::default()
                 }
             }

@@ -481,9 +481,13 @@ pub struct Emitter {
     pub area: f32,
     /// Emitted power estimate that `prob` is proportional to.
     pub power: f32,
-    /// A projector's irradiance texture, else 0.
+    /// A projector's irradiance texture or a spot's texture, else `NO_TEXTURE` (0 for
+    /// the lights that never read it).
     pub texture: u32,
     pub pad1: u32,
+    /// A textured spot's up vector (square to its axis) over the tangent of its outer
+    /// angle; else 0.
+    pub d: [f32; 4],
 }
 
 /// Per-dispatch constants (a uniform buffer): camera, image, pass and band.
@@ -871,7 +875,8 @@ shared_record!(Emitter {
     area,
     power,
     texture,
-    pad1
+    pad1,
+    d
 });
 shared_record!(Params {
     cam_origin,

@@ -493,18 +493,22 @@ impl Validator<'_> {
                 intensity,
                 inner_angle,
                 outer_angle,
+                texture,
+                up,
                 ..
             } => {
                 let placed = self.finite3(&format!("{key}.position"), *position, at);
                 self.nonnegative3(&format!("{key}.intensity"), *intensity, at);
-                match (direction, look_at) {
-                    (Some(d), None) => self.light_axis(&format!("{key}.direction"), *d, at),
+                let axis = match (direction, look_at) {
+                    (Some(d), None) => {
+                        self.light_axis(&format!("{key}.direction"), *d, at);
+                        Vec3::from(*d).try_normalize()
+                    }
                     (None, Some(t)) => {
+                        let axis = (Vec3::from(*t) - Vec3::from(*position)).try_normalize();
                         if self.finite3(&format!("{key}.look_at"), *t, at)
                             && placed
-                            && (Vec3::from(*t) - Vec3::from(*position))
-                                .try_normalize()
-                                .is_none()
+                            && axis.is_none()
                         {
                             self.push(
                                 at,
@@ -512,12 +516,47 @@ impl Validator<'_> {
                                 "must differ from position".into(),
                             );
                         }
+                        axis
                     }
-                    _ => self.push(
+                    _ => {
+                        self.push(
+                            at,
+                            &key,
+                            "needs exactly one of direction and look_at".into(),
+                        );
+                        None
+                    }
+                };
+                if let Some(t) = texture {
+                    self.color(
+                        &format!("{key}.texture"),
+                        &ColorDesc::Texture(t.clone()),
+                        false,
                         at,
-                        &key,
-                        "needs exactly one of direction and look_at".into(),
-                    ),
+                    );
+                    if self.attributes.iter().any(|n| n == t) {
+                        self.push(
+                            at,
+                            &format!("{key}.texture"),
+                            format!("\"{t}\" is a mesh attribute; a spot's image has no mesh"),
+                        );
+                    }
+                    if self.finite3(&format!("{key}.up"), *up, at)
+                        && axis.is_some_and(|a| a.cross(Vec3::from(*up)).try_normalize().is_none())
+                    {
+                        self.push(
+                            at,
+                            &format!("{key}.up"),
+                            "must not be parallel to the spot's axis".into(),
+                        );
+                    }
+                    if *outer_angle >= 90.0 {
+                        self.push(
+                            at,
+                            &format!("{key}.outer_angle"),
+                            format!("must be under 90 degrees with a texture, got {outer_angle}"),
+                        );
+                    }
                 }
                 if !(*outer_angle > 0.0 && *outer_angle <= 90.0) {
                     self.push(

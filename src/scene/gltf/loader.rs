@@ -224,6 +224,8 @@ impl<'a> Loader<'a> {
                     inner_angle: inner_cone_angle.to_degrees(),
                     outer_angle: outer_cone_angle.to_degrees(),
                     falloff: SpotFalloff::Gltf,
+                    texture: None,
+                    up: [0.0, 1.0, 0.0],
                 }
             }
         });

@@ -1745,25 +1745,29 @@ impl<'a> Importer<'a> {
                 light(self, table([("type", text("point")), ("position", vec3(position)), ("intensity", intensity)]));
             }
             "spot" => {
-                self.check_known(o, &["intensity", "cutoff_angle", "beam_width", "to_world"], &["sampling_weight"])?;
-                if o.get("texture").is_some() {
-                    return err(&o.pos, "emitter spot: a texture is not read");
-                }
+                self.check_known(o, &["intensity", "cutoff_angle", "beam_width", "to_world", "texture"], &["sampling_weight"])?;
                 let cutoff = self.float(o, "cutoff_angle", 20.0)?;
                 let beam = self.float(o, "beam_width", cutoff * 3.0 / 4.0)?;
                 let intensity = self.color_const(o, "intensity", 1.0, Use::Emission)?;
-                light(
-                    self,
-                    table([
-                        ("type", text("spot")),
-                        ("position", vec3(at(DVec3::ZERO))),
-                        ("direction", vec3(axis())),
-                        ("intensity", intensity),
-                        ("inner_angle", float(beam)),
-                        ("outer_angle", float(cutoff)),
-                        ("falloff", text("mitsuba")),
-                    ]),
-                );
+                let mut t = table([
+                    ("type", text("spot")),
+                    ("position", vec3(at(DVec3::ZERO))),
+                    ("direction", vec3(axis())),
+                    ("intensity", intensity),
+                    ("inner_angle", float(beam)),
+                    ("outer_angle", float(cutoff)),
+                    ("falloff", text("mitsuba")),
+                ]);
+                if let Some(p) = o.get("texture") {
+                    let Value::Object(i) = p.value else {
+                        return err(&p.pos, "emitter spot: `texture` must be a texture");
+                    };
+                    t.insert("texture".into(), T::String(self.texture(i)?));
+                    // Mitsuba looks the image up at 0.5 + 0.5 (x, y) / (z tan cutoff) in
+                    // its local frame, v down the image: its top toward local -y
+                    t.insert("up".into(), vec3(-m.transform_vector3(DVec3::Y).normalize()));
+                }
+                light(self, t);
             }
             "directional" => {
                 self.check_known(o, &["irradiance", "direction", "to_world"], &["sampling_weight"])?;
@@ -1775,8 +1779,24 @@ impl<'a> Importer<'a> {
                 light(self, table([("type", text("directional")), ("direction", vec3(direction)), ("irradiance", irradiance)]));
             }
             "projector" => {
-                self.check_known(o, &["irradiance", "scale", "fov", "to_world"], &["sampling_weight", "fov_axis"])?;
+                self.check_known(o, &["irradiance", "scale", "fov", "fov_axis", "focal_length", "to_world"], &["sampling_weight"])?;
                 let irradiance = self.color(o, "irradiance", 1.0, Use::Emission)?;
+                // Mitsuba reads the field of view as its perspective camera does, for the
+                // aspect of the image (1 for a constant)
+                let aspect = match o.get("irradiance").map(|p| &p.value) {
+                    Some(Value::Object(i)) if self.obj(*i).plugin == "bitmap" => {
+                        let t = self.obj(*i);
+                        let name = t.get("filename").map(|p| p.pos.clone()).unwrap_or(t.pos.clone());
+                        let file = self.tree.find_file(&name, self.string(t, "filename")?.unwrap_or(""));
+                        let (w, h) = image::image_dimensions(&file).map_err(|e| XmlError {
+                            pos: name,
+                            message: format!("texture bitmap: {}: {e}", file.display()),
+                        })?;
+                        f64::from(w) / f64::from(h)
+                    }
+                    _ => 1.0,
+                };
+                let fov = self.fov_x(o, aspect)?;
                 let position = at(DVec3::ZERO);
                 light(
                     self,
@@ -1785,7 +1805,7 @@ impl<'a> Importer<'a> {
                         ("position", vec3(position)),
                         ("look_at", vec3(position + axis())),
                         ("up", vec3(m.transform_vector3(DVec3::Y).normalize())),
-                        ("fov", float(self.float(o, "fov", 0.0)?)),
+                        ("fov", float(fov)),
                         ("irradiance", irradiance),
                         ("scale", float(self.float(o, "scale", 1.0)?)),
                     ]),
