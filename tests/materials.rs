@@ -505,6 +505,28 @@ fn strict_shading_normals_flip_and_shadow_as_mitsuba_does() {
     }
 }
 
+/// An anisotropic roughness's frame: the hit's tangent, or taken strictly (Mitsuba's
+/// frames) its dp/du, whatever the tangent says; `[render] shading_normals` sets the
+/// record's flag on every material.
+#[test]
+fn strict_anisotropy_follows_dp_du() {
+    for (shading, strict) in [("bend", false), ("strict", true)] {
+        let s = common::scene_from_str(&format!(
+            "[render]\nshading_normals = \"{shading}\"\n[camera]\nlook_from = [0, 0, 5]\n\
+             look_at = [0, 0, 0]\n[materials.brushed]\ntype = \"conductor\"\nmaterial = \"Al\"\n\
+             roughness_u = 0.5\nroughness_v = 0.2\n[[objects]]\ntype = \"sphere\"\n\
+             center = [0, 0, 0]\nradius = 1\nmaterial = \"brushed\"\n"
+        ));
+        let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_band()));
+        let (_, _, mut hit) = view(30.0);
+        hit.tangent = glam::Vec4::new(1.0, 0.0, 0.0, 1.0);
+        hit.dpdu = Vec3::new(0.0, 2.0, 0.0);
+        let m = wgtrace::cpu::materials::material_at(&b, &s.materials[0], &hit);
+        let t = Vec3::from_slice(&m.normal2[..3]);
+        assert_eq!(t, if strict { hit.dpdu } else { Vec3::X }, "{shading}");
+    }
+}
+
 /// The weight and pdf a sampled direction comes with are `eval / pdf` and `pdf` of that
 /// direction, for every material with a density (its non-delta samples); a material
 /// without one weighs every direction 0.

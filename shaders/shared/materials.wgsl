@@ -35,9 +35,15 @@ fn material_at(m: Material, hit: Hit) -> Material {
     // which side the hit is on, for a material whose eval needs it (rough glass's eta)
     mat.normal2.w = select(0.0, 1.0, !hit.front_face);
 #ifdef HAS_NORMAL_MAP
-    // an anisotropic roughness's frame follows the hit's tangent
+    // an anisotropic roughness's frame follows the hit's tangent, or taken strictly its
+    // dp/du, as Mitsuba's frames do
     if ((mat.flags & MAT_FLAG_ANISOTROPIC) != 0u) {
         mat.normal2 = vec4<f32>(hit.tangent.xyz, mat.normal2.w);
+#ifdef HAS_BUMP
+        if ((mat.flags & MAT_FLAG_STRICT_SHADING) != 0u) {
+            mat.normal2 = vec4<f32>(hit.dpdu, mat.normal2.w);
+        }
+#endif
     }
 #endif
 #ifdef HAS_TEXTURES

@@ -38,12 +38,10 @@ impl<'a> Bindings<'a> {
             textures: &scene.textures,
             texels: &scene.texels,
             tables: &scene.tables,
-            has_bump: scene.materials.iter().any(|m| {
-                m.flags
-                    & (crate::scene::records::MAT_FLAG_BUMP
-                        | crate::scene::records::MAT_FLAG_UV_NORMAL_MAP)
-                    != 0
-            }),
+            has_bump: scene
+                .materials
+                .iter()
+                .any(crate::scene::materials::reads_uv_derivatives),
             has_alpha: scene.materials.iter().any(|m| {
                 m.flags
                     & (crate::scene::records::MAT_FLAG_ALPHA_MASK

@@ -19,7 +19,7 @@ use crate::scene::flat::FlatScene;
 use crate::scene::format::{FilterKind, LightSampling, SamplerKind};
 use crate::scene::materials::common::Surface;
 use crate::scene::materials::MaterialKind;
-use crate::scene::materials::{conductor, dielectric, pbr, plastic};
+use crate::scene::materials::{conductor, dielectric, pbr, plastic, reads_uv_derivatives};
 use crate::scene::primitives::PrimitiveKind;
 use crate::scene::records as r;
 use crate::tuning::Tuning;
@@ -392,10 +392,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         )
         .with(
             Feature::Bump,
-            scene
-                .materials
-                .iter()
-                .any(|m| m.flags & (r::MAT_FLAG_BUMP | r::MAT_FLAG_UV_NORMAL_MAP) != 0),
+            scene.materials.iter().any(reads_uv_derivatives),
         )
         .with(Feature::MeshAttribute, texture(r::TEX_MESH_ATTRIBUTE))
         .with(

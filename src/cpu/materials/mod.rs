@@ -101,9 +101,15 @@ pub fn material_at(b: &Bindings, m: &Material, hit: &Hit) -> Material {
     let mut mat = *m;
     // which side the hit is on, for a material whose eval needs it (rough glass's eta)
     mat.normal2[3] = if hit.front_face { 0.0 } else { 1.0 };
-    // an anisotropic roughness's frame follows the hit's tangent
+    // an anisotropic roughness's frame follows the hit's tangent, or taken strictly its
+    // dp/du, as Mitsuba's frames do
     if mat.flags & MAT_FLAG_ANISOTROPIC != 0 {
-        mat.normal2 = hit.tangent.truncate().extend(mat.normal2[3]).to_array();
+        let t = if mat.flags & MAT_FLAG_STRICT_SHADING != 0 {
+            hit.dpdu
+        } else {
+            hit.tangent.truncate()
+        };
+        mat.normal2 = t.extend(mat.normal2[3]).to_array();
     }
     // the .w of each colour is a scalar of its own
     if mat.tex_color != NO_TEXTURE {

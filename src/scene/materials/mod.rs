@@ -27,9 +27,10 @@ pub mod thin_dielectric;
 use serde::Deserialize;
 
 use crate::scene::records::{
-    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_BUMP, MAT_FLAG_DELTA, MAT_FLAG_ENERGY, MAT_FLAG_NEE,
-    MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE, MAT_FLAG_OWN_COLORS, MAT_FLAG_STRICT_SHADING,
-    MAT_FLAG_STRICT_VIEW, MAT_FLAG_TRANSMITS, MAT_FLAG_TWO_SIDED, MAT_FLAG_UV_NORMAL_MAP,
+    Material, MAT_FLAG_ALPHA_BLEND, MAT_FLAG_ANISOTROPIC, MAT_FLAG_BUMP, MAT_FLAG_DELTA,
+    MAT_FLAG_ENERGY, MAT_FLAG_NEE, MAT_FLAG_ONE_SIDED, MAT_FLAG_OPACITY_TEXTURE,
+    MAT_FLAG_OWN_COLORS, MAT_FLAG_STRICT_SHADING, MAT_FLAG_STRICT_VIEW, MAT_FLAG_TRANSMITS,
+    MAT_FLAG_TWO_SIDED, MAT_FLAG_UV_NORMAL_MAP,
 };
 use common::{Check, Lobes, Model, OpacityDesc, Surface, TextureNames, View};
 
@@ -285,6 +286,15 @@ impl MaterialDesc {
         surface.write(&mut record);
         record
     }
+}
+
+/// Whether a material's record reads the hit's dp/du (`HAS_BUMP`): for a bump map, for a
+/// normal map in its frame (Mitsuba's), and for an anisotropic roughness taken strictly
+/// (`MAT_FLAG_STRICT_SHADING`: Mitsuba's frames follow dp/du).
+pub fn reads_uv_derivatives(m: &Material) -> bool {
+    m.flags & (MAT_FLAG_BUMP | MAT_FLAG_UV_NORMAL_MAP) != 0
+        || m.flags & (MAT_FLAG_ANISOTROPIC | MAT_FLAG_STRICT_SHADING)
+            == MAT_FLAG_ANISOTROPIC | MAT_FLAG_STRICT_SHADING
 }
 
 /// Marks a material that reads a mesh attribute (`is_attribute` of a texture index) in any
