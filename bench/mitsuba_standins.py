@@ -7,7 +7,8 @@ where Mitsuba looks first (the scene's latest `<path>` folder, else the scene's 
   of radius 0.5 at y = -1.2, so that a scene's sphere and its base do not coincide), the rectangle
   [-1, 1]^2 at z = 0 facing +z ("rectangle", "background" the same, 10 times larger), a
   cube of side 1 ("cube"), a torus ("torus"); each with normals and uv;
-- ASCII PLY: the rectangle with normals and uv; `.serialized`: 8 shapes (for any
+- ASCII PLY: the rectangle with normals and uv (names with "attribute": a sphere with a
+  colour per vertex and one per face); `.serialized`: 8 shapes (for any
   `shape_index`), each the rectangle ("rectangle") or the sphere (positions);
 - PNG/JPG/BMP: a 64 x 64 pattern of colour gradients and checks (names with "normalmap": a
   wave normal map; with "mask": a soft-edged disk pattern in grey);
@@ -15,8 +16,7 @@ where Mitsuba looks first (the scene's latest `<path>` folder, else the scene's 
 
 Both renderers then read the same stand-ins, so the comparison still judges how each
 reads the scene file; the stand-ins written are listed, and a report made from these
-scenes says the assets are stand-ins. PLY files with named attributes, volumes and other
-kinds are left missing (the scene is refused by the renderer that needs
+scenes says the assets are stand-ins. Volumes and other kinds are left missing (the scene is refused by the renderer that needs
 them, with its message).
 
 usage: python bench/mitsuba_standins.py FOLDER   (Mitsuba 3's Python package writes the
@@ -109,6 +109,38 @@ def quad_ply():
             "-1 -1 0 0 0 1 0 0\n1 -1 0 0 0 1 1 0\n1 1 0 0 0 1 1 1\n-1 1 0 0 0 1 0 1\n3 0 1 2\n3 0 2 3\n")
 
 
+def attribute_sphere_ply():
+    """A UV sphere of radius 1 as ASCII PLY with the attributes Mitsuba's reader names
+    `vertex_color` and `face_color` (float r, g, b per vertex and per face, the face's
+    before its indices, as that reader wants them; triangles only, none degenerate: one
+    vertex at each pole). Mitsuba reads no one-channel attribute without a postfix, so a
+    scene's `face_weight` is left out."""
+    rings, segs = 12, 24
+    points = [(0.0, 0.0, 1.0)]
+    for i in range(1, rings):
+        th = math.pi * i / rings
+        points += [(math.sin(th) * math.cos(2 * math.pi * j / segs), math.sin(th) * math.sin(2 * math.pi * j / segs),
+                    math.cos(th)) for j in range(segs)]
+    points.append((0.0, 0.0, -1.0))
+    ring = lambda i, j: 1 + (i - 1) * segs + j % segs
+    tris = [(0, ring(1, j), ring(1, j + 1)) for j in range(segs)]
+    for i in range(1, rings - 1):
+        for j in range(segs):
+            a, b, c, d = ring(i, j), ring(i + 1, j), ring(i + 1, j + 1), ring(i, j + 1)
+            tris += [(a, b, c), (a, c, d)]
+    tris += [(ring(rings - 1, j), len(points) - 1, ring(rings - 1, j + 1)) for j in range(segs)]
+    verts = ["%.6f %.6f %.6f %.6f %.6f %.6f" % (p + tuple(0.5 + 0.5 * a for a in p)) for p in points]
+    faces = ["%.4f %.4f %.4f 3 %d %d %d" % (((n * 7) % 5 / 4, (n * 3) % 4 / 3, n % 2) + t)
+             for n, t in enumerate(tris)]
+    head = ["ply", "format ascii 1.0", f"element vertex {len(verts)}",
+            "property float x", "property float y", "property float z",
+            "property float r", "property float g", "property float b",
+            f"element face {len(faces)}",
+            "property float r", "property float g", "property float b",
+            "property list uchar int vertex_indices", "end_header"]
+    return "\n".join(head + verts + faces) + "\n"
+
+
 def pattern(name):
     y, x = np.mgrid[0:64, 0:64] / 63.0
     if "normalmap" in name:
@@ -155,8 +187,8 @@ def write(path):
                 # a "base" beside a sphere of the same scene: below it, not in its place
                 else sphere_obj(0.5, (0.0, -1.2, 0.0)) if "base" in name else sphere_obj())
         open(path, "w").write(text)
-    elif ext == ".ply" and "attribute" not in name:
-        open(path, "w").write(quad_ply())
+    elif ext == ".ply":
+        open(path, "w").write(attribute_sphere_ply() if "attribute" in name else quad_ply())
     elif ext == ".serialized":
         if "rectangle" in name:
             mesh = ([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [(0, 1, 2), (0, 2, 3)])

@@ -627,7 +627,8 @@ material = "d"
 /// pixel is its albedo exactly) on both backends. With vertex colours (1, 1, 0), an albedo
 /// of `vertex_color` shows (1, 1, 0), not its square; an albedo of 0.5 is tinted by them
 /// as before, (0.5, 0.5, 0). With face colours, red and blue, `face_color` shows each
-/// face's colour, constant over it: every pixel is red or blue, and both occur.
+/// face's colour, constant over it: every pixel is red or blue, and both occur. A file
+/// with both gives each material the set it reads.
 #[test]
 fn mesh_attributes_read_vertex_and_face_colours() {
     let dir = common::tmp_dir("mesh-attribute");
@@ -649,8 +650,12 @@ fn mesh_attributes_read_vertex_and_face_colours() {
     let face_ply = header(false, true)
         + &corners.map(|c| format!("{c}\n")).concat()
         + "3 0 3 2 255 0 0\n3 0 2 1 0 0 255\n";
+    let both_ply = header(true, true)
+        + &corners.map(|c| format!("{c} 255 255 0\n")).concat()
+        + "3 0 3 2 255 0 0\n3 0 2 1 0 0 255\n";
     std::fs::write(dir.join("vertex.ply"), vertex_ply).unwrap();
     std::fs::write(dir.join("face.ply"), face_ply).unwrap();
+    std::fs::write(dir.join("both.ply"), both_ply).unwrap();
     let src = |mesh: &str, albedo: &str| {
         format!(
             r#"
@@ -682,11 +687,12 @@ material = "m"
         wgtrace::load_scene_str(&text, &dir.join("s.toml"), &Default::default())
             .unwrap_or_else(|e| panic!("{e}"))
     };
-    for (albedo, expected) in [
-        ("\"vc\"", [1.0f32, 1.0, 0.0]),
-        ("[0.5, 0.5, 0.5]", [0.5, 0.5, 0.0]),
+    for (mesh, albedo, expected) in [
+        ("vertex.ply", "\"vc\"", [1.0f32, 1.0, 0.0]),
+        ("vertex.ply", "[0.5, 0.5, 0.5]", [0.5, 0.5, 0.0]),
+        ("both.ply", "\"vc\"", [1.0, 1.0, 0.0]),
     ] {
-        let s = load(src("vertex.ply", albedo));
+        let s = load(src(mesh, albedo));
         for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
             let bad = (0..img.pixel_count())
                 .filter(|&i| (0..3).any(|c| (img.mean(i)[c] - expected[c]).abs() > 1e-5))
@@ -699,8 +705,13 @@ material = "m"
             );
         }
     }
-    let s = load(src("face.ply", "\"fc\""));
-    for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
+    for (name, img) in ["face.ply", "both.ply"].into_iter().flat_map(|mesh| {
+        let s = load(src(mesh, "\"fc\""));
+        [
+            (format!("{mesh}, gpu"), render_gpu(&s)),
+            (format!("{mesh}, cpu"), render_cpu(&s)),
+        ]
+    }) {
         let is = |i: usize, c: [f32; 3]| (0..3).all(|k| (img.mean(i)[k] - c[k]).abs() <= 1e-5);
         let red = (0..img.pixel_count())
             .filter(|&i| is(i, [1.0, 0.0, 0.0]))

@@ -439,7 +439,9 @@ proptest! {
 /// Vertex colours of OBJ (`v x y z r g b`) and PLY (`red`, `green`, `blue`, 8-bit here)
 /// files are display colours, decoded from sRGB, that multiply the material's colour: a
 /// white-lit Lambertian quad of one vertex colour shows albedo x colour exactly (every
-/// cosine-weighted sample of a uniform sky weighs the albedo), on both backends.
+/// cosine-weighted sample of a uniform sky weighs the albedo), on both backends. A PLY
+/// file's `r`, `g`, `b` (Mitsuba's names) read alike, and with `color_space = "linear"`
+/// are taken as they are, as Mitsuba takes them.
 #[test]
 fn obj_and_ply_vertex_colours_multiply_the_material_colour() {
     use wgtrace::scene::texels::srgb_to_linear;
@@ -461,18 +463,38 @@ fn obj_and_ply_vertex_colours_multiply_the_material_colour() {
     }
     ply += "4 0 1 2 3\n";
     std::fs::write(dir.join("c.ply"), ply).unwrap();
+    let mut rgb = String::from(
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+         property float z\nproperty float r\nproperty float g\nproperty float b\n\
+         element face 1\nproperty list uchar int vertex_indices\nend_header\n",
+    );
+    for [x, y] in quad {
+        rgb += &format!("{x} {y} 0 0.7 0.4 0.1\n");
+    }
+    rgb += "4 0 1 2 3\n";
+    std::fs::write(dir.join("rgb.ply"), rgb).unwrap();
     let albedo = 0.8f32;
     let want = |c: [f32; 3]| c.map(|x| albedo * srgb_to_linear(x));
-    for (file, colour) in [
-        ("c.obj", want([0.5, 0.25, 1.0])),
-        ("c.ply", want([200.0 / 255.0, 100.0 / 255.0, 50.0 / 255.0])),
+    for (file, keys, colour) in [
+        ("c.obj", "", want([0.5, 0.25, 1.0])),
+        (
+            "c.ply",
+            "",
+            want([200.0 / 255.0, 100.0 / 255.0, 50.0 / 255.0]),
+        ),
+        ("rgb.ply", "", want([0.7, 0.4, 0.1])),
+        (
+            "rgb.ply",
+            "color_space = \"linear\"\n",
+            [0.7, 0.4, 0.1].map(|x| albedo * x),
+        ),
     ] {
         let src = format!(
             "[render]\nwidth = 16\nheight = 16\nspp = 4\nmax_depth = 2\n\
              [camera]\nprojection = \"orthographic\"\nheight = 1.5\n\
              look_from = [0, 0, 3]\nlook_at = [0, 0, 0]\n[background]\ncolor = [1, 1, 1]\n\
              [materials]\nm = {{ type = \"lambertian\", albedo = [{albedo}, {albedo}, {albedo}] }}\n\
-             [[objects]]\ntype = \"mesh\"\npath = \"{file}\"\nmaterial = \"m\"\n"
+             [[objects]]\ntype = \"mesh\"\npath = \"{file}\"\nmaterial = \"m\"\n{keys}"
         );
         let s = wgtrace::load_scene_str(&src, &dir.join("s.toml"), &Overrides::default())
             .unwrap_or_else(|e| panic!("{e}"));
@@ -494,5 +516,46 @@ fn obj_and_ply_vertex_colours_multiply_the_material_colour() {
                 }
             }
         }
+    }
+}
+
+/// A PLY file's face colours give each triangle corners of its own, after the vertex
+/// normals are made over the shared corners: a folded quad of two coloured faces, without
+/// normals, with `smooth_normals` (as the Mitsuba importer writes), has the same normal
+/// at each end of the fold in both triangles, and each triangle one colour.
+#[test]
+fn face_colours_keep_smooth_normals_over_shared_corners() {
+    use glam::{Vec3, Vec4};
+    use wgtrace::scene::mesh::{adjust, load_mesh, Adjust, ColorChoice};
+    let dir = dir("face-colours");
+    let ply = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+               property float z\nelement face 2\nproperty float r\nproperty float g\n\
+               property float b\nproperty list uchar int vertex_indices\nend_header\n\
+               -1 0 0\n0 -1 0.5\n1 0 0\n0 1 0.5\n1 0 0 3 0 1 3\n0 0 1 3 1 2 3\n";
+    std::fs::write(dir.join("fold.ply"), ply).unwrap();
+    let mut m = load_mesh(&dir.join("fold.ply"), ColorChoice::default()).unwrap();
+    adjust(
+        &mut m,
+        Adjust {
+            smooth_normals: true,
+            ..Default::default()
+        },
+    );
+    assert_eq!(m.triangles.len(), 2);
+    assert_eq!(m.positions.len(), 6, "each triangle's corners its own");
+    let corner = |t: usize, p: Vec3| {
+        let k = m.triangles[t]
+            .into_iter()
+            .find(|&i| m.positions[i as usize] == p)
+            .unwrap() as usize;
+        (m.normals[k], m.colors[k])
+    };
+    for p in [Vec3::new(0.0, -1.0, 0.5), Vec3::new(0.0, 1.0, 0.5)] {
+        let ((n0, c0), (n1, c1)) = (corner(0, p), corner(1, p));
+        assert!((n0 - n1).length() < 1e-6, "{p}: {n0} and {n1}");
+        assert_eq!(
+            (c0, c1),
+            (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 0.0, 1.0, 1.0))
+        );
     }
 }

@@ -869,6 +869,10 @@ pub enum ObjectDesc {
         /// Which mesh of a `.serialized` file (Mitsuba's `shape_index`).
         #[serde(default)]
         shape_index: u32,
+        /// How the file's vertex and face colours become linear ones: decoded from sRGB
+        /// (display colours), or taken as they are (Mitsuba's reading).
+        #[serde(default)]
+        color_space: ColorSpace,
     },
     /// A glTF 2.0 file (`.gltf` or `.glb`), `path` relative to the scene file: its first
     /// scene's meshes with their materials, and its KHR_lights_punctual lights, placed by

@@ -18,6 +18,7 @@ use super::format::{
 };
 use super::gltf::{self, GltfError};
 use super::imported::ImportedScene;
+use super::materials::{reads_texture, MaterialDesc};
 use super::{mesh, mitsuba, mtl, textures, validate};
 
 /// Largest scene file read (64 MiB).
@@ -440,6 +441,7 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                         face_normals,
                         smooth_normals,
                         flip_normals,
+                        color_space,
                         ..
                     } = obj.get_ref()
                     {
@@ -458,7 +460,7 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                                 "a {kind} file has no materials: give the object a `material`"
                             ));
                         }
-                        let mut g = mtl::load_obj_scene(p, &prefix)?;
+                        let mut g = mtl::load_obj_scene(p, &prefix, *color_space)?;
                         for m in &mut g.meshes {
                             mesh::adjust(m, adjust);
                         }
@@ -493,13 +495,26 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 smooth_normals,
                 flip_normals,
                 shape_index,
+                color_space,
                 ..
             } => read_relative(
                 (src, dir, path),
                 obj.span().start,
                 format!("{}.path", file.object_key(i)),
                 |p| {
-                    let mut m = mesh::load_mesh_at(p, *shape_index)?;
+                    let reads = |attribute: &str| reads_attribute(file, material, attribute);
+                    let faces = reads("face_color");
+                    if faces && reads("vertex_color") {
+                        return Err(format!(
+                            "material \"{material}\" reads both face_color and vertex_color; \
+                             a mesh keeps one of its file's colour sets"
+                        ));
+                    }
+                    let colors = mesh::ColorChoice {
+                        space: *color_space,
+                        faces,
+                    };
+                    let mut m = mesh::load_mesh_at(p, *shape_index, colors)?;
                     mesh::adjust(
                         &mut m,
                         mesh::Adjust {
@@ -567,6 +582,35 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
 }
 
 /// Adds `n` to the scene's running `total` of `what`, or fails once it would pass `cap`.
+/// Whether material `name` (or a part of it, for a blend) reads the mesh attribute
+/// `attribute` (`vertex_color`, `face_color`) through a `mesh_attribute` texture. The file
+/// is validated.
+fn reads_attribute(file: &SceneFile, name: &str, attribute: &str) -> bool {
+    let names: Vec<String> = file.textures.keys().cloned().collect();
+    let picked: Vec<u32> = file
+        .textures
+        .values()
+        .enumerate()
+        .filter(|(_, t)| matches!(t.get_ref(), TextureDesc::MeshAttribute { name } if name == attribute))
+        .map(|(k, _)| k as u32)
+        .collect();
+    let mut stack = vec![name.to_string()];
+    let mut seen = std::collections::HashSet::new();
+    while let Some(n) = stack.pop() {
+        let Some(desc) = file.materials.get(&n).filter(|_| seen.insert(n.clone())) else {
+            continue;
+        };
+        if let MaterialDesc::Blend(b) = desc.get_ref() {
+            stack.push(b.first.clone());
+            stack.push(b.second.clone());
+        }
+        if reads_texture(&desc.get_ref().record(&names), |t| picked.contains(&t)) {
+            return true;
+        }
+    }
+    false
+}
+
 fn count_toward(total: &Cell<u64>, n: u64, cap: u64, what: &str) -> Result<(), String> {
     let sum = total.get() + n;
     if sum > cap {

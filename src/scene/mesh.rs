@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use super::format::ColorSpace;
 use super::texels::srgb_to_linear;
 use glam::{DVec2, DVec3, Vec2, Vec3, Vec4};
 use ply_rs_bw::parser::{Parser, Reader};
@@ -24,6 +25,10 @@ pub struct MeshData {
     pub uvs1: Vec<Vec2>,
     /// Vertex colours (linear rgb, alpha) per vertex: empty, or one per position.
     pub colors: Vec<Vec4>,
+    /// A colour per triangle (a PLY file's face colours): empty, or one per triangle.
+    /// `adjust` gives each triangle corners of its own of that colour, once the vertex
+    /// normals are made over the shared corners.
+    pub face_colors: Vec<Vec4>,
 }
 
 /// Largest OBJ file read (2 GiB): the whole file is parsed in memory.
@@ -35,7 +40,7 @@ pub const MAX_TRIANGLES: usize = 1 << 24;
 /// Reads a mesh file: PLY for a `.ply` name (any case), else OBJ. Files over
 /// [`MAX_MESH_FILE_BYTES`] and meshes over [`MAX_TRIANGLES`] are refused; so are faces
 /// that index no vertex and coordinates that are not finite.
-pub fn load_mesh(path: &Path) -> Result<MeshData, String> {
+pub fn load_mesh(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
     let bytes = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
     if bytes > MAX_MESH_FILE_BYTES {
         return Err(format!(
@@ -43,9 +48,9 @@ pub fn load_mesh(path: &Path) -> Result<MeshData, String> {
         ));
     }
     let mesh = if is_ply(path) {
-        load_ply(path)?
+        load_ply(path, colors)?
     } else {
-        load_obj(path)?
+        load_obj(path, colors.space)?
     };
     check(mesh)
 }
@@ -58,7 +63,11 @@ pub fn is_serialized(path: &Path) -> bool {
 
 /// The mesh a scene asks for: mesh `shape_index` of a `.serialized` file, else the whole
 /// OBJ or PLY file.
-pub fn load_mesh_at(path: &Path, shape_index: u32) -> Result<MeshData, String> {
+pub fn load_mesh_at(
+    path: &Path,
+    shape_index: u32,
+    colors: ColorChoice,
+) -> Result<MeshData, String> {
     if is_serialized(path) {
         let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
         return check(read_serialized(&bytes, shape_index)?);
@@ -66,7 +75,7 @@ pub fn load_mesh_at(path: &Path, shape_index: u32) -> Result<MeshData, String> {
     if shape_index != 0 {
         return Err("`shape_index` applies to .serialized files only".into());
     }
-    load_mesh(path)
+    load_mesh(path, colors)
 }
 
 /// How a mesh object's shading normals and front side are asked for.
@@ -100,6 +109,12 @@ pub fn adjust(mesh: &mut MeshData, a: Adjust) {
         for t in &mut mesh.tangents {
             t.swap(1, 2);
         }
+    }
+    // face colours: each triangle gets corners of its own, of its face's colour, so that
+    // the colour is constant over it as the renderer interpolates corners
+    if !mesh.face_colors.is_empty() {
+        let colors = std::mem::take(&mut mesh.face_colors);
+        *mesh = unwelded(mesh, |t| colors[t]);
     }
 }
 
@@ -366,25 +381,38 @@ pub fn is_ply(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("ply"))
 }
 
-/// A vertex colour of an OBJ or PLY file as the renderer's: such colours are display
-/// colours (as MeshLab and Blender write them), so rgb is decoded from sRGB; alpha is
-/// linear.
-pub fn display_color(c: [f64; 4]) -> Vec4 {
-    let lin = |x: f64| srgb_to_linear(x as f32);
+/// A vertex colour of an OBJ or PLY file as the renderer's: by default such colours are
+/// display colours (as MeshLab and Blender write them), so rgb is decoded from sRGB;
+/// `ColorSpace::Linear` takes them as they are (Mitsuba's reading). Alpha is linear.
+pub fn file_color(c: [f64; 4], space: ColorSpace) -> Vec4 {
+    let lin = |x: f64| match space {
+        ColorSpace::Srgb => srgb_to_linear(x as f32),
+        ColorSpace::Linear => x as f32,
+    };
     Vec4::new(lin(c[0]), lin(c[1]), lin(c[2]), c[3] as f32)
 }
 
-/// The vertex colours of an OBJ model (tobj's, rgb per vertex), decoded
-/// ([`display_color`]); none when the model has none.
-pub fn obj_colors(m: &tobj::Mesh) -> Vec<Vec4> {
+/// The vertex colours of an OBJ model (tobj's, rgb per vertex) as the renderer's
+/// ([`file_color`]); none when the model has none.
+pub fn obj_colors(m: &tobj::Mesh, space: ColorSpace) -> Vec<Vec4> {
     m.vertex_color
         .chunks_exact(3)
-        .map(|c| display_color([c[0].into(), c[1].into(), c[2].into(), 1.0]))
+        .map(|c| file_color([c[0].into(), c[1].into(), c[2].into(), 1.0], space))
         .collect()
 }
 
+/// Which of a mesh file's colours the mesh keeps, and how it reads them.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ColorChoice {
+    /// How the colours become linear ones (`color_space`).
+    pub space: ColorSpace,
+    /// A PLY file's face colours even where it has vertex colours (its material reads
+    /// `face_color`).
+    pub faces: bool,
+}
+
 /// Every object of an OBJ file as one mesh (polygons are triangulated).
-fn load_obj(path: &Path) -> Result<MeshData, String> {
+fn load_obj(path: &Path, colors: ColorSpace) -> Result<MeshData, String> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: true,
@@ -410,7 +438,7 @@ fn load_obj(path: &Path) -> Result<MeshData, String> {
                 .extend(m.texcoords.chunks_exact(2).map(Vec2::from_slice));
         }
         if with_colors {
-            mesh.colors.extend(obj_colors(m));
+            mesh.colors.extend(obj_colors(m, colors));
         }
         mesh.triangles.extend(
             m.indices
@@ -476,7 +504,8 @@ impl PropertyAccess for PlyVertex {
 fn ply_color(name: &str, property: &Property, c: &mut [f64; 4]) -> Option<PropertyAccessResult> {
     let k = ["red", "green", "blue", "alpha"]
         .iter()
-        .position(|&n| n == name)?;
+        .position(|&n| n == name)
+        .or_else(|| ["r", "g", "b", "a"].iter().position(|&n| n == name))?;
     Some(match ply_unit(property) {
         Some(v) => {
             c[k] = v;
@@ -572,7 +601,7 @@ fn ply_scalar(p: &Property) -> Option<f64> {
 
 /// A PLY file's `vertex` and `face` elements as one mesh, its polygons split into fans of
 /// triangles; normals and uvs when the vertex element declares all of their components.
-fn load_ply(path: &Path) -> Result<MeshData, String> {
+fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
     let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
     let mut reader = Reader::new(std::io::BufReader::new(file));
     // the parser's message on one line: it spans several, with the offending text quoted
@@ -629,7 +658,10 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
     let normals = declares("vertex", &["nx", "ny", "nz"]);
     let uv_names = PLY_UV.map(|names| names.iter().any(|n| declares("vertex", &[n])));
     let uvs = uv_names[0] && uv_names[1];
-    let colors = declares("vertex", &["red", "green", "blue"]);
+    let rgb = |element: &str| {
+        declares(element, &["red", "green", "blue"]) || declares(element, &["r", "g", "b"])
+    };
+    let vertex_colors = rgb("vertex");
     let mut vertices = Vec::new();
     let mut faces = Vec::new();
     for (name, def) in &header.elements {
@@ -670,8 +702,11 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
             .map(|v| DVec2::from(v.uv).as_vec2())
             .collect();
     }
-    if colors {
-        mesh.colors = vertices.iter().map(|v| display_color(v.c)).collect();
+    if vertex_colors {
+        mesh.colors = vertices
+            .iter()
+            .map(|v| file_color(v.c, colors.space))
+            .collect();
     }
     let n = mesh.positions.len() as i64;
     for (k, face) in faces.iter().enumerate() {
@@ -691,16 +726,20 @@ fn load_ply(path: &Path) -> Result<MeshData, String> {
                 .push([f[0] as u32, f[j] as u32, f[j + 1] as u32]);
         }
     }
-    // face colours, where there are no vertex colours: each triangle gets corners of its
-    // own, of its face's colour (Mitsuba's `face_color`), so that the colour is constant
-    // over it as the renderer interpolates corners
-    if !colors && declares("face", &["red", "green", "blue"]) {
-        let face_of: Vec<usize> = faces
+    // face colours (Mitsuba's `face_color`), where there are no vertex colours or the
+    // mesh asks for them: one per triangle of the face's fan, which `adjust` gives the
+    // triangle's corners
+    if (colors.faces || !vertex_colors) && rgb("face") {
+        mesh.colors.clear();
+        mesh.face_colors = faces
             .iter()
-            .enumerate()
-            .flat_map(|(k, f)| std::iter::repeat_n(k, f.indices.len().saturating_sub(2)))
+            .flat_map(|f| {
+                std::iter::repeat_n(
+                    file_color(f.c, colors.space),
+                    f.indices.len().saturating_sub(2),
+                )
+            })
             .collect();
-        mesh = unwelded(&mesh, |t| display_color(faces[face_of[t]].c));
     }
     Ok(mesh)
 }
@@ -749,6 +788,9 @@ pub fn check(mesh: MeshData) -> Result<MeshData, String> {
     if !matches(mesh.colors.len()) {
         return Err("has vertex colours that do not match its positions".into());
     }
+    if !mesh.face_colors.is_empty() && mesh.face_colors.len() != mesh.triangles.len() {
+        return Err("has face colours that do not match its faces".into());
+    }
     if mesh.triangles.iter().flatten().any(|&i| i as usize >= n) {
         return Err("has a face index beyond its vertex list".into());
     }
@@ -762,6 +804,7 @@ pub fn check(mesh: MeshData) -> Result<MeshData, String> {
     if !mesh
         .colors
         .iter()
+        .chain(&mesh.face_colors)
         .all(|c| c.is_finite() && c.cmpge(Vec4::ZERO).all())
     {
         return Err("has a negative or non-finite vertex colour".into());

@@ -19,7 +19,11 @@ use super::textures::{ImageData, MAX_TEXELS};
 /// mapped onto wgtrace's (`mtl_material`), their textures read relative to the OBJ file.
 /// A file without materials is refused: the scene must then name one. Names begin with
 /// `prefix`.
-pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String> {
+pub fn load_obj_scene(
+    path: &Path,
+    prefix: &str,
+    colors: ColorSpace,
+) -> Result<ImportedScene, String> {
     let bytes = std::fs::metadata(path).map_err(|e| e.to_string())?.len();
     if bytes > MAX_MESH_FILE_BYTES {
         return Err(format!(
@@ -65,7 +69,7 @@ pub fn load_obj_scene(path: &Path, prefix: &str) -> Result<ImportedScene, String
             positions: m.positions.chunks_exact(3).map(Vec3::from_slice).collect(),
             normals: m.normals.chunks_exact(3).map(Vec3::from_slice).collect(),
             uvs: m.texcoords.chunks_exact(2).map(Vec2::from_slice).collect(),
-            colors: obj_colors(m),
+            colors: obj_colors(m, colors),
             triangles: m
                 .indices
                 .chunks_exact(3)

@@ -672,7 +672,8 @@ pub const MATERIALS: &[TestMaterial] = &[
 /// shipped level-3 icosphere, subdivided further.
 pub fn icosphere(levels: u32, r: f32) -> Vec<[glam::Vec3; 3]> {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/meshes/icosphere.obj");
-    let mesh = wgtrace::scene::mesh::load_mesh(&path).expect("scenes/meshes/icosphere.obj");
+    let mesh = wgtrace::scene::mesh::load_mesh(&path, Default::default())
+        .expect("scenes/meshes/icosphere.obj");
     let mut tris: Vec<[glam::Vec3; 3]> = mesh
         .triangles
         .iter()

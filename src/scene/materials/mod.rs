@@ -301,6 +301,14 @@ pub fn reads_uv_derivatives(m: &Material) -> bool {
 /// of its texture places, so that `material_at` does not also tint it by the vertex colours
 /// (`MAT_FLAG_OWN_COLORS`). The opacity texture counts where the flags say it is one.
 pub fn mark_own_colors(m: &mut Material, is_attribute: impl Fn(u32) -> bool) {
+    if reads_texture(m, is_attribute) {
+        m.flags |= MAT_FLAG_OWN_COLORS;
+    }
+}
+
+/// Whether a material's record reads a texture `is` picks in any of its texture places
+/// (the opacity texture where the flags say it is one, a principled material's scalars).
+pub fn reads_texture(m: &Material, is: impl Fn(u32) -> bool) -> bool {
     let places = [
         m.tex_color,
         m.tex_color2,
@@ -312,15 +320,11 @@ pub fn mark_own_colors(m: &mut Material, is_attribute: impl Fn(u32) -> bool) {
         m.tex_data4,
         m.tex_data5,
     ];
-    let opacity = m.flags & MAT_FLAG_OPACITY_TEXTURE != 0 && is_attribute(m.tex_opacity);
+    let opacity = m.flags & MAT_FLAG_OPACITY_TEXTURE != 0 && is(m.tex_opacity);
     // a principled material packs two scalars' textures a word
     let scalars = m.tag == MaterialKind::Principled.tag()
-        && principled::scalar_textures(m)
-            .into_iter()
-            .any(&is_attribute);
-    if opacity || scalars || places.into_iter().any(&is_attribute) {
-        m.flags |= MAT_FLAG_OWN_COLORS;
-    }
+        && principled::scalar_textures(m).into_iter().any(&is);
+    opacity || scalars || places.into_iter().any(&is)
 }
 
 /// The key of field `field` of a material imported from a file whose fields have other

@@ -1477,6 +1477,10 @@ impl<'a> Importer<'a> {
                 if o.plugin == "serialized" {
                     t.insert("shape_index".into(), T::Integer(self.integer(o, "shape_index", 0)?));
                 }
+                if o.plugin == "ply" {
+                    // Mitsuba takes a PLY file's float colours as they are
+                    t.insert("color_space".into(), text("linear"));
+                }
                 t.insert("material".into(), T::String(material(self)?));
                 if self.boolean(o, "face_normals", false)? {
                     t.insert("face_normals".into(), T::Boolean(true));
