@@ -2115,13 +2115,24 @@ material = "plastic"
 /// on the GPU with the same random numbers, and as the CPU renders them.
 #[test]
 fn instances_render_as_the_expanded_scene_and_on_the_cpu() {
-    let head = "[render]\nwidth = 48\nheight = 48\nspp = 32\nseed = 5\nmax_depth = 4\n\
+    for shading in ["bend", "strict"] {
+        instances_render_as_expanded(shading);
+    }
+}
+
+/// `instances_render_as_the_expanded_scene_and_on_the_cpu` with `[render] shading_normals`
+/// set to `shading` (strict reads the unmapped shading normal, which an instance turns too).
+fn instances_render_as_expanded(shading: &str) {
+    let head = format!(
+        "[render]\nwidth = 48\nheight = 48\nspp = 32\nseed = 5\nmax_depth = 4\n\
+        shading_normals = \"{shading}\"\n\
         [camera]\nlook_from = [0, 1, 7]\nlook_at = [0, 0, 0]\nvfov = 50\n\
         [background]\ncolor = [0.5, 0.6, 0.8]\n\
-        [textures]\nc = { type = \"checker\", even = [0.8, 0.8, 0.8], odd = [0.2, 0.3, 0.6], scale = 8 }\n\
-        [materials]\nm = { type = \"lambertian\", albedo = \"c\" }\n\
-        [[lights]]\ntype = \"directional\"\ndirection = [-0.3, -1, -0.5]\nirradiance = [2, 2, 2]\n";
-    let (a, b) = common::instances::instanced_and_expanded(head);
+        [textures]\nc = {{ type = \"checker\", even = [0.8, 0.8, 0.8], odd = [0.2, 0.3, 0.6], scale = 8 }}\n\
+        [materials]\nm = {{ type = \"lambertian\", albedo = \"c\" }}\n\
+        [[lights]]\ntype = \"directional\"\ndirection = [-0.3, -1, -0.5]\nirradiance = [2, 2, 2]\n"
+    );
+    let (a, b) = common::instances::instanced_and_expanded(&head);
     let load = |src: &str| common::scene_from_file_str(src, "scenes/instances-test.toml");
     let (instanced, expanded) = (load(&a), load(&b));
     let image = render_gpu(&instanced);
@@ -2135,12 +2146,15 @@ fn instances_render_as_the_expanded_scene_and_on_the_cpu() {
         let c = compare(&image, &other, 8);
         assert!(
             c.failed_tiles.is_empty() && c.agree_fraction >= share,
-            "against {what}: {} tiles outside the bound (first: {:?}), {:.4} of pixels agree",
+            "{shading}, against {what}: {} tiles outside the bound (first: {:?}), {:.4} of pixels agree",
             c.failed_tiles.len(),
             c.failed_tiles.first(),
             c.agree_fraction
         );
-        eprintln!("against {what}: {:.4} of pixels agree", c.agree_fraction);
+        eprintln!(
+            "{shading}, against {what}: {:.4} of pixels agree",
+            c.agree_fraction
+        );
     }
 }
 

@@ -504,6 +504,7 @@ fn surface_at(ray: Ray, cand: Candidate) -> Hit {
     h.p = point_to_world(data, p_obj);
     h.ng = normal_to_world(data, h.ng);
     h.ns = normal_to_world(data, h.ns);
+    h.unmapped = h.ns;
     h.err = transform_error(data, p_obj, h.err);
     h.front_face = dot(ray.dir, h.ng) < 0.0;
     // tangent vectors by the object-to-world matrix itself; a mirror flips the

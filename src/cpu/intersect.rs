@@ -407,6 +407,7 @@ pub fn surface_at(b: &Bindings, ray: &Ray, cand: &Candidate) -> Hit {
     h.p = point_to_world(b, data, p_obj);
     h.ng = normal_to_world(b, data, h.ng);
     h.ns = normal_to_world(b, data, h.ns);
+    h.unmapped = h.ns;
     h.err = transform_error(b, data, p_obj, h.err);
     h.front_face = ray.dir.dot(h.ng) < 0.0;
     // tangent vectors by the object-to-world matrix itself; a mirror flips the
