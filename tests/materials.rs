@@ -301,6 +301,26 @@ fn every_sampler_matches_its_pdf() {
     );
 }
 
+/// The red channel of `bsdf_eval` integrated over directions within `theta_max` of +Z
+/// (the midpoint rule, `nt` polar by 512 azimuthal cells).
+fn eval_integral(m: &Material, ray: &Ray, hit: &Hit, theta_max: f64, nt: usize) -> f64 {
+    let np = 512;
+    let mut integral = 0.0f64;
+    for i in 0..nt {
+        let th = (i as f64 + 0.5) / nt as f64 * theta_max;
+        for j in 0..np {
+            let ph = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
+            let wi = Vec3::new(
+                (th.sin() * ph.cos()) as f32,
+                (th.sin() * ph.sin()) as f32,
+                th.cos() as f32,
+            );
+            integral += bsdf_eval(m, ray, hit, wi).x as f64 * th.sin();
+        }
+    }
+    integral * theta_max / nt as f64 * std::f64::consts::TAU / np as f64
+}
+
 /// A shading normal tilted 35 degrees from the geometric one (+Z), seen from views that
 /// leave the viewer over and under its horizon: after `bent_normal`, every material of the
 /// chi-square rows samples directions over the geometric surface with the density
@@ -345,21 +365,7 @@ fn shading_normals_sample_and_weigh_what_eval_and_pdf_say() {
             }
             let mean = sum / n as f64;
             let se = ((sq / n as f64 - mean * mean) / n as f64).sqrt();
-            let (nt, np) = (256, 512);
-            let mut integral = 0.0f64;
-            for i in 0..nt {
-                let th = (i as f64 + 0.5) / nt as f64 * std::f64::consts::FRAC_PI_2;
-                for j in 0..np {
-                    let ph = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
-                    let wi = Vec3::new(
-                        (th.sin() * ph.cos()) as f32,
-                        (th.sin() * ph.sin()) as f32,
-                        th.cos() as f32,
-                    );
-                    integral += bsdf_eval(&m, &ray, &hit, wi).x as f64 * th.sin();
-                }
-            }
-            integral *= std::f64::consts::FRAC_PI_2 / nt as f64 * std::f64::consts::TAU / np as f64;
+            let integral = eval_integral(&m, &ray, &hit, std::f64::consts::FRAC_PI_2, 256);
             assert!(
                 (mean - integral).abs() <= 5.0 * se + 3e-3,
                 "{label}: mean weight {mean} +- {se} vs eval's integral {integral}"
@@ -434,21 +440,7 @@ fn strict_shading_normals_lose_what_crosses_and_weigh_what_eval_says() {
             }
             let mean = sum / n as f64;
             let se = ((sq / n as f64 - mean * mean) / n as f64).sqrt();
-            let (nt, np) = (512, 512);
-            let mut integral = 0.0f64;
-            for i in 0..nt {
-                let th = (i as f64 + 0.5) / nt as f64 * std::f64::consts::PI;
-                for j in 0..np {
-                    let ph = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
-                    let wi = Vec3::new(
-                        (th.sin() * ph.cos()) as f32,
-                        (th.sin() * ph.sin()) as f32,
-                        th.cos() as f32,
-                    );
-                    integral += bsdf_eval(&m, &ray, &hit, wi).x as f64 * th.sin();
-                }
-            }
-            integral *= std::f64::consts::PI / nt as f64 * std::f64::consts::TAU / np as f64;
+            let integral = eval_integral(&m, &ray, &hit, std::f64::consts::PI, 512);
             assert!(
                 (mean - integral).abs() <= 5.0 * se + 3e-3,
                 "{label}: mean weight {mean} +- {se} vs eval's integral {integral}"

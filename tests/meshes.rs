@@ -453,26 +453,25 @@ fn obj_and_ply_vertex_colours_multiply_the_material_colour() {
         .collect::<String>()
         + "f 1 2 3 4\n";
     std::fs::write(dir.join("c.obj"), obj).unwrap();
-    let mut ply = String::from(
-        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
-         property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n\
-         element face 1\nproperty list uchar int vertex_indices\nend_header\n",
-    );
-    for [x, y] in quad {
-        ply += &format!("{x} {y} 0 200 100 50\n");
-    }
-    ply += "4 0 1 2 3\n";
-    std::fs::write(dir.join("c.ply"), ply).unwrap();
-    let mut rgb = String::from(
-        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
-         property float z\nproperty float r\nproperty float g\nproperty float b\n\
-         element face 1\nproperty list uchar int vertex_indices\nend_header\n",
-    );
-    for [x, y] in quad {
-        rgb += &format!("{x} {y} 0 0.7 0.4 0.1\n");
-    }
-    rgb += "4 0 1 2 3\n";
-    std::fs::write(dir.join("rgb.ply"), rgb).unwrap();
+    // a quad of one colour: its type, its property names and each vertex's values
+    let ply = |ty: &str, [r, g, b]: [&str; 3], values: &str| {
+        let mut text = format!(
+            "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+             property float z\nproperty {ty} {r}\nproperty {ty} {g}\nproperty {ty} {b}\n\
+             element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        );
+        for [x, y] in quad {
+            text += &format!("{x} {y} 0 {values}\n");
+        }
+        text + "4 0 1 2 3\n"
+    };
+    let names = ["red", "green", "blue"];
+    std::fs::write(dir.join("c.ply"), ply("uchar", names, "200 100 50")).unwrap();
+    std::fs::write(
+        dir.join("rgb.ply"),
+        ply("float", ["r", "g", "b"], "0.7 0.4 0.1"),
+    )
+    .unwrap();
     let albedo = 0.8f32;
     let want = |c: [f32; 3]| c.map(|x| albedo * srgb_to_linear(x));
     for (file, keys, colour) in [
