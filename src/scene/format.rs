@@ -135,10 +135,11 @@ pub enum ShadingNormals {
     /// surface keeps the energy its shading gives it.
     #[default]
     Bend,
-    /// The lobes about the shading normal as they are (Mitsuba 3's and pbrt-v4's way):
-    /// a direction on one side of the geometric surface and the other of the shading
-    /// one is black (Mitsuba's `normalmap` and `bumpmap` rule), and so is a material that
-    /// only reflects to a viewer under the shading normal.
+    /// The lobes about the shading normal as they are (Mitsuba 3's way): a direction on
+    /// different sides of the shading and the unmapped or geometric surface is black, a
+    /// mapped normal the viewer is behind is mirrored about the unmapped one, a map's
+    /// bumps shadow grazing light (Mitsuba's `normalmap` and `bumpmap`), and a material
+    /// that only reflects is black to a viewer under the shading normal.
     Strict,
 }
 

@@ -137,9 +137,11 @@ shared_constants! {
     MAT_FLAG_UV_NORMAL_MAP: u32 = 8192;
     /// Material flag: shading normals are taken strictly, as Mitsuba 3 and pbrt-v4 take
     /// them (`[render] shading_normals = "strict"`): none is bent toward the viewer, no
-    /// direction is folded over the surface, and a direction on one side of the geometric
-    /// surface and the other of the shading one is absorbed (Mitsuba's `normalmap` and
-    /// `bumpmap` rule): `bsdf_scatter`, `bsdf_eval`.
+    /// direction is folded over the surface; a mapped normal the viewer is behind is
+    /// mirrored about the unmapped one (`bent_normal`), a direction on different sides of
+    /// the shading and the unmapped or geometric surface is absorbed (`strictly_black`),
+    /// and a map's bumps shadow grazing light (`map_shadowing`): Mitsuba's `normalmap` and
+    /// `bumpmap`.
     MAT_FLAG_STRICT_SHADING: u32 = 16384;
     /// Material flag, with `MAT_FLAG_STRICT_SHADING` on a material that only reflects: a
     /// viewer under the shading normal sees it black, as Mitsuba's one-sided lobes are in
