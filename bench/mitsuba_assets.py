@@ -42,12 +42,16 @@ def waves():
 
 
 def serialized(meshes):
-    """A version 4 .serialized file (as wgtrace's mesh::write_serialized writes it)."""
+    """A version 4 .serialized file (as wgtrace's mesh::write_serialized writes it): each
+    mesh positions, triangles and optionally uvs (v as stored)."""
     out, offsets = b"", []
-    for positions, triangles in meshes:
+    for positions, triangles, *uvs in meshes:
+        uvs = uvs[0] if uvs else []
         offsets.append(len(out))
-        raw = struct.pack("<I", 0x1000) + b"mesh\0" + struct.pack("<QQ", len(positions), len(triangles))
+        flags = 0x1000 | (0x0002 if uvs else 0)
+        raw = struct.pack("<I", flags) + b"mesh\0" + struct.pack("<QQ", len(positions), len(triangles))
         raw += b"".join(struct.pack("<3f", *p) for p in positions)
+        raw += b"".join(struct.pack("<2f", *uv) for uv in uvs)
         raw += b"".join(struct.pack("<3I", *t) for t in triangles)
         out += struct.pack("<HH", 0x041C, 4) + zlib.compress(raw)
     return out + b"".join(struct.pack("<Q", o) for o in offsets) + struct.pack("<I", len(meshes))
@@ -61,6 +65,22 @@ PYRAMID = [
 ]
 
 
+# the quads of mesh-uvs.xml, [-1, 1]^2 at z = 0: mesh 0 without uvs, wound toward -z; mesh
+# 1 with uvs ((x + 1) / 2, (y + 1) / 2), wound toward +z
+QUAD = [(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)]
+QUADS = [
+    (QUAD, [(0, 2, 1), (0, 3, 2)]),
+    (QUAD, [(0, 1, 2), (0, 2, 3)], [(0, 0), (1, 0), (1, 1), (0, 1)]),
+]
+# the PLY quad of mesh-uvs.xml: the same square with normals +z and the same uvs
+QUAD_PLY = ("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+            "property float z\nproperty float nx\nproperty float ny\nproperty float nz\n"
+            "property float u\nproperty float v\nelement face 2\n"
+            "property list uchar int vertex_indices\nend_header\n"
+            "-1 -1 0 0 0 1 0 0\n1 -1 0 0 0 1 1 0\n1 1 0 0 0 1 1 1\n-1 1 0 0 0 1 0 1\n"
+            "3 0 1 2\n3 0 2 3\n")
+
+
 def write_assets(folder, write_exr):
     """Writes the assets under folder/generated; write_exr(path, float32 array) writes EXR."""
     os.makedirs(os.path.join(folder, "generated"), exist_ok=True)
@@ -68,6 +88,10 @@ def write_assets(folder, write_exr):
     write_exr(os.path.join(folder, "generated", "waves.exr"), waves())
     with open(os.path.join(folder, "generated", "pyramid.serialized"), "wb") as f:
         f.write(serialized(PYRAMID))
+    with open(os.path.join(folder, "generated", "quads.serialized"), "wb") as f:
+        f.write(serialized(QUADS))
+    with open(os.path.join(folder, "generated", "quad.ply"), "w") as f:
+        f.write(QUAD_PLY)
     with open(os.path.join(folder, "generated", "octahedron.obj"), "w") as f:
         f.write("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n")
         f.write("vn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\n")

@@ -361,6 +361,18 @@ fn obj_materials_come_from_the_mtl_unless_the_scene_names_one() {
     .unwrap_err()
     .to_string();
     assert!(e.contains("a PLY file has no materials"), "{e}");
+    // flip_tex_coords names PLY files only
+    let e = wgtrace::load_scene_str(
+        &scene("material = \"m\"\nflip_tex_coords = true\n"),
+        &dir.join("s.toml"),
+        &Overrides::default(),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("objects[0].path: ") && e.contains("flip_tex_coords applies to PLY files"),
+        "{e}"
+    );
     // values out of range, named by their statement
     for (statement, why) in [
         ("Kd 0.5 inf 0.5", "Kd: must be finite"),
@@ -555,6 +567,121 @@ fn face_colours_keep_smooth_normals_over_shared_corners() {
         assert_eq!(
             (c0, c1),
             (Vec4::new(1.0, 0.0, 0.0, 1.0), Vec4::new(0.0, 0.0, 1.0, 1.0))
+        );
+    }
+}
+
+/// `flip_tex_coords` flips a file's uvs; a file without uvs gets its triangles' default
+/// uvs, v down under `default_uvs_v_down`, as corners that follow the file's winding
+/// through `flip_normals`; `winding_front` turns the front of a mesh left without the
+/// file's normals, and only of such a mesh.
+#[test]
+fn mesh_uvs_and_fronts_as_adjust_is_asked() {
+    use glam::{Vec2, Vec3};
+    use wgtrace::scene::mesh::{adjust, Adjust, MeshData};
+    let quad = |uvs: Vec<Vec2>, normals: Vec<Vec3>| MeshData {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        triangles: vec![[0, 1, 2], [0, 2, 3]],
+        uvs,
+        normals,
+        ..Default::default()
+    };
+    let stored = vec![
+        Vec2::new(0.0, 0.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(0.0, 1.0),
+    ];
+    let mut m = quad(stored.clone(), vec![]);
+    adjust(
+        &mut m,
+        Adjust {
+            flip_tex_coords: true,
+            corner_uvs: true,
+            ..Default::default()
+        },
+    );
+    let flipped: Vec<Vec2> = stored
+        .iter()
+        .map(|uv| Vec2::new(uv.x, 1.0 - uv.y))
+        .collect();
+    assert_eq!(
+        (m.uvs, m.positions.len()),
+        (flipped, 4),
+        "stored uvs flipped in place"
+    );
+
+    // each triangle's corner k (in the file's winding) keeps the default uv k, v down
+    let want = [
+        Vec2::new(0.0, 1.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(0.0, 0.0),
+    ];
+    for flip_normals in [false, true] {
+        let file = quad(vec![], vec![]);
+        let mut m = file.clone();
+        let a = Adjust {
+            default_uvs_v_down: true,
+            corner_uvs: true,
+            flip_normals,
+            ..Default::default()
+        };
+        adjust(&mut m, a);
+        assert_eq!(m.positions.len(), 6, "corners of their own");
+        for (t, tri) in file.triangles.iter().enumerate() {
+            for (k, &i) in tri.iter().enumerate() {
+                let p = file.positions[i as usize];
+                let at = m.triangles[t]
+                    .into_iter()
+                    .find(|&j| m.positions[j as usize] == p)
+                    .unwrap();
+                assert_eq!(
+                    m.uvs[at as usize], want[k],
+                    "flip_normals {flip_normals}: triangle {t} corner {k}"
+                );
+            }
+        }
+        let n = |m: &MeshData| {
+            let p = m.triangles[0].map(|i| m.positions[i as usize]);
+            (p[1] - p[0]).cross(p[2] - p[0]).z.signum()
+        };
+        assert_eq!(n(&m), if flip_normals { -1.0 } else { 1.0 });
+    }
+    // without a material that reads uvs, nothing is unwelded
+    let mut m = quad(vec![], vec![]);
+    adjust(
+        &mut m,
+        Adjust {
+            default_uvs_v_down: true,
+            ..Default::default()
+        },
+    );
+    assert!(m.uvs.is_empty() && m.positions.len() == 4);
+
+    // winding_front turns a mesh without normals, or with face_normals, not one with normals
+    for (normals, face_normals, turned) in [
+        (false, false, true),
+        (true, true, true),
+        (true, false, false),
+    ] {
+        let mut m = quad(vec![], if normals { vec![Vec3::Z; 4] } else { vec![] });
+        adjust(
+            &mut m,
+            Adjust {
+                winding_front: true,
+                face_normals,
+                ..Default::default()
+            },
+        );
+        assert_eq!(
+            m.triangles[0] != [0, 1, 2],
+            turned,
+            "normals {normals}, face_normals {face_normals}"
         );
     }
 }

@@ -80,6 +80,35 @@ fn pyramid() -> Vec<u8> {
     ])
 }
 
+/// The .serialized quads of mesh-uvs.xml (as bench/mitsuba_assets.py writes them), [-1, 1]^2
+/// at z = 0: one without uvs wound toward -z, one with uvs ((x + 1) / 2, (y + 1) / 2)
+/// wound toward +z.
+fn quads() -> Vec<u8> {
+    let corners = vec![
+        [-1.0, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ];
+    write_serialized(&[
+        (corners.clone(), vec![[0, 2, 1], [0, 3, 2]], vec![]),
+        (
+            corners,
+            vec![[0, 1, 2], [0, 2, 3]],
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+        ),
+    ])
+}
+
+/// The PLY quad of mesh-uvs.xml (as bench/mitsuba_assets.py writes it): the same square
+/// with normals +z and the same uvs.
+const QUAD_PLY: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
+    property float y\nproperty float z\nproperty float nx\nproperty float ny\n\
+    property float nz\nproperty float u\nproperty float v\nelement face 2\n\
+    property list uchar int vertex_indices\nend_header\n\
+    -1 -1 0 0 0 1 0 0\n1 -1 0 0 0 1 1 0\n1 1 0 0 0 1 1 1\n-1 1 0 0 0 1 0 1\n\
+    3 0 1 2\n3 0 2 3\n";
+
 /// The OBJ octahedron of shapes.xml (as bench/mitsuba_assets.py writes it): unit distance
 /// from centre to vertex, faces wound outward, a normal per vertex along its axis.
 fn octahedron() -> String {
@@ -116,6 +145,8 @@ fn scenes(name: &str) -> PathBuf {
     wgtrace::image_io::write_image(&generated.join("waves.exr"), 64, 64, &waves()).unwrap();
     std::fs::write(generated.join("pyramid.serialized"), pyramid()).unwrap();
     std::fs::write(generated.join("octahedron.obj"), octahedron()).unwrap();
+    std::fs::write(generated.join("quads.serialized"), quads()).unwrap();
+    std::fs::write(generated.join("quad.ply"), QUAD_PLY).unwrap();
     dir
 }
 
@@ -229,6 +260,13 @@ fn materials_agree_with_mitsuba() {
 #[test]
 fn shapes_and_instances_agree_with_mitsuba() {
     agrees_with_mitsuba("shapes", 256);
+}
+
+/// mesh-uvs.xml: PLY and .serialized uvs with v down, a file's default barycentric uvs,
+/// and the front of a mirrored mesh without the file's normals, as Mitsuba reads them.
+#[test]
+fn mesh_files_uvs_and_mirrored_fronts_agree_with_mitsuba() {
+    agrees_with_mitsuba("mesh-uvs", 256);
 }
 
 #[test]

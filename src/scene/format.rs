@@ -870,6 +870,16 @@ pub enum ObjectDesc {
         /// Which mesh of a `.serialized` file (Mitsuba's `shape_index`).
         #[serde(default)]
         shape_index: u32,
+        /// A PLY file's uvs with v down: v' = 1 - v, and a file without uvs given its
+        /// triangles' default ones flipped so (how Mitsuba reads PLY; a `.serialized`
+        /// file is read so always).
+        #[serde(default)]
+        flip_tex_coords: bool,
+        /// Under a mirroring `transform`, a mesh left without the file's vertex normals
+        /// faces as its placed triangles wind (Mitsuba's front), not as the mirror image
+        /// of the file's front.
+        #[serde(default)]
+        placed_winding: bool,
         /// How the file's vertex and face colours become linear ones: decoded from sRGB
         /// (display colours), or taken as they are (Mitsuba's reading).
         #[serde(default)]

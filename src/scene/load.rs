@@ -18,7 +18,7 @@ use super::format::{
 };
 use super::gltf::{self, GltfError};
 use super::imported::ImportedScene;
-use super::materials::{reads_texture, MaterialDesc};
+use super::materials::{reads_texture, reads_uv_derivatives, MaterialDesc};
 use super::{mesh, mitsuba, mtl, textures, validate};
 
 /// Largest scene file read (64 MiB).
@@ -449,6 +449,7 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                             face_normals: *face_normals,
                             smooth_normals: *smooth_normals,
                             flip_normals: *flip_normals,
+                            ..Default::default()
                         };
                         if mesh::is_ply(p) || mesh::is_serialized(p) {
                             let kind = if mesh::is_ply(p) {
@@ -496,6 +497,9 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 flip_normals,
                 shape_index,
                 color_space,
+                flip_tex_coords,
+                placed_winding,
+                transform,
                 ..
             } => read_relative(
                 (src, dir, path),
@@ -514,6 +518,12 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                         space: *color_space,
                         faces,
                     };
+                    if *flip_tex_coords && !mesh::is_ply(p) {
+                        return Err("flip_tex_coords applies to PLY files (a .serialized \
+                                    file's uvs are read with v down always, an OBJ file's \
+                                    with v up)"
+                            .into());
+                    }
                     let mut m = mesh::load_mesh_at(p, *shape_index, colors)?;
                     mesh::adjust(
                         &mut m,
@@ -521,6 +531,13 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                             face_normals: *face_normals,
                             smooth_normals: *smooth_normals,
                             flip_normals: *flip_normals,
+                            flip_tex_coords: *flip_tex_coords,
+                            default_uvs_v_down: *flip_tex_coords || mesh::is_serialized(p),
+                            corner_uvs: reads_uvs(file, material),
+                            winding_front: *placed_winding
+                                && transform.as_ref().is_some_and(|t| {
+                                    flatten::transform_matrix(t).matrix3.determinant() < 0.0
+                                }),
                         },
                     );
                     // a normal map or anisotropic roughness needs tangents:
@@ -581,36 +598,60 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
     }
 }
 
-/// Adds `n` to the scene's running `total` of `what`, or fails once it would pass `cap`.
 /// Whether material `name` (or a part of it, for a blend) reads the mesh attribute
 /// `attribute` (`vertex_color`, `face_color`) through a `mesh_attribute` texture. The file
 /// is validated.
 fn reads_attribute(file: &SceneFile, name: &str, attribute: &str) -> bool {
+    reads_any(
+        file,
+        name,
+        |t| matches!(t, TextureDesc::MeshAttribute { name } if name == attribute),
+    )
+}
+
+/// Whether material `name` (or a part of a blend) reads a texture other than a mesh
+/// attribute, or the uv derivatives: whether a mesh of it needs uvs.
+fn reads_uvs(file: &SceneFile, name: &str) -> bool {
+    let names: Vec<String> = file.textures.keys().cloned().collect();
+    reads_any(file, name, |t| {
+        !matches!(t, TextureDesc::MeshAttribute { .. })
+    }) || materials_of(file, name)
+        .any(|d| d.needs_tangents() || reads_uv_derivatives(&d.record(&names)))
+}
+
+/// Material `name` and, through blends, the materials it is made of (each once).
+fn materials_of<'a>(file: &'a SceneFile, name: &str) -> impl Iterator<Item = &'a MaterialDesc> {
+    let mut stack = vec![name.to_string()];
+    let mut seen = std::collections::HashSet::new();
+    std::iter::from_fn(move || {
+        while let Some(n) = stack.pop() {
+            let Some(desc) = file.materials.get(&n).filter(|_| seen.insert(n.clone())) else {
+                continue;
+            };
+            if let MaterialDesc::Blend(b) = desc.get_ref() {
+                stack.push(b.first.clone());
+                stack.push(b.second.clone());
+            }
+            return Some(desc.get_ref());
+        }
+        None
+    })
+}
+
+/// Whether material `name` (or a part of a blend) reads a texture `pick` picks.
+fn reads_any(file: &SceneFile, name: &str, pick: impl Fn(&TextureDesc) -> bool) -> bool {
     let names: Vec<String> = file.textures.keys().cloned().collect();
     let picked: Vec<u32> = file
         .textures
         .values()
         .enumerate()
-        .filter(|(_, t)| matches!(t.get_ref(), TextureDesc::MeshAttribute { name } if name == attribute))
+        .filter(|(_, t)| pick(t.get_ref()))
         .map(|(k, _)| k as u32)
         .collect();
-    let mut stack = vec![name.to_string()];
-    let mut seen = std::collections::HashSet::new();
-    while let Some(n) = stack.pop() {
-        let Some(desc) = file.materials.get(&n).filter(|_| seen.insert(n.clone())) else {
-            continue;
-        };
-        if let MaterialDesc::Blend(b) = desc.get_ref() {
-            stack.push(b.first.clone());
-            stack.push(b.second.clone());
-        }
-        if reads_texture(&desc.get_ref().record(&names), |t| picked.contains(&t)) {
-            return true;
-        }
-    }
-    false
+    materials_of(file, name).any(|d| reads_texture(&d.record(&names), |t| picked.contains(&t)))
 }
 
+/// Adds `n` to the scene's running `total` of `what`, or fails once it would pass `cap`.
 fn count_toward(total: &Cell<u64>, n: u64, cap: u64, what: &str) -> Result<(), String> {
     let sum = total.get() + n;
     if sum > cap {

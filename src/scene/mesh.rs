@@ -88,16 +88,51 @@ pub struct Adjust {
     /// The front side turned to the back: windings swapped, normals negated (Mitsuba's
     /// `flip_normals`).
     pub flip_normals: bool,
+    /// The file's uvs read with v down: v' = 1 - v (how Mitsuba reads a PLY file, in
+    /// wgtrace's v up; a `.serialized` file's uvs are so read already).
+    pub flip_tex_coords: bool,
+    /// The triangles' default uvs taken with v down too ((0, 1), (1, 1), (0, 0) over the
+    /// corners: Mitsuba's barycentric uvs of a PLY or `.serialized` file without uvs).
+    pub default_uvs_v_down: bool,
+    /// A mesh without uvs whose material reads them gets its triangles' default uvs as
+    /// corners of their own where `default_uvs_v_down` or `flip_normals` would otherwise
+    /// change them: they stay as the file's winding gives them.
+    pub corner_uvs: bool,
+    /// The object's own placement mirrors and the file's front is its placed winding's
+    /// where the mesh ends up without the file's vertex normals (Mitsuba's, whose face and
+    /// smooth normals are those of the placed triangles): the front turned, as
+    /// `flip_normals` turns it, to undo the flattener's mirror image of the file's front.
+    pub winding_front: bool,
 }
 
 /// A mesh's normals and windings as `a` asks.
 pub fn adjust(mesh: &mut MeshData, a: Adjust) {
-    let (face_normals, flip_normals) = (a.face_normals, a.flip_normals);
+    let face_normals = a.face_normals;
+    let flip_normals =
+        a.flip_normals ^ (a.winding_front && (face_normals || mesh.normals.is_empty()));
     if face_normals {
         mesh.normals.clear();
         mesh.tangents.clear();
     } else if a.smooth_normals && mesh.normals.is_empty() {
         mesh.normals = angle_weighted_normals(&mesh.positions, &mesh.triangles);
+    }
+    // uvs after the smooth normals (corners of their own would flatten those) and before
+    // the windings turn (the default uvs follow the file's winding)
+    if !mesh.uvs.is_empty() {
+        if a.flip_tex_coords {
+            for uv in &mut mesh.uvs {
+                uv.y = 1.0 - uv.y;
+            }
+        }
+    } else if a.corner_uvs && (a.default_uvs_v_down || flip_normals) {
+        let v = |v: f32| if a.default_uvs_v_down { 1.0 - v } else { v };
+        let corners = [
+            Vec2::new(0.0, v(0.0)),
+            Vec2::new(1.0, v(0.0)),
+            Vec2::new(0.0, v(1.0)),
+        ];
+        *mesh = unwelded(mesh);
+        mesh.uvs = (0..mesh.triangles.len()).flat_map(|_| corners).collect();
     }
     if flip_normals {
         for t in &mut mesh.triangles {
@@ -114,7 +149,8 @@ pub fn adjust(mesh: &mut MeshData, a: Adjust) {
     // the colour is constant over it as the renderer interpolates corners
     if !mesh.face_colors.is_empty() {
         let colors = std::mem::take(&mut mesh.face_colors);
-        *mesh = unwelded(mesh, |t| colors[t]);
+        *mesh = unwelded(mesh);
+        mesh.colors = colors.iter().flat_map(|&c| [c; 3]).collect();
     }
 }
 
@@ -744,9 +780,9 @@ fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
     Ok(mesh)
 }
 
-/// The mesh with three corners of its own per triangle (positions, normals and uvs copied),
-/// each triangle's corners coloured `color(triangle)`.
-fn unwelded(mesh: &MeshData, color: impl Fn(usize) -> Vec4) -> MeshData {
+/// The mesh with three corners of its own per triangle (positions, normals, uvs and vertex
+/// colours copied; tangents left out).
+fn unwelded(mesh: &MeshData) -> MeshData {
     fn copy<T: Copy>(v: &[T], triangles: &[[u32; 3]]) -> Vec<T> {
         if v.is_empty() {
             Vec::new()
@@ -760,7 +796,7 @@ fn unwelded(mesh: &MeshData, color: impl Fn(usize) -> Vec4) -> MeshData {
         normals: copy(&mesh.normals, t),
         uvs: copy(&mesh.uvs, t),
         uvs1: copy(&mesh.uvs1, t),
-        colors: (0..t.len()).flat_map(|k| [color(k); 3]).collect(),
+        colors: copy(&mesh.colors, t),
         triangles: (0..t.len() as u32)
             .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
             .collect(),

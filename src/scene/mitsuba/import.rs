@@ -1481,6 +1481,15 @@ impl<'a> Importer<'a> {
                     // Mitsuba takes a PLY file's float colours as they are
                     t.insert("color_space".into(), text("linear"));
                 }
+                if o.plugin == "ply" {
+                    // Mitsuba keeps a PLY file's uvs as stored, v down (and its default
+                    // barycentric uvs where it has none): wgtrace's v is 1 - those
+                    t.insert("flip_tex_coords".into(), T::Boolean(true));
+                }
+                if to_world.determinant() < 0.0 {
+                    // Mitsuba's normals of a file without them are the placed triangles'
+                    t.insert("placed_winding".into(), T::Boolean(true));
+                }
                 t.insert("material".into(), T::String(material(self)?));
                 if self.boolean(o, "face_normals", false)? {
                     t.insert("face_normals".into(), T::Boolean(true));
