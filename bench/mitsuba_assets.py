@@ -24,6 +24,18 @@ def sky():
     return img
 
 
+def texels():
+    """The environment image of tests/mitsuba/envmap-texels.xml (as tests/mitsuba_import.rs
+    writes it): 16 x 8 texels, checkered 1 and 0.1 times a colour that changes along each
+    row and down each column."""
+    img = np.zeros((8, 16, 3), np.float32)
+    for j in range(8):
+        for i in range(16):
+            k = 1.0 if (i + j) % 2 == 0 else 0.1
+            img[j, i] = [k * (0.5 + i / 30), k * (0.5 + j / 14), k]
+    return img
+
+
 def waves():
     """The normal map of tests/mitsuba/normalmap.xml (as tests/mitsuba_import.rs writes
     it): 64 x 64, the normals of a height 0.015 sin(2 pi 3 u) sin(2 pi 2 v) as colours
@@ -86,6 +98,7 @@ def write_assets(folder, write_exr):
     os.makedirs(os.path.join(folder, "generated"), exist_ok=True)
     write_exr(os.path.join(folder, "generated", "sky.exr"), sky())
     write_exr(os.path.join(folder, "generated", "waves.exr"), waves())
+    write_exr(os.path.join(folder, "generated", "texels.exr"), texels())
     with open(os.path.join(folder, "generated", "pyramid.serialized"), "wb") as f:
         f.write(serialized(PYRAMID))
     with open(os.path.join(folder, "generated", "quads.serialized"), "wb") as f:

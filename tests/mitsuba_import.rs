@@ -39,6 +39,17 @@ fn sky() -> Vec<f32> {
     })
 }
 
+/// The environment image of envmap-texels.xml, as bench/mitsuba_assets.py writes it: 16 x 8
+/// texels, checkered 1 and 0.1 times a colour that changes along each row and down each
+/// column.
+fn texels() -> Vec<f32> {
+    image(16, 8, |u, v| {
+        let (i, j) = ((u * 16.0) as u32, (v * 8.0) as u32);
+        let k = if (i + j) % 2 == 0 { 1.0 } else { 0.1 };
+        [k * (0.5 + i as f64 / 30.0), k * (0.5 + j as f64 / 14.0), k]
+    })
+}
+
 /// The normal map of normalmap.xml, as bench/mitsuba_assets.py writes it: the normals of a
 /// height 0.015 sin(2 pi 3 u) sin(2 pi 2 v) as colours (n + 1) / 2.
 fn waves() -> Vec<f32> {
@@ -143,6 +154,7 @@ fn scenes(name: &str) -> PathBuf {
     std::fs::create_dir_all(&generated).unwrap();
     wgtrace::image_io::write_image(&generated.join("sky.exr"), 128, 64, &sky()).unwrap();
     wgtrace::image_io::write_image(&generated.join("waves.exr"), 64, 64, &waves()).unwrap();
+    wgtrace::image_io::write_image(&generated.join("texels.exr"), 16, 8, &texels()).unwrap();
     std::fs::write(generated.join("pyramid.serialized"), pyramid()).unwrap();
     std::fs::write(generated.join("octahedron.obj"), octahedron()).unwrap();
     std::fs::write(generated.join("quads.serialized"), quads()).unwrap();
@@ -255,6 +267,12 @@ fn legacy_cornell_box_agrees_with_mitsuba() {
 #[test]
 fn materials_agree_with_mitsuba() {
     agrees_with_mitsuba("materials", 256);
+}
+
+/// envmap-texels.xml: an envmap's texel grid lies where Mitsuba's does.
+#[test]
+fn envmap_texels_lie_where_mitsuba_puts_them() {
+    agrees_with_mitsuba("envmap-texels", 256);
 }
 
 #[test]
@@ -551,7 +569,8 @@ fn spectra_convert_as_mitsuba_rgb_mode() {
 }
 
 /// An envmap turned about +y by a, rendered by wgtrace turned by a + 180 (Mitsuba's image
-/// centre faces +z, wgtrace's -z) with its look-up moved onto Mitsuba's texel grid; a
+/// centre faces +z, wgtrace's -z) with its rows moved onto Mitsuba's (its first and last on
+/// the poles; envmap-texels.xml checks the grid against Mitsuba's image); a
 /// bitmap's to_uv conjugated by the v flip (an offset of 0.25 in Mitsuba's v, which runs
 /// down, is -0.25 in wgtrace's); an envmap turned about x turns the scene back with it.
 #[test]
@@ -573,10 +592,10 @@ fn envmaps_turn_and_uv_transforms_flip() {
     std::fs::write(&path, xml("y=\"1\"")).unwrap();
     let out = wgtrace::scene::load::convert_mitsuba(&path, &[], &dir).unwrap();
     assert!(out.toml.contains("rotation = 210.0"), "{}", out.toml);
-    // 128 x 64 texels: half a texel across, and rows spread over theta as Mitsuba's
+    // 128 x 64 texels: the rows spread over theta as Mitsuba's, the columns where they were
     assert!(
         out.toml
-            .contains("matrix = [[1.0, 0.0, 0.00390625], [0.0, 0.984375, 0.0078125]]"),
+            .contains("matrix = [[1.0, 0.0, 0.0], [0.0, 0.984375, 0.0078125]]"),
         "{}",
         out.toml
     );

@@ -1710,17 +1710,19 @@ impl<'a> Importer<'a> {
                     })?;
                     let path = self.file(o, "filename")?;
                     let name = self.name_str("envmap");
-                    // Mitsuba's envmap puts texel i of w at u = i / w and row j of h at
-                    // theta / pi = j / (h - 1) (its texels at the grid's corners); wgtrace's
-                    // image look-up at texel centres, so the look-up is moved to match
+                    // Mitsuba 3.9.1's envmap puts texel i of w at u = (i + 1/2) / w, as
+                    // wgtrace does, but row j of h at theta / pi = j / (h - 1) (its first
+                    // and last rows on the poles), where wgtrace's look-up has row centres:
+                    // v is moved to match (measured: its eval returns texel values exactly
+                    // there)
                     let file = self.tree.find_file(&o.get("filename").unwrap().pos, self.string(o, "filename")?.unwrap_or(""));
-                    let (w, h) = image::image_dimensions(&file).map_err(|e| XmlError {
+                    let (_, h) = image::image_dimensions(&file).map_err(|e| XmlError {
                         pos: o.get("filename").unwrap().pos.clone(),
                         message: format!("emitter envmap: {}: {e}", file.display()),
                     })?;
-                    let (w, h) = (w as f64, h as f64);
+                    let h = h as f64;
                     let remap = T::Array(vec![
-                        T::Array(vec![float(1.0), float(0.0), float(0.5 / w)]),
+                        T::Array(vec![float(1.0), float(0.0), float(0.0)]),
                         T::Array(vec![float(0.0), float((h - 1.0) / h), float(0.5 / h)]),
                     ]);
                     self.textures.push(Entry {
