@@ -13,7 +13,7 @@ is found; writes docs/bench/mitsuba-own-scenes.md, naming files relative to the 
 parent. Nothing is copied: the scenes and their assets stay where they are.
 
 usage: python bench/mitsuba_import_report.py [RUNS] [SPP] [FOLDER...]   (default 16 runs of
-128 spp; build target/release/wgtrace first). Needs `pip install mitsuba==3.9.1 numpy` and
+128 spp; build target/release/wgtrace first, or name another build in $WGTRACE). Needs `pip install mitsuba==3.9.1 numpy` and
 an LLVM named by DRJIT_LIBLLVM_PATH.
 """
 import datetime
@@ -35,7 +35,7 @@ mi.set_variant("llvm_ad_rgb")
 root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 runs = int(sys.argv[1]) if len(sys.argv) > 1 else 16
 spp = int(sys.argv[2]) if len(sys.argv) > 2 else 128
-wgtrace = os.path.join(root, "target", "release", "wgtrace")
+wgtrace = os.environ.get("WGTRACE") or os.path.join(root, "target", "release", "wgtrace")
 tmp = tempfile.mkdtemp()
 
 folders = [os.path.abspath(f) for f in sys.argv[3:]]
