@@ -9,10 +9,13 @@ docs/bench/mitsuba-import.md; files wgtrace refuses are listed with its message.
 With folders after RUNS and SPP, the scene files found in them instead: every
 `test_*.xml` below each folder, Mitsuba's render tests' naming (its own test scenes are
 mitsuba-data's tests/scenes), and every `*.xml` that holds a <sensor> where no test_ file
-is found; writes docs/bench/mitsuba-own-scenes.md, naming files relative to the folder's
-parent. Nothing is copied: the scenes and their assets stay where they are.
+is found; writes docs/bench/mitsuba-own-scenes.md (for a folder named `scenes`) or
+docs/bench/mitsuba-FOLDER.md (named by the first folder), naming files relative to the
+folder's parent. Nothing is copied: the scenes and their assets stay where they are.
+`-D NAME=VALUE` (any number, anywhere after SPP) sets a scene parameter for both renderers,
+as `wgtrace render -D` and `mitsuba.load_file(..., NAME=VALUE)` do.
 
-usage: python bench/mitsuba_import_report.py [RUNS] [SPP] [FOLDER...]   (default 16 runs of
+usage: python bench/mitsuba_import_report.py [RUNS] [SPP] [-D NAME=VALUE...] [FOLDER...]   (default 16 runs of
 128 spp; build target/release/wgtrace first, or name another build in $WGTRACE). Needs `pip install mitsuba==3.9.1 numpy` and
 an LLVM named by DRJIT_LIBLLVM_PATH.
 """
@@ -38,7 +41,13 @@ spp = int(sys.argv[2]) if len(sys.argv) > 2 else 128
 wgtrace = os.environ.get("WGTRACE") or os.path.join(root, "target", "release", "wgtrace")
 tmp = tempfile.mkdtemp()
 
-folders = [os.path.abspath(f) for f in sys.argv[3:]]
+rest, defines = sys.argv[3:], {}
+while "-D" in rest:
+    k = rest.index("-D")
+    name, value = rest[k + 1].split("=", 1)
+    defines[name] = value
+    del rest[k:k + 2]
+folders = [os.path.abspath(f) for f in rest]
 
 
 def scene_files(folder):
@@ -83,7 +92,8 @@ for path in files:
     for s in range(runs):
         t0 = time.time()
         # -D spp as mi.load_file(path, spp=...) sets it (for files whose $spp has no default)
-        r = subprocess.run([wgtrace, "render", path, "--spp", str(spp), "-D", f"spp={spp}", "--seed", str(s), "-o", out],
+        r = subprocess.run([wgtrace, "render", path, "--spp", str(spp), "-D", f"spp={spp}", "--seed", str(s), "-o", out]
+                           + [a for k, v in defines.items() for a in ("-D", f"{k}={v}")],
                            capture_output=True, text=True)
         t_w += time.time() - t0
         if r.returncode != 0:
@@ -98,7 +108,7 @@ for path in files:
         continue
     try:
         t0 = time.time()
-        scene = mi.load_file(path, spp=spp)
+        scene = mi.load_file(path, spp=spp, **defines)
         m_runs = [np.array(mi.render(scene, spp=spp, seed=1000 + s))[..., :3].astype(np.float64) for s in range(runs)]
         t_m = time.time() - t0
     except Exception as e:
@@ -158,7 +168,9 @@ a row judges how each reads the scene file, not the image Mitsuba's own assets w
 make."""
 source = ("every Mitsuba 3\nscene file of `bench/` and `tests/mitsuba/`" if not folders else
           "the scene files of\n" + ", ".join(f"`{os.path.basename(d)}/`" for d in folders) + " (named from there)")
-command = " ".join(["bench/mitsuba_import_report.py", str(runs), str(spp)] + [os.path.basename(d) for d in folders])
+command = " ".join(["bench/mitsuba_import_report.py", str(runs), str(spp)]
+                   + [a for k, v in defines.items() for a in ("-D", f"{k}={v}")]
+                   + [os.path.basename(d) for d in folders])
 report = f"""# The Mitsuba importer against Mitsuba 3
 
 Written by `{command}` on {datetime.date.today()}: {source}, rendered by wgtrace from the file itself
@@ -180,6 +192,7 @@ if known:
     report += "\nWhy a file differs:\n\n" + "".join(known)
 if refused:
     report += "\nRefused (wgtrace's message):\n\n" + "".join(f"- `{n}`: {e}\n" for n, e in refused)
-name = "mitsuba-own-scenes.md" if folders else "mitsuba-import.md"
+name = ("mitsuba-import.md" if not folders else "mitsuba-own-scenes.md"
+        if os.path.basename(folders[0]) == "scenes" else f"mitsuba-{os.path.basename(folders[0])}.md")
 open(os.path.join(root, "docs", "bench", name), "w").write(report)
 print(report)

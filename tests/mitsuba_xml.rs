@@ -128,6 +128,28 @@ fn defaults_and_defines_substitute_the_longest_names_first() {
     let t = parse_str(text, Path::new("test.xml"), &[("spp".into(), "16".into())]).unwrap();
     let sampler = child(&t, t.root, "_arg_0");
     assert_eq!(value(&t, sampler, "sample_count"), &Value::Integer(16));
+    // a define no $name uses is refused, as Mitsuba refuses it: one with a <default> too
+    for name in ["sp", "unknown"] {
+        let e = parse_str(text, Path::new("test.xml"), &[(name.into(), "16".into())])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("test.xml:1:1: -D ") && e.contains("uses no such $parameter"),
+            "{e}"
+        );
+    }
+    let unused = text.replace("value=\"$res\"", "value=\"128\"");
+    let e = parse_str(
+        &unused,
+        Path::new("test.xml"),
+        &[("res".into(), "256".into())],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains("-D res=256: the scene uses no such $parameter"),
+        "{e}"
+    );
 }
 
 #[test]

@@ -162,6 +162,7 @@ pub fn parse_str(
     let mut p = Parser {
         objects: Vec::new(),
         params: defines.to_vec(),
+        used: Default::default(),
         ids: HashMap::new(),
         refs: Vec::new(),
         // Mitsuba's file resolver starts with the scene file's folder: a file named in an
@@ -189,6 +190,20 @@ pub fn parse_str(
         legacy,
     };
     let root = p.object(&src, root_node)?;
+    let unused: Vec<String> = defines
+        .iter()
+        .filter(|(k, _)| !p.used.borrow().contains(k))
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    if !unused.is_empty() {
+        return Err(XmlError {
+            pos: at,
+            message: format!(
+                "-D {}: the scene uses no such $parameter (Mitsuba refuses an unused one too)",
+                unused.join(", -D ")
+            ),
+        });
+    }
     p.resolve()?;
     p.check_cycles(root)?;
     Ok(SceneTree {
@@ -249,6 +264,9 @@ struct Parser {
     objects: Vec<Object>,
     /// `-D` defines first, then `<default>`s in the order read.
     params: Vec<(String, String)>,
+    /// The names a `$name` has been replaced by (a `-D` define never used is an error,
+    /// as Mitsuba's).
+    used: std::cell::RefCell<HashSet<String>>,
     ids: HashMap<String, (usize, Pos)>,
     /// (object, property, id referred to, where) to resolve once every id is known.
     refs: Vec<(usize, usize, String, Pos)>,
@@ -304,7 +322,11 @@ impl Parser {
         params.sort_by_key(|(k, _)| std::cmp::Reverse(k.len()));
         let mut value = raw.to_string();
         for (k, v) in params {
-            value = value.replace(&format!("${k}"), v);
+            let name = format!("${k}");
+            if value.contains(&name) {
+                value = value.replace(&name, v);
+                self.used.borrow_mut().insert(k.clone());
+            }
         }
         if value.contains('$') {
             return src.err(
