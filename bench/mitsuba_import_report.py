@@ -83,17 +83,27 @@ def sidak(alpha, n):
     return hi
 
 
+def uses_spp(path):
+    """Whether the file (or one beside or below it, which it may include) has a $spp: the
+    sample count is then also given as the parameter (both renderers refuse an unused
+    one)."""
+    folder = os.path.dirname(path)
+    texts = [path] + glob.glob(os.path.join(folder, "**", "*.xml"), recursive=True)
+    return any("$spp" in open(f, errors="replace").read() for f in texts)
+
+
 rows, refused = [], []
 for path in files:
     shown = shown_of[path]
+    spp_define = {"spp": str(spp)} if uses_spp(path) else {}
     out = os.path.join(tmp, "w.exr")
     w_runs, t_w = [], 0.0
     error = None
     for s in range(runs):
         t0 = time.time()
         # -D spp as mi.load_file(path, spp=...) sets it (for files whose $spp has no default)
-        r = subprocess.run([wgtrace, "render", path, "--spp", str(spp), "-D", f"spp={spp}", "--seed", str(s), "-o", out]
-                           + [a for k, v in defines.items() for a in ("-D", f"{k}={v}")],
+        r = subprocess.run([wgtrace, "render", path, "--spp", str(spp), "--seed", str(s), "-o", out]
+                           + [a for k, v in {**spp_define, **defines}.items() for a in ("-D", f"{k}={v}")],
                            capture_output=True, text=True)
         t_w += time.time() - t0
         if r.returncode != 0:
@@ -108,7 +118,7 @@ for path in files:
         continue
     try:
         t0 = time.time()
-        scene = mi.load_file(path, spp=spp, **defines)
+        scene = mi.load_file(path, **spp_define, **defines)
         m_runs = [np.array(mi.render(scene, spp=spp, seed=1000 + s))[..., :3].astype(np.float64) for s in range(runs)]
         t_m = time.time() - t0
     except Exception as e:
@@ -123,9 +133,10 @@ for path in files:
     z = (wm - mm) / np.sqrt(ws**2 + ms**2 + rounding**2 + 1e-12)
     bound = sidak(0.01, z.size)
     within = float((np.abs(z) <= bound).mean())
-    whole = (wm.mean() - mm.mean()) / mm.mean() * 100
+    whole = (f"{(wm.mean() - mm.mean()) / mm.mean() * 100:+.2f}%" if mm.mean() > 0
+             else "black in both" if wm.mean() == 0 else f"{wm.mean():.3g} against 0")
     rows.append(f"| `{shown}` | {w.shape[2]} x {w.shape[1]} | {within * 100:.2f}% | "
-                f"{'agrees' if within >= 0.9975 else 'DIFFERS'} | {whole:+.2f}% | {np.abs(z).max():.1f} |")
+                f"{'agrees' if within >= 0.9975 else 'DIFFERS'} | {whole} | {np.abs(z).max():.1f} |")
     print(rows[-1])
 
 # why a file differs, where it is known
@@ -166,6 +177,14 @@ Where the folders lacked meshes or images, `bench/mitsuba_standins.py` wrote sta
 (spheres, rectangles, cubes, tori, patterns, a sky): both renderers read the same ones, so
 a row judges how each reads the scene file, not the image Mitsuba's own assets would
 make."""
+BITTERLI = """
+
+The files are the public copies of Bitterli's scenes in Mitsuba form that
+bench/bitterli-sources.md lists (each edited by whoever keeps it, most without their meshes),
+prepared by bench/bitterli_prepare.py: the integrator back to `path` where a copy names one
+of its own, the film a quarter of the size. The stand-in meshes of a scene are spheres
+placed apart, so a row judges each renderer's reading of the file's materials, lights,
+camera and integrator, not Bitterli's image."""
 source = ("every Mitsuba 3\nscene file of `bench/` and `tests/mitsuba/`" if not folders else
           "the scene files of\n" + ", ".join(f"`{os.path.basename(d)}/`" for d in folders) + " (named from there)")
 command = " ".join(["bench/mitsuba_import_report.py", str(runs), str(spp)]
@@ -182,7 +201,7 @@ for 99.75%. (Each run's f32 sum of {spp} values may round by {spp} x 2^-24 of th
 that is added to the errors, for pixels without variance, such as those that see only an
 emitter.) *Whole image*: wgtrace's mean over Mitsuba's, less 1.
 
-{agree} of {len(rows)} rendered files agree; {len(refused)} refused.{STANDINS if folders else ""}
+{agree} of {len(rows)} rendered files agree; {len(refused)} refused.{STANDINS if folders else ""}{BITTERLI if any(os.path.basename(d) == "bitterli" for d in folders) else ""}
 
 | file | size | pixels within | verdict | whole image | largest z |
 |---|---|---|---|---|---|

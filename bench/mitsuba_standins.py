@@ -3,16 +3,20 @@ every scene file below FOLDER, each file it names (`<string name="filename">`, i
 a file it includes) that no folder Mitsuba would search holds is written, generated here,
 where Mitsuba looks first (the scene's latest `<path>` folder, else the scene's folder):
 
-- OBJ: a UV sphere of radius 1 (names with "sphere", and any other name; with "base", one
-  of radius 0.5 at y = -1.2, so that a scene's sphere and its base do not coincide), the rectangle
+- OBJ: a UV sphere of radius 1 (names with "sphere"; with "base", one of radius 0.5 at
+  y = -1.2, so that a scene's sphere and its base do not coincide), the rectangle
   [-1, 1]^2 at z = 0 facing +z ("rectangle", "background" the same, 10 times larger), a
-  cube of side 1 ("cube"), a torus ("torus"); each with normals and uv;
-- ASCII PLY: the rectangle with normals and uv (names with "attribute": a sphere with a
-  colour per vertex and one per face); `.serialized`: 8 shapes (for any
-  `shape_index`), each the rectangle ("rectangle") or the sphere (positions);
+  cube of side 1 ("cube"), a torus ("torus"); any other name (a scene of many meshes,
+  such as Bitterli's Mesh000.obj ...) a sphere of radius 0.5 centred where the name's
+  CRC-32 puts it in [-1.2, 1.2]^3, so that no two such meshes coincide (which would leave
+  each renderer's choice between their materials to rounding); each with normals and uv;
+- ASCII PLY: the rectangle with normals and uv ("rectangle"), a sphere with a colour per
+  vertex and one per face ("attribute"), any other name the placed sphere of an OBJ;
+  `.serialized`: 8 shapes (for any `shape_index`), each the rectangle ("rectangle") or
+  a placed sphere (positions; each shape placed by the name and its index);
 - PNG/JPG/BMP: a 64 x 64 pattern of colour gradients and checks (names with "normalmap": a
   wave normal map; with "mask": a soft-edged disk pattern in grey);
-- EXR/HDR: a 64 x 32 equirectangular sky, a gradient with a small bright sun.
+- EXR/HDR/PFM: a 64 x 32 equirectangular sky, a gradient with a small bright sun.
 
 Both renderers then read the same stand-ins, so the comparison still judges how each
 reads the scene file; the stand-ins written are listed, and a report made from these
@@ -28,6 +32,7 @@ import os
 import re
 import struct
 import sys
+import zlib
 
 import mitsuba as mi
 import numpy as np
@@ -177,6 +182,26 @@ def sky():
     return img.astype(np.float32)
 
 
+def placed(name):
+    """The centre of a stand-in named `name` that is neither a sphere nor a rectangle, cube
+    or torus: each coordinate a byte of the name's CRC-32 spread over [-1.2, 1.2]."""
+    h = zlib.crc32(name.encode())
+    return tuple(((h >> (8 * k)) & 0xFF) / 255 * 2.4 - 1.2 for k in range(3))
+
+
+def sphere_ply(radius, centre):
+    """sphere_obj's sphere as ASCII PLY (positions, normals, uv; the OBJ's triangles)."""
+    text = sphere_obj(radius, centre).splitlines()
+    pick = lambda tag: [l.split()[1:] for l in text if l.startswith(tag + " ")]
+    v, n, t, f = pick("v"), pick("vn"), pick("vt"), pick("f")
+    head = ("ply\nformat ascii 1.0\n" f"element vertex {len(v)}\n"
+            + "".join(f"property float {c}\n" for c in ("x", "y", "z", "nx", "ny", "nz", "u", "v"))
+            + f"element face {len(f)}\nproperty list uchar int vertex_indices\nend_header\n")
+    rows = [" ".join(a + b + c) for a, b, c in zip(v, n, t)]
+    faces = ["3 " + " ".join(str(int(k.split("/")[0]) - 1) for k in tri) for tri in f]
+    return head + "\n".join(rows + faces) + "\n"
+
+
 def write(path):
     name = os.path.basename(path).lower()
     ext = os.path.splitext(name)[1]
@@ -185,19 +210,24 @@ def write(path):
         text = (quad_obj(10.0) if "background" in name else quad_obj() if "rectangle" in name
                 else cube_obj() if "cube" in name else torus_obj() if "torus" in name
                 # a "base" beside a sphere of the same scene: below it, not in its place
-                else sphere_obj(0.5, (0.0, -1.2, 0.0)) if "base" in name else sphere_obj())
+                else sphere_obj(0.5, (0.0, -1.2, 0.0)) if "base" in name
+                else sphere_obj() if "sphere" in name else sphere_obj(0.5, placed(name)))
         open(path, "w").write(text)
     elif ext == ".ply":
-        open(path, "w").write(attribute_sphere_ply() if "attribute" in name else quad_ply())
+        open(path, "w").write(attribute_sphere_ply() if "attribute" in name else quad_ply() if "rectangle" in name
+                              else sphere_ply(0.5, placed(name)))
     elif ext == ".serialized":
+        def sphere(k):
+            text = sphere_obj(0.5, placed(f"{name}#{k}")).splitlines()
+            v = [tuple(map(float, l.split()[1:])) for l in text if l.startswith("v ")]
+            f = [tuple(int(k.split("/")[0]) - 1 for k in l.split()[1:]) for l in text if l.startswith("f ")]
+            return (v, f)
         if "rectangle" in name:
-            mesh = ([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [(0, 1, 2), (0, 2, 3)])
+            meshes = [([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [(0, 1, 2), (0, 2, 3)])] * 8
         else:
-            v = [tuple(map(float, l.split()[1:])) for l in sphere_obj().splitlines() if l.startswith("v ")]
-            f = [tuple(int(k.split("/")[0]) - 1 for k in l.split()[1:]) for l in sphere_obj().splitlines() if l.startswith("f ")]
-            mesh = (v, f)
-        # as many shapes as a file's shape_index may name, each the same mesh
-        open(path, "wb").write(serialized([mesh] * 8))
+            meshes = [sphere(k) for k in range(8)]
+        # as many shapes as a file's shape_index may name
+        open(path, "wb").write(serialized(meshes))
     elif ext in (".png", ".jpg", ".jpeg", ".bmp"):
         img = pattern(name)
         bmp = mi.Bitmap(img).convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, True)
@@ -205,7 +235,7 @@ def write(path):
             open(path, "wb").write(bmp_bytes(np.array(bmp)))
         else:
             bmp.write(path)
-    elif ext in (".exr", ".hdr"):
+    elif ext in (".exr", ".hdr", ".pfm"):
         mi.Bitmap(sky()).write(path)
     else:
         return False

@@ -592,3 +592,76 @@ fn opacity_masks_are_validated() {
     );
     assert!(e.contains("bad.toml:7:") && e.contains("opacity"), "{e}");
 }
+
+/// A Portable FloatMap reads as linear float texels, top row first (the file stores the
+/// bottom row first), in either byte order (a negative scale: little-endian), grey or RGB,
+/// of an odd height too; a short or malformed file is an error saying what is wrong.
+#[test]
+fn pfm_images_read_top_row_first_in_either_byte_order() {
+    use wgtrace::scene::textures::{image_size, load_image};
+    let dir = image_dir("pfm");
+    // 2 x 3 texels, the file's rows bottom first: the value of (x, y from the top) is
+    // 10 y + x (+ 0.25, 0.5 in g and b)
+    let pfm = |kind: &str, little: bool| {
+        let grey = kind == "Pf";
+        let mut bytes =
+            format!("{kind}\n2 3\n{}\n", if little { "-1.0" } else { "1.0" }).into_bytes();
+        for y in (0..3).rev() {
+            for x in 0..2 {
+                let v = 10.0 * y as f32 + x as f32;
+                let texel: &[f32] = if grey { &[v] } else { &[v, v + 0.25, v + 0.5] };
+                for f in texel {
+                    bytes.extend(if little {
+                        f.to_le_bytes()
+                    } else {
+                        f.to_be_bytes()
+                    });
+                }
+            }
+        }
+        bytes
+    };
+    for (kind, little) in [("PF", true), ("PF", false), ("Pf", true)] {
+        let path = dir.join(format!("{kind}-{little}.pfm"));
+        std::fs::write(&path, pfm(kind, little)).unwrap();
+        assert_eq!(image_size(&path), Ok((2, 3)));
+        let img = load_image(&path, true).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((img.width, img.height), (2, 3));
+        for y in 0..3 {
+            for x in 0..2 {
+                let v = 10.0 * y as f32 + x as f32;
+                let want = if kind == "Pf" {
+                    [v, v, v, 1.0]
+                } else {
+                    [v, v + 0.25, v + 0.5, 1.0]
+                };
+                assert_eq!(
+                    img.texel(y * 2 + x),
+                    want,
+                    "{kind} little-endian {little}: ({x}, {y})"
+                );
+            }
+        }
+    }
+    let short = pfm("PF", true);
+    for (bytes, why) in [
+        (
+            short[..short.len() - 4].to_vec(),
+            "PFM data is 68 bytes, 72 expected",
+        ),
+        (b"P6\n2 3\n255\n".to_vec(), "not a PFM file"),
+        (
+            b"PF\n2 x\n-1\n".to_vec(),
+            "PFM size 2 x x: not two positive integers",
+        ),
+        (
+            b"PF\n2 3\n0\n".to_vec(),
+            "PFM scale \"0\": not a non-zero number",
+        ),
+    ] {
+        let path = dir.join("bad.pfm");
+        std::fs::write(&path, bytes).unwrap();
+        let e = load_image(&path, false).unwrap_err();
+        assert!(e.contains(why), "{e}");
+    }
+}

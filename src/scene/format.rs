@@ -421,7 +421,7 @@ pub enum TextureDesc {
         #[serde(default)]
         mapping: CheckerMapping,
     },
-    /// An image file (PNG, JPEG, HDR, EXR, PPM, BMP), `path` relative to the scene file; 8- and
+    /// An image file (PNG, JPEG, HDR, EXR, PPM, PFM, BMP), `path` relative to the scene file; 8- and
     /// 16-bit images are sRGB-decoded to linear unless `color_space = "linear"` (data such
     /// as roughness); bilinear filtering, or the nearest texel. `factor` multiplies the
     /// texels; `transform` maps the surface's uv (of set `uv_set`) before the look-up;

@@ -81,12 +81,141 @@ pub const MAX_TEXELS: u64 = 1 << 31;
 /// [`MAX_TEXTURE_SIDE`] or more than [`MAX_IMAGE_TEXELS`] texels is refused before
 /// decoding.
 pub fn load_image(path: &Path, srgb: bool) -> Result<ImageData, String> {
+    if is_pfm(path) {
+        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+        return read_pfm(&bytes);
+    }
     let reader = || {
         image::ImageReader::open(path)
             .and_then(|r| r.with_guessed_format())
             .map_err(|e| e.to_string())
     };
     decode(reader, srgb)
+}
+
+/// An image file's width and height, read from its header.
+pub fn image_size(path: &Path) -> Result<(u32, u32), String> {
+    if is_pfm(path) {
+        let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+        return pfm_header(&bytes).map(|h| (h.width, h.height));
+    }
+    image::image_dimensions(path).map_err(|e| e.to_string())
+}
+
+/// Whether `path` names a Portable FloatMap (`.pfm`), which the image crate does not read.
+fn is_pfm(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pfm"))
+}
+
+/// A PFM file's header: `PF` (RGB) or `Pf` (grey), the width and height, and a scale whose
+/// sign gives the byte order (negative: little-endian), each followed by white space;
+/// then `at`, where the floats begin.
+struct PfmHeader {
+    channels: usize,
+    width: u32,
+    height: u32,
+    little_endian: bool,
+    at: usize,
+}
+
+fn pfm_header(bytes: &[u8]) -> Result<PfmHeader, String> {
+    // four tokens, each ended by one white-space byte (the last one before the floats)
+    let mut tokens = Vec::new();
+    let mut at = 0;
+    while tokens.len() < 4 {
+        while at < bytes.len() && bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        let start = at;
+        while at < bytes.len() && !bytes[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        if start == at || at == bytes.len() {
+            return Err("is not a PFM file (its header ends early)".into());
+        }
+        tokens.push(String::from_utf8_lossy(&bytes[start..at]).into_owned());
+        at += 1;
+    }
+    let channels = match tokens[0].as_str() {
+        "PF" => 3,
+        "Pf" => 1,
+        t => return Err(format!("is not a PFM file (it begins {t:?}, not PF or Pf)")),
+    };
+    let size = |t: &str| t.parse::<u32>().ok().filter(|&n| n > 0);
+    let (Some(width), Some(height)) = (size(&tokens[1]), size(&tokens[2])) else {
+        return Err(format!(
+            "PFM size {} x {}: not two positive integers",
+            tokens[1], tokens[2]
+        ));
+    };
+    let scale: f32 = tokens[3]
+        .parse()
+        .ok()
+        .filter(|s: &f32| s.is_finite() && *s != 0.0)
+        .ok_or_else(|| format!("PFM scale {:?}: not a non-zero number", tokens[3]))?;
+    Ok(PfmHeader {
+        channels,
+        width,
+        height,
+        little_endian: scale < 0.0,
+        at,
+    })
+}
+
+/// A PFM image (linear floats, rows stored bottom first) as float texels, top row first.
+fn read_pfm(bytes: &[u8]) -> Result<ImageData, String> {
+    let h = pfm_header(bytes)?;
+    let (w, rows, c) = (h.width as usize, h.height as usize, h.channels);
+    if h.width > MAX_TEXTURE_SIDE
+        || h.height > MAX_TEXTURE_SIDE
+        || (w as u64) * (rows as u64) > MAX_IMAGE_TEXELS
+    {
+        return Err(format!(
+            "is {w}x{rows}, more than the {MAX_TEXTURE_SIDE} per side and {MAX_IMAGE_TEXELS} \
+             texels accepted"
+        ));
+    }
+    let body = &bytes[h.at..];
+    let want = w * rows * c * 4;
+    if body.len() < want {
+        return Err(format!(
+            "PFM data is {} bytes, {want} expected for {w}x{rows}x{c} floats",
+            body.len()
+        ));
+    }
+    let float = |k: usize| {
+        let b: [u8; 4] = body[4 * k..4 * k + 4].try_into().unwrap();
+        if h.little_endian {
+            f32::from_le_bytes(b)
+        } else {
+            f32::from_be_bytes(b)
+        }
+    };
+    let mut data = Vec::with_capacity(w * rows * 16);
+    for y in (0..rows).rev() {
+        for x in 0..w {
+            let k = (y * w + x) * c;
+            let rgb = if c == 3 {
+                [float(k), float(k + 1), float(k + 2)]
+            } else {
+                [float(k); 3]
+            };
+            if !rgb.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return Err("has a negative or non-finite texel".into());
+            }
+            for v in [rgb[0], rgb[1], rgb[2], 1.0] {
+                data.extend_from_slice(&v.to_le_bytes());
+            }
+        }
+    }
+    Ok(ImageData {
+        width: h.width,
+        height: h.height,
+        kind: TexelKind::Float,
+        srgb: false,
+        data,
+    })
 }
 
 /// [`load_image`] of an image held in memory (a glTF buffer view or data URI).

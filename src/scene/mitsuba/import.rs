@@ -1716,7 +1716,7 @@ impl<'a> Importer<'a> {
                     // v is moved to match (measured: its eval returns texel values exactly
                     // there)
                     let file = self.tree.find_file(&o.get("filename").unwrap().pos, self.string(o, "filename")?.unwrap_or(""));
-                    let (_, h) = image::image_dimensions(&file).map_err(|e| XmlError {
+                    let (_, h) = crate::scene::textures::image_size(&file).map_err(|e| XmlError {
                         pos: o.get("filename").unwrap().pos.clone(),
                         message: format!("emitter envmap: {}: {e}", file.display()),
                     })?;
@@ -1803,7 +1803,7 @@ impl<'a> Importer<'a> {
                         let t = self.obj(*i);
                         let name = t.get("filename").map(|p| p.pos.clone()).unwrap_or(t.pos.clone());
                         let file = self.tree.find_file(&name, self.string(t, "filename")?.unwrap_or(""));
-                        let (w, h) = image::image_dimensions(&file).map_err(|e| XmlError {
+                        let (w, h) = crate::scene::textures::image_size(&file).map_err(|e| XmlError {
                             pos: name,
                             message: format!("texture bitmap: {}: {e}", file.display()),
                         })?;
