@@ -652,6 +652,19 @@ fn mesh_uvs_and_fronts_as_adjust_is_asked() {
         };
         assert_eq!(n(&m), if flip_normals { -1.0 } else { 1.0 });
     }
+    // face colours survive the corners the default uvs take
+    let mut m = quad(vec![], vec![]);
+    m.face_colors = vec![glam::Vec4::X, glam::Vec4::Y];
+    adjust(
+        &mut m,
+        Adjust {
+            default_uvs_v_down: true,
+            corner_uvs: true,
+            ..Default::default()
+        },
+    );
+    assert_eq!((m.uvs.len(), m.colors.len()), (6, 6));
+    assert_eq!(m.colors[3..], [glam::Vec4::Y; 3]);
     // without a material that reads uvs, nothing is unwelded
     let mut m = quad(vec![], vec![]);
     adjust(

@@ -781,7 +781,7 @@ fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
 }
 
 /// The mesh with three corners of its own per triangle (positions, normals, uvs and vertex
-/// colours copied; tangents left out).
+/// colours copied; the per-triangle tangents and face colours kept).
 fn unwelded(mesh: &MeshData) -> MeshData {
     fn copy<T: Copy>(v: &[T], triangles: &[[u32; 3]]) -> Vec<T> {
         if v.is_empty() {
@@ -800,7 +800,8 @@ fn unwelded(mesh: &MeshData) -> MeshData {
         triangles: (0..t.len() as u32)
             .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
             .collect(),
-        ..Default::default()
+        tangents: mesh.tangents.clone(),
+        face_colors: mesh.face_colors.clone(),
     }
 }
 
