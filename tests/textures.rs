@@ -665,3 +665,33 @@ fn pfm_images_read_top_row_first_in_either_byte_order() {
         assert!(e.contains(why), "{e}");
     }
 }
+
+/// A Radiance HDR file signed `#?RGBE` (as Mitsuba writes one) reads as the same file signed
+/// `#?RADIANCE`, the one signature the image crate's decoder takes; its size too.
+#[test]
+fn hdr_files_signed_rgbe_read_as_radiance_ones() {
+    use wgtrace::scene::textures::{image_size, load_image};
+    let dir = image_dir("rgbe");
+    let texels: Vec<image::Rgb<f32>> = (0..6)
+        .map(|k| image::Rgb([k as f32, 0.5, 2.0 + k as f32]))
+        .collect();
+    let mut bytes = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut bytes)
+        .encode(&texels, 3, 2)
+        .unwrap();
+    assert!(bytes.starts_with(b"#?RADIANCE\n"));
+    let radiance = dir.join("radiance.hdr");
+    std::fs::write(&radiance, &bytes).unwrap();
+    let rgbe = dir.join("rgbe.hdr");
+    std::fs::write(
+        &rgbe,
+        [b"#?RGBE".as_slice(), &bytes[b"#?RADIANCE".len()..]].concat(),
+    )
+    .unwrap();
+    let (a, b) = (
+        load_image(&radiance, false).unwrap(),
+        load_image(&rgbe, false).unwrap(),
+    );
+    assert_eq!((b.width, b.height, &b.data), (3, 2, &a.data));
+    assert_eq!(image_size(&rgbe), Ok((3, 2)));
+}
