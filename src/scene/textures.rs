@@ -85,7 +85,7 @@ pub fn load_image(path: &Path, srgb: bool) -> Result<ImageData, String> {
         let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
         return read_pfm(&bytes);
     }
-    if let Some(bytes) = rgbe_as_radiance(path)? {
+    if let Some(bytes) = hdr_bytes(path)? {
         return decode_image(&bytes, srgb);
     }
     let reader = || {
@@ -102,7 +102,7 @@ pub fn image_size(path: &Path) -> Result<(u32, u32), String> {
         let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
         return pfm_header(&bytes).map(|h| (h.width, h.height));
     }
-    if let Some(bytes) = rgbe_as_radiance(path)? {
+    if let Some(bytes) = hdr_bytes(path)? {
         return image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| e.to_string())?
@@ -112,10 +112,10 @@ pub fn image_size(path: &Path) -> Result<(u32, u32), String> {
     image::image_dimensions(path).map_err(|e| e.to_string())
 }
 
-/// A Radiance HDR file whose first line is `#?RGBE` (as Mitsuba and other writers sign it)
-/// with that line made `#?RADIANCE`, the only one the image crate's decoder accepts; None
-/// for any other file.
-fn rgbe_as_radiance(path: &Path) -> Result<Option<Vec<u8>>, String> {
+/// A Radiance HDR file's bytes (`.hdr`, `.pic`), read once, with a first line of `#?RGBE`
+/// (as Mitsuba and other writers sign it) made `#?RADIANCE`, the only signature the image
+/// crate's decoder accepts; None for any other file.
+fn hdr_bytes(path: &Path) -> Result<Option<Vec<u8>>, String> {
     if !path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("hdr") || e.eq_ignore_ascii_case("pic"))
@@ -123,10 +123,10 @@ fn rgbe_as_radiance(path: &Path) -> Result<Option<Vec<u8>>, String> {
         return Ok(None);
     }
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
-    Ok(bytes
-        .strip_prefix(b"#?RGBE")
-        .filter(|rest| rest.first() == Some(&b'\n'))
-        .map(|rest| [b"#?RADIANCE".as_slice(), rest].concat()))
+    Ok(Some(match bytes.strip_prefix(b"#?RGBE") {
+        Some(rest) if rest.first() == Some(&b'\n') => [b"#?RADIANCE".as_slice(), rest].concat(),
+        _ => bytes,
+    }))
 }
 
 /// Whether `path` names a Portable FloatMap (`.pfm`), which the image crate does not read.
