@@ -7,6 +7,12 @@ pub use crate::scene::records::accum_entries as entries_per_pixel;
 /// from the top-left) from `data[entries * i]`: (sum r, sum g, sum b, count), (sum r^2,
 /// sum g^2, sum b^2, samples dropped as not finite), and with `aovs` (sum albedo rgb, sum
 /// depth), (sum normal xyz, 0), (sum position xyz, 0) over every sample, dropped or not.
+///
+/// A render that splats (`[render] reconstruction = "splat"`) sums each sample into every
+/// pixel its filter reaches with its weight w there: (sum w L, sum w), (sum w L^2,
+/// dropped), and its AOVs into its own pixel, their count in the normal's fourth
+/// component. Its mean is sum w L / sum w; its variance and error estimates take sum w
+/// for the count (for Mitsuba's Gaussian, about 2x the true variance of the mean).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Accumulation {
     pub width: u32,
@@ -70,7 +76,8 @@ impl Accumulation {
     /// Mean radiance of pixel `i`.
     pub fn mean(&self, i: usize) -> [f32; 3] {
         let s = self.entry(i, 0);
-        let n = s[3].max(1.0);
+        // a count, or a splat render's sum of weights (which may be below 1)
+        let n = if s[3] > 0.0 { s[3] } else { 1.0 };
         [s[0] / n, s[1] / n, s[2] / n]
     }
 
@@ -81,8 +88,19 @@ impl Accumulation {
         if !self.aovs {
             return [0.0; 4];
         }
-        let n = (self.entry(i, 0)[3] + self.entry(i, 1)[3]).max(1.0);
-        self.entry(i, k).map(|x| x / n)
+        // a splat render counts the samples in the normal's fourth component (its colour's
+        // count is a sum of weights)
+        let counted = self.entry(i, 3)[3];
+        let n = if counted > 0.0 {
+            counted
+        } else {
+            (self.entry(i, 0)[3] + self.entry(i, 1)[3]).max(1.0)
+        };
+        let mut mean = self.entry(i, k).map(|x| x / n);
+        if k == 3 {
+            mean[3] = 0.0;
+        }
+        mean
     }
 
     /// Unbiased sample variance of one sample of pixel `i`, per channel.

@@ -612,40 +612,50 @@ fn merged_sample_ranges_equal_one_render() {
 
 /// An image split into bands of one row, each with its own accumulation buffer (as an
 /// image larger than one storage binding is), gives the same file, byte for byte, as one
-/// band; so does a checkpoint written and resumed in bands.
+/// band; so does a checkpoint written and resumed in bands. With splatted samples too
+/// (Mitsuba's Gaussian, `reconstruction = "splat"`), whose gather reads the samples of
+/// the bands above and below each one.
 #[test]
 fn banded_and_whole_renders_are_identical() {
     let dir = tmp_dir("bands");
-    let run = |rows: bool, extra: &[&str], out: &Path| {
-        let mut cmd = Command::new(env!("CARGO_BIN_EXE_wgtrace"));
-        cmd.args([
-            "render",
-            &cornell(),
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "-q",
-        ])
-        .args(extra)
-        .arg("-o")
-        .arg(out);
-        if rows {
-            // 100 pixels per band at most: 48 bands of one row
-            cmd.args(["--tune", "band-pixels=100"]);
-        }
-        let o = cmd.output().expect("run wgtrace");
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    };
-    let (whole, banded, resumed) = (dir.join("w.exr"), dir.join("b.exr"), dir.join("r.exr"));
-    run(false, &["--spp", "4"], &whole);
-    run(true, &["--spp", "4"], &banded);
-    let ckpt = dir.join("r.ckpt").display().to_string();
-    run(true, &["--spp", "2", "--checkpoint", &ckpt], &resumed);
-    run(true, &["--spp", "4", "--resume", &ckpt], &resumed);
-    let bytes = |p: &Path| std::fs::read(p).unwrap();
-    assert!(bytes(&whole) == bytes(&banded), "banded differs");
-    assert!(bytes(&whole) == bytes(&resumed), "banded resume differs");
+    let splat = dir.join("cornell-splat.toml");
+    let src = std::fs::read_to_string(cornell()).unwrap();
+    std::fs::write(
+        &splat,
+        src.replacen(
+            "[render]\n",
+            "[render]\nfilter = \"gaussian\"\nreconstruction = \"splat\"\n",
+            1,
+        ),
+    )
+    .unwrap();
+    for scene in [cornell(), splat.display().to_string()] {
+        let run = |rows: bool, extra: &[&str], out: &Path| {
+            let mut cmd = Command::new(env!("CARGO_BIN_EXE_wgtrace"));
+            cmd.args(["render", &scene, "--width", "64", "--height", "48", "-q"])
+                .args(extra)
+                .arg("-o")
+                .arg(out);
+            if rows {
+                // 100 pixels per band at most: 48 bands of one row
+                cmd.args(["--tune", "band-pixels=100"]);
+            }
+            let o = cmd.output().expect("run wgtrace");
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        };
+        let (whole, banded, resumed) = (dir.join("w.exr"), dir.join("b.exr"), dir.join("r.exr"));
+        run(false, &["--spp", "4"], &whole);
+        run(true, &["--spp", "4"], &banded);
+        let ckpt = dir.join("r.ckpt").display().to_string();
+        run(true, &["--spp", "2", "--checkpoint", &ckpt], &resumed);
+        run(true, &["--spp", "4", "--resume", &ckpt], &resumed);
+        let bytes = |p: &Path| std::fs::read(p).unwrap();
+        assert!(bytes(&whole) == bytes(&banded), "{scene}: banded differs");
+        assert!(
+            bytes(&whole) == bytes(&resumed),
+            "{scene}: banded resume differs"
+        );
+    }
 }
 
 /// While the driver compiles a shader no sample is in flight: the render says it is

@@ -1405,7 +1405,8 @@ fn a_device_lost_mid_render_keeps_the_samples_read_back() {
 
 /// Every pixel filter gives the same image on both backends: the tent, Mitsuba's Gaussian
 /// (radius 4 deviations) and pbrt-v4's (radius 1.5), each sample's position drawn from
-/// the filter on both.
+/// the filter on both; and splatted (a Gaussian, a wide tent), the GPU's gather pass
+/// reading the sample buffer as the CPU's reads its samples.
 #[test]
 fn gpu_matches_cpu_with_every_pixel_filter() {
     use wgtrace::scene::format::FilterKind;
@@ -1414,6 +1415,11 @@ fn gpu_matches_cpu_with_every_pixel_filter() {
         (FilterKind::Tent, ""),
         (FilterKind::Gaussian, ""),
         (FilterKind::Gaussian, "filter_radius = 1.5\n"),
+        (FilterKind::Gaussian, "reconstruction = \"splat\"\n"),
+        (
+            FilterKind::Tent,
+            "reconstruction = \"splat\"\nfilter_radius = 2\n",
+        ),
     ] {
         let src = src.replacen("[render]\n", &format!("[render]\n{extra}"), 1);
         let o = Overrides {
@@ -1534,6 +1540,115 @@ material = "light"
                         (mean - p).abs() <= 5.0 * se + 2e-3,
                         "{label}: {mean} against {p} (standard error {se})"
                     );
+                }
+            }
+        }
+    }
+}
+
+/// Splat reconstruction (`reconstruction = "splat"`, Mitsuba 3's film) renders the same
+/// step edge as `a_step_edge_renders_each_pixel_filters_cdf`, on both backends: each
+/// sample uniform in its pixel and weighed into every pixel its filter reaches, pixel i
+/// converges to the same 1 - F(7.75 - i) (the expected image does not change, only how
+/// the noise spreads). Pixels the filter keeps on one side read exactly 0 or 1 (a ratio
+/// of equal sums), those within it are within 5 standard errors of the weighted
+/// Bernoulli mean: p (1 - p) x 1.3 / n for the n = 1024 samples of a pixel (1.27 is
+/// sum w^2 / (sum w)^2 of Mitsuba's Gaussian over a pixel's neighbours), with the four
+/// rows counted as one (they share samples). With the AOVs, every pixel on the emitter
+/// reads its distance 2: the AOVs stay each pixel's own samples' mean.
+#[test]
+fn splatted_samples_render_each_pixel_filters_cdf() {
+    for (filter, extra, r, sd, steps) in [
+        ("tent", "", 1.0f64, 0.0f64, 0u32),
+        ("gaussian", "", 2.0, 0.5, 0),
+        ("gaussian", "filter_radius = 1.5", 1.5, 0.5, 0),
+        ("gaussian", "filter_steps = 31", 2.0, 0.5, 31),
+    ] {
+        let src = format!(
+            r#"
+[render]
+width = 16
+height = 4
+spp = 1024
+max_depth = 1
+filter = "{filter}"
+reconstruction = "splat"
+sample_border = false
+{extra}
+
+[camera]
+projection = "orthographic"
+height = 4
+look_from = [0, 0, 2]
+look_at = [0, 0, 0]
+
+[materials]
+light = {{ type = "emissive", radiance = [1, 1, 1] }}
+
+[[objects]]
+type = "polygon"
+vertices = [[0.25, -10, 0], [20, -10, 0], [20, 10, 0], [0.25, 10, 0]]
+material = "light"
+"#
+        );
+        let mut scene = scene_from_str(&src);
+        assert!(scene.filter.splat, "{filter} {extra}");
+        scene.aovs = true;
+        let step = |x: f64| match steps {
+            0 => x,
+            n => (x.abs() * n as f64 / r).floor() * r / n as f64,
+        };
+        let profile = |x: f64| match filter {
+            _ if x.abs() >= r => 0.0,
+            "tent" => (1.0 - step(x).abs() / r).max(0.0),
+            _ => {
+                let g = |t: f64| (-t * t / (2.0 * sd * sd)).exp();
+                (g(step(x)) - g(r)).max(0.0)
+            }
+        };
+        let cdf = |x: f64| {
+            let n = 20_000;
+            let h = 2.0 * r / n as f64;
+            let part = |hi: f64| {
+                (0..n)
+                    .map(|i| -r + (i as f64 + 0.5) * h)
+                    .filter(|&t| t < hi)
+                    .map(profile)
+                    .sum::<f64>()
+            };
+            part(x) / part(r + 1.0)
+        };
+        for (name, render) in [
+            (
+                "gpu",
+                render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
+            ),
+            ("cpu", render_cpu),
+        ] {
+            let img = render(&scene);
+            for i in 0..16u32 {
+                let mean = (0..4)
+                    .map(|y| img.mean((y * 16 + i) as usize)[0] as f64)
+                    .sum::<f64>()
+                    / 4.0;
+                let d = 7.75 - i as f64;
+                let label = format!("{filter} {extra}, {name}, pixel {i}");
+                if d.abs() >= r {
+                    let want = if d > 0.0 { 0.0 } else { 1.0 };
+                    assert_eq!(mean, want, "{label}: outside the radius");
+                } else {
+                    let p = 1.0 - cdf(d);
+                    let se = (p * (1.0 - p) * 1.3 / 1024.0).sqrt();
+                    assert!(
+                        (mean - p).abs() <= 5.0 * se + 1e-6,
+                        "{label}: {mean} against {p} (standard error {se})"
+                    );
+                }
+                if d < -1.0 {
+                    for y in 0..4 {
+                        let depth = img.aov_mean((y * 16 + i) as usize, 2)[3];
+                        assert!((depth - 2.0).abs() < 1e-5, "{label}: depth {depth}");
+                    }
                 }
             }
         }

@@ -763,42 +763,52 @@ fn documentation_scene_forms_read_as_mitsuba_reads_them() {
     );
 }
 
-/// Mitsuba's film weighs its samples by a table of its filter's values, 31 steps over the
-/// radius: a file's tent and Gaussian (the default) become `filter_steps = 31`, the box
-/// (which a table leaves as it is) none; the loaded scene hands the steps to both backends.
+/// Mitsuba's film splats each sample over the pixels its filter reaches, weighed by the
+/// filter itself (its llvm and cuda variants): a file's tent and Gaussian (the default,
+/// with a film or without) become `reconstruction = "splat"` without steps, which the
+/// loaded scene hands to both backends; the box (whose splat is the sample's own pixel)
+/// and a film with `sample_border` (whose samples come from beyond the image) keep
+/// drawing samples from the filter.
 #[test]
-fn mitsuba_filters_are_stepped_as_its_film_tabulates_them() {
-    let dir = common::tmp_dir("mitsuba-filter-steps");
-    for (rfilter, kind, steps) in [
-        ("", "gaussian", 31),
+fn mitsuba_films_splat_their_samples() {
+    let dir = common::tmp_dir("mitsuba-filter-splat");
+    let film = |rfilter: &str, border: &str| {
+        format!(
+            "<film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/>\
+             <integer name=\"height\" value=\"8\"/>{border}{rfilter}</film>"
+        )
+    };
+    let border = "<boolean name=\"sample_border\" value=\"true\"/>";
+    for (name, film, kind, splat) in [
+        ("default", film("", ""), "gaussian", true),
+        ("no-film", String::new(), "gaussian", true),
         (
-            "<rfilter type=\"gaussian\"><float name=\"stddev\" value=\"0.25\"/></rfilter>",
+            "narrow",
+            film(
+                "<rfilter type=\"gaussian\"><float name=\"stddev\" value=\"0.25\"/></rfilter>",
+                "",
+            ),
             "gaussian",
-            31,
+            true,
         ),
-        ("<rfilter type=\"tent\"/>", "tent", 31),
-        ("<rfilter type=\"box\"/>", "box", 0),
+        ("tent", film("<rfilter type=\"tent\"/>", ""), "tent", true),
+        ("box", film("<rfilter type=\"box\"/>", ""), "box", false),
+        ("border", film("", border), "gaussian", false),
     ] {
-        let path = dir.join(format!("{kind}-{steps}.xml"));
+        let path = dir.join(format!("{name}.xml"));
         std::fs::write(
             &path,
             format!(
-                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\">\n\
-                 <film type=\"hdrfilm\"><integer name=\"width\" value=\"8\"/>\
-                 <integer name=\"height\" value=\"8\"/>{rfilter}</film>\n</sensor>\n\
+                "<scene version=\"3.0.0\">\n<sensor type=\"perspective\">\n{film}\n</sensor>\n\
                  <shape type=\"sphere\"/>\n</scene>\n"
             ),
         )
         .unwrap();
         let toml = converted(&path);
         assert!(toml.contains(&format!("filter = \"{kind}\"")), "{toml}");
-        assert_eq!(
-            toml.contains("filter_steps = 31"),
-            steps == 31,
-            "{rfilter}: {toml}"
-        );
+        assert!(!toml.contains("filter_steps"), "{name}: {toml}");
         let scene = wgtrace::load_scene(&path, &Overrides::default()).unwrap();
-        assert_eq!(scene.filter.steps, steps, "{rfilter}");
-        assert_eq!(scene.params(0, scene.full_band()).filter_steps, steps);
+        assert_eq!(scene.filter.splat, splat, "{name}: {toml}");
+        assert_eq!(scene.params(0, scene.full_band()).splat, splat as u32);
     }
 }

@@ -179,6 +179,7 @@ fn filters_kept_on_the_image_sample_the_restricted_profile() {
         stddev: 0.0,
         inside: true,
         steps: 0,
+        splat: false,
     }
     .shape();
     let edge = offsets(&p, 0, 8);
@@ -193,6 +194,7 @@ fn filters_kept_on_the_image_sample_the_restricted_profile() {
         stddev: 0.5,
         inside: true,
         steps: 0,
+        splat: false,
     }
     .shape();
     let last = offsets(&p, 3, 4);
@@ -261,6 +263,7 @@ fn pixel_filters_sample_their_profiles_by_the_inverse_cdf() {
             stddev,
             inside: false,
             steps: 0,
+            splat: false,
         };
         let s = scene(1);
         let mut p = params(&s);
@@ -326,6 +329,7 @@ fn stepped_filters_sample_their_steps_by_the_inverse_cdf() {
             stddev,
             inside: false,
             steps,
+            splat: false,
         };
         let s = scene(1);
         let mut p = params(&s);

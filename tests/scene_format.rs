@@ -166,6 +166,7 @@ fn every_enumerated_value_is_documented() {
     for (id, key) in [
         ("render", "sampler"),
         ("render", "light_sampling"),
+        ("render", "reconstruction"),
         ("textures.checker", "mapping"),
         ("textures.image", "wrap"),
         ("textures.noise", "kind"),

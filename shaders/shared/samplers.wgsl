@@ -116,10 +116,17 @@ fn bounce_2d(pixel: u32, sample: u32, depth: u32, dim: u32) -> vec2<f32> {
 }
 
 // A sample's position in its pixel ([0, 1)^2 is the pixel's square): the sampler's point,
-// moved by the pixel filter where the scene has one other than the box.
+// moved by the pixel filter where the scene has one other than the box and does not
+// splat.
 fn pixel_position(pixel: u32, sample: u32) -> vec2<f32> {
     let u = sample_2d(pixel, sample, DIM_PIXEL);
 #ifdef HAS_PIXEL_FILTER
+#ifdef HAS_SPLAT
+    // splatted samples lie uniformly in their pixel: the filter weighs them afterwards
+    if (params.splat != 0u) {
+        return u;
+    }
+#endif
     let x = pixel % params.width;
     let y = pixel / params.width;
     return vec2<f32>(
@@ -255,5 +262,23 @@ fn stepped_filter_offset(v: f32) -> f32 {
         below += value * h;
     }
     return min(x, r);
+}
+#endif
+
+#ifdef HAS_SPLAT
+// The weight a splatted sample d pixels from a pixel's centre along one axis has in that
+// pixel (splat reconstruction): the filter's profile at |d| (the stepped filter's at the
+// start of |d|'s step), 0 from the radius on, as Mitsuba 3's film weighs a sample.
+fn splat_weight(d: f32) -> f32 {
+    let r = params.filter_shape.x;
+    var x = abs(d);
+    if (x >= r) {
+        return 0.0;
+    }
+    if (params.filter_steps != 0u) {
+        let h = r / f32(params.filter_steps);
+        x = floor(x / h) * h;
+    }
+    return filter_profile(x);
 }
 #endif

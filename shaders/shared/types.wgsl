@@ -183,7 +183,9 @@ struct Params {
     near_clip: f32,
     // the tent or Gaussian as a step function of this many steps over [0, radius]; 0: itself
     filter_steps: u32,
-    pad2: u32,
+    // 1: samples lie uniformly in their pixels and the gather pass splats them over the
+    // pixels the filter reaches; 0: drawn from the filter
+    splat: u32,
     // the filter's radius (pixels), a Gaussian's standard deviation, its value at the
     // radius (subtracted), and 1 when samples stay on the image
     filter_shape: vec4<f32>,

@@ -102,10 +102,10 @@ pub fn bounce_2d(b: &Bindings, pixel: u32, sample: u32, depth: u32, dim: u32) ->
 }
 
 /// A sample's position in its pixel: the sampler's point, moved by the pixel filter
-/// unless it is the box.
+/// unless it is the box or the samples are splatted.
 pub fn pixel_position(b: &Bindings, pixel: u32, sample: u32) -> [f32; 2] {
     let u = sample_2d(b, pixel, sample, DIM_PIXEL);
-    if b.params.pixel_filter == FILTER_BOX {
+    if b.params.pixel_filter == FILTER_BOX || b.params.splat != 0 {
         return u;
     }
     let p = &b.params;
@@ -256,4 +256,19 @@ pub fn stepped_filter_offset(p: &Params, v: f32) -> f32 {
         below += value * h;
     }
     x.min(r)
+}
+
+/// The weight of a splatted sample `d` pixels from a pixel's centre along one axis
+/// (samplers.wgsl's `splat_weight`).
+pub fn splat_weight(p: &Params, d: f32) -> f32 {
+    let r = p.filter_shape[0];
+    let mut x = d.abs();
+    if x >= r {
+        return 0.0;
+    }
+    if p.filter_steps != 0 {
+        let h = r / p.filter_steps as f32;
+        x = (x / h).floor() * h;
+    }
+    filter_profile(p, x)
 }

@@ -15,7 +15,7 @@ use super::materials::{
 };
 use super::rng::rand_2d;
 use super::samplers::{
-    bounce_2d, pixel_position, sample_2d, DIM_ALPHA, DIM_BLEND, DIM_PUNCTUAL, DIM_RR,
+    bounce_2d, pixel_position, sample_2d, splat_weight, DIM_ALPHA, DIM_BLEND, DIM_PUNCTUAL, DIM_RR,
 };
 use super::sampling::{offset_ray, sample_disk};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
@@ -23,7 +23,7 @@ use crate::scene::flat::FlatScene;
 use crate::scene::materials::MaterialKind;
 use crate::scene::records::{
     accum_entries, Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE,
-    MAX_ALPHA_SKIPS, NO_LIGHT, PRIM_LIGHT_SHIFT,
+    MAX_ALPHA_SKIPS, NO_LIGHT, PRIM_LIGHT_SHIFT, SPLAT_DROPPED,
 };
 
 pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PIXEL};
@@ -444,8 +444,9 @@ pub fn accumulate(sum: &mut [f32; 4], sq: &mut [f32; 4], c: Vec3) {
     }
 }
 
-/// Adds one sample's AOVs to a pixel's three AOV entries, as the shader's `main` does.
-pub fn accumulate_aovs(aovs: &mut [[f32; 4]], path: &Path) {
+/// Adds one sample's AOVs to a pixel's three AOV entries, as the shader's `main` does (a
+/// splat render counting them in the normal's fourth component).
+pub fn accumulate_aovs(aovs: &mut [[f32; 4]], path: &Path, splat: bool) {
     let albedo = if all_finite(path.albedo) {
         path.albedo
     } else {
@@ -458,8 +459,68 @@ pub fn accumulate_aovs(aovs: &mut [[f32; 4]], path: &Path) {
         e[3] += w;
     };
     add(&mut aovs[0], albedo, path.distance);
-    add(&mut aovs[1], path.normal, 0.0);
+    add(&mut aovs[1], path.normal, splat as u32 as f32);
     add(&mut aovs[2], path.position, 0.0);
+}
+
+/// A sample as the splat sample buffer holds it (trace.wgsl's `splat_record`): its
+/// colour's bits (`SPLAT_DROPPED` first when it or its square is not finite) and its
+/// position in the pixel as two 16-bit fixed-point numbers (WGSL's `pack2x16unorm`).
+pub fn splat_record(c: Vec3, jitter: [f32; 2]) -> [u32; 4] {
+    let unorm = |v: f32| ((v.clamp(0.0, 1.0) * 65535.0).round() as u32) & 0xffff;
+    let packed = unorm(jitter[0]) | (unorm(jitter[1]) << 16);
+    if all_finite(c) && all_finite(c * c) {
+        [c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), packed]
+    } else {
+        [SPLAT_DROPPED, 0, 0, packed]
+    }
+}
+
+/// trace.wgsl's `gather` for pixel (x, y): every sample (`sample_at` a pixel: the pass's
+/// one there) that its filter reaches, weighed by `splat_weight` along x times along y, added
+/// row by row and column by column to the pixel's sum and sum of squares.
+pub fn gather(
+    b: &Bindings,
+    sample_at: impl Fn(u32, u32) -> [u32; 4],
+    x: u32,
+    y: u32,
+    sum: &mut [f32; 4],
+    sq: &mut [f32; 4],
+) {
+    let p = &b.params;
+    let reach = (p.filter_shape[0] - 0.5).ceil() as i32;
+    for dy in -reach..=reach {
+        let yy = y as i32 + dy;
+        if yy < 0 || yy >= p.height as i32 {
+            continue;
+        }
+        for dx in -reach..=reach {
+            let xx = x as i32 + dx;
+            if xx < 0 || xx >= p.width as i32 {
+                continue;
+            }
+            let r = sample_at(xx as u32, yy as u32);
+            if r[0] == SPLAT_DROPPED {
+                continue;
+            }
+            let at = [
+                (r[3] & 0xffff) as f32 / 65535.0,
+                (r[3] >> 16) as f32 / 65535.0,
+            ];
+            let w =
+                splat_weight(p, 0.5 - at[0] - dx as f32) * splat_weight(p, 0.5 - at[1] - dy as f32);
+            let c = Vec3::new(
+                f32::from_bits(r[0]),
+                f32::from_bits(r[1]),
+                f32::from_bits(r[2]),
+            );
+            for k in 0..3 {
+                sum[k] += w * c[k];
+                sq[k] += w * c[k] * c[k];
+            }
+            sum[3] += w;
+        }
+    }
 }
 
 /// Progressive CPU renderer: one sample per pixel per pass, accumulated as the GPU
@@ -491,20 +552,49 @@ impl CpuRenderer {
         let bindings = Bindings::new(scene, scene.params(sample_index, scene.full_band()));
         let width = scene.width as usize;
         let entries = accum_entries(scene.aovs);
-        self.accum
-            .par_chunks_mut(entries * width)
-            .enumerate()
-            .for_each(|(y, row)| {
-                for (x, px) in row.chunks_exact_mut(entries).enumerate() {
-                    let path = trace_pixel(&bindings, x as u32, y as u32);
-                    let (sum, rest) = px.split_at_mut(1);
-                    let (sq, aovs) = rest.split_at_mut(1);
-                    accumulate(&mut sum[0], &mut sq[0], path.radiance);
-                    if scene.aovs {
-                        accumulate_aovs(aovs, &path);
+        let splat = bindings.params.splat != 0;
+        // splatting: the pass's sample of every pixel, then their gather
+        let mut samples = vec![[0u32; 4]; if splat { self.accum.len() / entries } else { 0 }];
+        let trace_row = |y: usize, row: &mut [[f32; 4]], mut splatted: Option<&mut [[u32; 4]]>| {
+            for (x, px) in row.chunks_exact_mut(entries).enumerate() {
+                let path = trace_pixel(&bindings, x as u32, y as u32);
+                let (sum, rest) = px.split_at_mut(1);
+                let (sq, aovs) = rest.split_at_mut(1);
+                match splatted.as_deref_mut() {
+                    Some(out) => {
+                        let pixel = (y * width + x) as u32;
+                        let jitter = pixel_position(&bindings, pixel, sample_index);
+                        out[x] = splat_record(path.radiance, jitter);
+                        if out[x][0] == SPLAT_DROPPED {
+                            sq[0][3] += 1.0;
+                        }
                     }
+                    None => accumulate(&mut sum[0], &mut sq[0], path.radiance),
                 }
-            });
+                if scene.aovs {
+                    accumulate_aovs(aovs, &path, splat);
+                }
+            }
+        };
+        let rows = self.accum.par_chunks_mut(entries * width).enumerate();
+        if splat {
+            rows.zip(samples.par_chunks_mut(width))
+                .for_each(|((y, row), out)| trace_row(y, row, Some(out)));
+        } else {
+            rows.for_each(|(y, row)| trace_row(y, row, None));
+        }
+        if splat {
+            self.accum
+                .par_chunks_mut(entries * width)
+                .enumerate()
+                .for_each(|(y, row)| {
+                    for (x, px) in row.chunks_exact_mut(entries).enumerate() {
+                        let (sum, rest) = px.split_at_mut(1);
+                        let at = |xx: u32, yy: u32| samples[yy as usize * width + xx as usize];
+                        gather(&bindings, at, x as u32, y as u32, &mut sum[0], &mut rest[0]);
+                    }
+                });
+        }
     }
 
     /// The accumulation buffer: `accum_entries` `[f32; 4]` per pixel, row-major from the

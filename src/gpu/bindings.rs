@@ -34,13 +34,16 @@ pub enum Slot {
     Textures,
     /// The Perlin tables and the image background's distribution (`FlatScene::tables`).
     Tables,
+    /// Splat reconstruction's samples of one dispatch (`trace.wgsl`'s `splat_record`):
+    /// written by `main`, read by `gather`.
+    Samples,
     /// Image texel bank i (`scene::texels`), a 2D array texture of the bank's format.
     Texels(u8),
 }
 
 impl Slot {
     /// Every slot, in binding order.
-    pub const ALL: [Slot; 9 + MAX_BANKS] = [
+    pub const ALL: [Slot; 10 + MAX_BANKS] = [
         Slot::Params,
         Slot::Primitives,
         Slot::Materials,
@@ -50,6 +53,7 @@ impl Slot {
         Slot::ShapeData,
         Slot::Textures,
         Slot::Tables,
+        Slot::Samples,
         Slot::Texels(0),
         Slot::Texels(1),
         Slot::Texels(2),
@@ -89,6 +93,7 @@ impl Slot {
             Slot::ShapeData => "shape_data",
             Slot::Textures => "textures",
             Slot::Tables => "tables",
+            Slot::Samples => "samples",
             Slot::Texels(i) => TEXEL_BANK_NAMES[i as usize],
         }
     }
@@ -105,6 +110,7 @@ impl Slot {
             Slot::Bvh => ("BvhNode", size_of::<BvhNode>()),
             Slot::Textures => ("Texture", size_of::<Texture>()),
             Slot::Accum | Slot::ShapeData | Slot::Tables => ("vec4<f32>", 16),
+            Slot::Samples => ("vec4<u32>", 16),
             Slot::Texels(_) => ("texture_2d_array<f32>", 0),
         }
     }
@@ -112,7 +118,7 @@ impl Slot {
     /// The scene's records this slot holds (none for the parameters and the sums).
     pub fn bytes(self, scene: &FlatScene) -> &[u8] {
         match self {
-            Slot::Params | Slot::Accum => &[],
+            Slot::Params | Slot::Accum | Slot::Samples => &[],
             Slot::Primitives => bytemuck::cast_slice(&scene.primitives),
             Slot::Materials => bytemuck::cast_slice(&scene.materials),
             Slot::Emitters => bytemuck::cast_slice(&scene.emitters),
@@ -306,7 +312,9 @@ pub fn wgsl_declarations(placements: &Placements) -> String {
         }
         let (space, ty) = match (slot, placements.get(slot)) {
             (Slot::Params, _) => ("uniform".to_string(), ty.to_string()),
-            (Slot::Accum, _) => ("storage, read_write".into(), format!("array<{ty}>")),
+            (Slot::Accum | Slot::Samples, _) => {
+                ("storage, read_write".into(), format!("array<{ty}>"))
+            }
             (_, Placement::Uniform) => (
                 "uniform".into(),
                 format!("array<{ty}, {}>", slot.uniform_len()),
@@ -336,7 +344,9 @@ fn binding_type(slot: Slot, placements: &Placements) -> wgpu::BindingType {
             view_dimension: wgpu::TextureViewDimension::D2Array,
             multisampled: false,
         },
-        (Slot::Accum, _) => buffer(wgpu::BufferBindingType::Storage { read_only: false }),
+        (Slot::Accum | Slot::Samples, _) => {
+            buffer(wgpu::BufferBindingType::Storage { read_only: false })
+        }
         (_, Placement::Uniform) => buffer(wgpu::BufferBindingType::Uniform),
         (_, Placement::Texture) => wgpu::BindingType::StorageTexture {
             access: wgpu::StorageTextureAccess::ReadOnly,
@@ -428,7 +438,7 @@ fn upload(
     });
     let records = slots
         .iter()
-        .filter(|s| !matches!(s, Slot::Params | Slot::Accum))
+        .filter(|s| !matches!(s, Slot::Params | Slot::Accum | Slot::Samples))
         .map(|&slot| {
             if let Slot::Texels(i) = slot {
                 let bank = &scene.texels.banks[i as usize];
@@ -587,13 +597,15 @@ fn bank_texture(
     })
 }
 
-/// Group 0: the scene's buffers for `slots`, with `accum` as the sums.
+/// Group 0: the scene's buffers for `slots`, with `accum` as the sums and `samples` as the
+/// splat reconstruction's sample buffer (needed when `slots` has it).
 pub fn bind_scene(
     device: &wgpu::Device,
     layout: &wgpu::BindGroupLayout,
     slots: &[Slot],
     buffers: &SceneBuffers,
     accum: &wgpu::Buffer,
+    samples: Option<&wgpu::Buffer>,
 ) -> wgpu::BindGroup {
     let entries: Vec<wgpu::BindGroupEntry> = slots
         .iter()
@@ -606,6 +618,9 @@ pub fn bind_scene(
                     size: wgpu::BufferSize::new(std::mem::size_of::<Params>() as u64),
                 }),
                 Slot::Accum => accum.as_entire_binding(),
+                Slot::Samples => samples
+                    .expect("a splatting plan has a sample buffer")
+                    .as_entire_binding(),
                 _ => match &buffers
                     .records
                     .iter()

@@ -160,7 +160,8 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         cache: None,
     });
 
-    // The kernels never touch the accumulation buffer; one element keeps the group valid.
+    // The kernels never touch the accumulation buffer nor a splatting plan's sample
+    // buffer; one element each keeps the group valid.
     let accum = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("unused accumulation"),
         size: 32,
@@ -168,7 +169,13 @@ fn run_kernel<I: bytemuck::Pod, O: bytemuck::Pod>(
         mapped_at_creation: false,
     });
     let buffers = scene_buffers(device, &ctx.queue, &slots, &spec.placements, scene, 0)?;
-    let scene_group = bind_scene(device, &scene_bgl, &slots, &buffers, &accum);
+    let samples = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("unused samples"),
+        size: 16,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let scene_group = bind_scene(device, &scene_bgl, &slots, &buffers, &accum, Some(&samples));
     let params = scene.params(0, scene.full_band());
     ctx.queue
         .write_buffer(&buffers.params, 0, bytemuck::bytes_of(&params));

@@ -6,11 +6,14 @@ use std::time::{Duration, Instant};
 
 use super::bindings::{layout, Slot};
 use super::error::GpuError;
-use super::plan::ShaderSpec;
+use super::plan::{Feature, ShaderSpec};
 
 /// A compiled trace pipeline.
 pub struct TracePipeline {
     pub pipeline: wgpu::ComputePipeline,
+    /// Splat reconstruction's second pass (`trace.wgsl`'s `gather`), for a spec that
+    /// splats.
+    pub gather: Option<wgpu::ComputePipeline>,
     pub layout: wgpu::BindGroupLayout,
     /// The slots of group 0 the shader reads; only these are in the layout and bound.
     pub slots: Vec<Slot>,
@@ -51,8 +54,19 @@ pub fn compile_trace_pipeline(
         compilation_options: Default::default(),
         cache,
     });
+    let gather = spec.features.contains(Feature::Splat).then(|| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("gather"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("gather"),
+            compilation_options: Default::default(),
+            cache,
+        })
+    });
     Ok(TracePipeline {
         pipeline,
+        gather,
         layout,
         slots,
         shader_bytes: wgsl.len(),

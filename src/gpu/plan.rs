@@ -98,6 +98,9 @@ pub enum Feature {
     /// A pixel filter other than the box (tent, Gaussian): each sample's position in the
     /// pixel drawn from it.
     PixelFilter,
+    /// Splat reconstruction (`[render] reconstruction = "splat"`): the sample buffer and
+    /// the gather pass.
+    Splat,
     /// Projectors among the lights without a surface: their frustum and texture.
     Projector,
     /// Opacity masks read from a texture (`opacity = "NAME"` of any material).
@@ -121,7 +124,7 @@ const GEOMETRY: [Feature; 4] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 32] = [
+const SHADING: [Feature; 33] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -147,6 +150,7 @@ const SHADING: [Feature; 32] = [
     Feature::Emission,
     Feature::Aovs,
     Feature::PixelFilter,
+    Feature::Splat,
     Feature::Projector,
     Feature::OpacityTexture,
     Feature::GlassMicrofacets,
@@ -202,6 +206,7 @@ impl Feature {
             Feature::EnvMap => "HAS_ENV_MAP",
             Feature::Emission => "HAS_EMISSION",
             Feature::PixelFilter => "HAS_PIXEL_FILTER",
+            Feature::Splat => "HAS_SPLAT",
             Feature::Projector => "HAS_PROJECTOR",
             Feature::OpacityTexture => "HAS_OPACITY_TEXTURE",
             Feature::GlassMicrofacets => "HAS_GLASS_MICROFACETS",
@@ -434,6 +439,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
         .with(Feature::Emission, scene.emits() || scene.aovs)
         .with(Feature::Aovs, scene.aovs)
         .with(Feature::PixelFilter, scene.filter.kind != FilterKind::Box)
+        .with(Feature::Splat, scene.filter.splat)
         .with(
             Feature::Projector,
             scene.num_punctual > 0
@@ -488,10 +494,10 @@ impl ShaderSpec {
     /// every glass hit; shading normals a second eval and pdf to every light sample;
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
     /// compile of the full shader took minutes longer). The materials added after pbr
-    /// (conductor, thin_dielectric, plastic, blend, principled), the pixel filters, projectors, opacity
+    /// (conductor, thin_dielectric, plastic, blend, principled), the pixel filters, splatting, projectors, opacity
     /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps, mesh attributes and energy compensation too: the full shader of every other
     /// scene stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 25] = [
+    pub const OPTIONAL_IN_FULL: [Feature; 26] = [
         Feature::Instances,
         Feature::Aovs,
         Feature::Alpha,
@@ -510,6 +516,7 @@ impl ShaderSpec {
         Feature::Material(MaterialKind::Principled),
         Feature::Beckmann,
         Feature::PixelFilter,
+        Feature::Splat,
         Feature::Projector,
         Feature::OpacityTexture,
         Feature::GlassMicrofacets,
@@ -551,7 +558,11 @@ impl ShaderSpec {
         if self.lane_stats {
             d.insert(LANE_STATS);
         }
-        if f(Feature::Beckmann) || f(Feature::PixelFilter) {
+        // splatting weighs samples by the filter's profile
+        if f(Feature::Splat) {
+            d.insert(Feature::PixelFilter.define());
+        }
+        if f(Feature::Beckmann) || f(Feature::PixelFilter) || f(Feature::Splat) {
             d.insert(HAS_ERF);
         }
         d
@@ -624,6 +635,7 @@ impl ShaderSpec {
             .into_iter()
             .filter(|&slot| match slot {
                 Slot::Params | Slot::Accum => true,
+                Slot::Samples => f(Feature::Splat),
                 _ if !traced => false,
                 Slot::Primitives | Slot::Materials => buffer(slot),
                 Slot::Emitters => {

@@ -10,13 +10,20 @@ use super::context::{describe, GpuContext};
 use super::error::GpuError;
 use super::fault;
 use super::pipeline::TracePipeline;
-use super::plan::GpuPlan;
+use super::plan::{Feature, GpuPlan};
 use crate::scene::flat::{Band, FlatScene};
 use crate::scene::records::{accum_entries as entries_per_pixel, Params};
 use crate::tuning::Tuning;
 
 /// Accumulation bytes per pixel: two `vec4<f32>` (sum with count, sum of squares).
 pub const ACCUM_BYTES_PER_PIXEL: u64 = 32;
+
+/// Bytes of one splatted sample in the sample buffer (`trace.wgsl`'s `splat_record`).
+pub const SPLAT_BYTES_PER_SAMPLE: u64 = 16;
+
+/// The most bytes the splat sample buffer takes beyond one sample of every pixel: it holds
+/// the samples of one dispatch, this many or the plan's sample group, whichever is fewer.
+pub const SPLAT_BUFFER_BYTES: u64 = 1 << 27;
 
 /// Accumulation bytes per pixel with or without the AOVs' sums.
 pub fn accum_bytes_per_pixel(aovs: bool) -> u64 {
@@ -40,6 +47,9 @@ pub struct GpuRenderer {
     bands: Vec<BandBuffers>,
     /// As large as the largest band's accumulation.
     readback: wgpu::Buffer,
+    /// Splat reconstruction: the sample buffer, and the samples per pixel it holds (one
+    /// dispatch's, whose gather follows before the next).
+    splat: Option<(wgpu::Buffer, u32)>,
     submissions: Submissions,
     /// A note for the user about how this renderer came to be (a spot check that fell
     /// back to safer record placements).
@@ -170,6 +180,34 @@ impl GpuRenderer {
             device_scene,
             stride * MAX_DISPATCHES_PER_SUBMISSION as u64,
         )?;
+        let splat = if plan.shader.features.contains(Feature::Splat) {
+            let per_sample = scene.width as u64 * scene.height as u64 * SPLAT_BYTES_PER_SAMPLE;
+            let fit = plan.fit.storage_bytes / per_sample;
+            if fit == 0 {
+                return Err(GpuError::SceneTooLarge {
+                    what: format!(
+                        "splatted samples ({} x {} pixels, one sample each)",
+                        scene.width, scene.height
+                    ),
+                    needed_mib: per_sample.div_ceil(1 << 20),
+                    limit_mib: plan.fit.storage_bytes >> 20,
+                    advice: "render fewer pixels or set [render] reconstruction = \"importance\"",
+                });
+            }
+            // no more than SPLAT_BUFFER_BYTES unless one sample needs it
+            let per_dispatch = fit
+                .min(SPLAT_BUFFER_BYTES / per_sample)
+                .clamp(1, plan.sample_group.max(1) as u64) as u32;
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("splatted samples"),
+                size: per_sample * per_dispatch as u64,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            });
+            Some((buffer, per_dispatch))
+        } else {
+            None
+        };
         // wgpu zero-initialises new buffers, so the sums start at 0.
         let bands: Vec<BandBuffers> = bands
             .into_iter()
@@ -184,7 +222,14 @@ impl GpuRenderer {
                         | wgpu::BufferUsages::COPY_DST,
                     mapped_at_creation: false,
                 });
-                let group = bind_scene(device, &pipeline.layout, &pipeline.slots, &buffers, &accum);
+                let group = bind_scene(
+                    device,
+                    &pipeline.layout,
+                    &pipeline.slots,
+                    &buffers,
+                    &accum,
+                    splat.as_ref().map(|(b, _)| b),
+                );
                 BandBuffers { band, accum, group }
             })
             .collect();
@@ -205,6 +250,7 @@ impl GpuRenderer {
             params_stride: stride,
             bands,
             readback,
+            splat,
             submissions: Submissions {
                 target: DEFAULT_SUBMISSION_TARGET,
                 budget: FIRST_SUBMISSION_WORK,
@@ -329,8 +375,27 @@ impl GpuRenderer {
                 self.clear()?;
             }
         }
+        if let Some(per_dispatch) = self.splat.as_ref().map(|s| s.1) {
+            // splatting: each dispatch's samples of the whole image, then their gather
+            for part in group_parts(samples, per_dispatch) {
+                for b in 0..self.bands.len() {
+                    self.trace_parts(b, std::slice::from_ref(&part))?;
+                }
+                self.gather(&part)?;
+            }
+            return Ok(());
+        }
         let parts = group_parts(samples, self.plan.sample_group);
         for b in 0..self.bands.len() {
+            self.trace_parts(b, &parts)?;
+        }
+        Ok(())
+    }
+
+    /// Traces samples `parts` (one dispatch each) of every pixel of band `b`, in
+    /// submissions sized by the time the earlier ones took ([`Self::render_samples`]).
+    fn trace_parts(&mut self, b: usize, parts: &[Range<u32>]) -> Result<(), GpuError> {
+        {
             let band = self.bands[b].band;
             let band_pixels = band.width as u64 * band.height as u64;
             let work = |p: &Range<u32>| band_pixels * p.len() as u64;
@@ -378,6 +443,47 @@ impl GpuRenderer {
                     i += 1;
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Splat reconstruction's second pass over samples `part` (in the sample buffer): a
+    /// `gather` dispatch per band, up to [`MAX_DISPATCHES_PER_SUBMISSION`] per submission.
+    fn gather(&mut self, part: &Range<u32>) -> Result<(), GpuError> {
+        let gather = self
+            .pipeline
+            .gather
+            .as_ref()
+            .expect("a splatting plan has a gather pipeline");
+        let stride = self.params_stride as usize;
+        for bands in self.bands.chunks(MAX_DISPATCHES_PER_SUBMISSION as usize) {
+            self.write_params(bands.iter().map(|band| {
+                let mut params = self.scene.params(part.start, band.band);
+                params.sample_count = part.len() as u32;
+                params.accum_y = band.band.y;
+                params
+            }));
+            let mut encoder = self
+                .ctx
+                .device
+                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("gather pass"),
+                    timestamp_writes: None,
+                });
+                pass.set_pipeline(gather);
+                for (i, band) in bands.iter().enumerate() {
+                    pass.set_bind_group(0, &band.group, &[(i * stride) as u32]);
+                    pass.dispatch_workgroups(
+                        band.band.width.div_ceil(WORKGROUP),
+                        band.band.height.div_ceil(WORKGROUP),
+                        1,
+                    );
+                }
+            }
+            self.ctx.queue.submit([encoder.finish()]);
+            self.ctx.wait()?;
         }
         Ok(())
     }

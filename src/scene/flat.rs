@@ -182,6 +182,7 @@ impl FlatScene {
             near_clip: c.near_clip,
             filter_shape: self.filter.shape(),
             filter_steps: self.filter.steps,
+            splat: self.filter.splat as u32,
             ..Default::default()
         }
     }

@@ -103,6 +103,10 @@ pub struct RenderDesc {
     /// step the filter's value at its inner end (Mitsuba 3's film weighs its samples by
     /// such a table of 31 steps); none: the filter itself.
     pub filter_steps: Option<u32>,
+    /// How the filter weighs samples: each pixel's own samples drawn from it
+    /// (`importance`), or every sample weighed into the pixels its filter reaches
+    /// (`splat`, Mitsuba 3's film).
+    pub reconstruction: Reconstruction,
     /// Compensate every microfacet lobe for the energy it loses to multiple scattering
     /// (Kulla and Conty), but where a material's own `energy_compensation` says otherwise.
     pub energy_compensation: bool,
@@ -179,6 +183,32 @@ impl FilterKind {
     }
 }
 
+/// `[render] reconstruction`: how a pixel's value is made from the samples around it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Reconstruction {
+    /// Each pixel's samples are drawn from its filter (filter importance sampling), so
+    /// each weighs 1 and the pixel is their mean: no sample is shared, the noise of
+    /// neighbouring pixels is independent.
+    #[default]
+    Importance,
+    /// Each sample lies uniformly in its pixel and is weighed into every pixel its filter
+    /// reaches, each pixel the weighted mean sum(w L) / sum(w) (Mitsuba 3's film): the
+    /// same expected image, but a pixel beside an edge sees the other side in every
+    /// sample's tail instead of in rare ones, as Mitsuba's images do.
+    Splat,
+}
+
+impl Reconstruction {
+    /// The name in scene files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Reconstruction::Importance => "importance",
+            Reconstruction::Splat => "splat",
+        }
+    }
+}
+
 /// A pixel filter with its radius and standard deviation resolved (the defaults applied).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PixelFilter {
@@ -191,6 +221,9 @@ pub struct PixelFilter {
     pub inside: bool,
     /// Steps of the stepped filter (`[render] filter_steps`); 0: the filter itself.
     pub steps: u32,
+    /// Samples splatted over the pixels the filter reaches (`[render] reconstruction =
+    /// "splat"`) rather than drawn from it.
+    pub splat: bool,
 }
 
 impl PixelFilter {
@@ -214,6 +247,8 @@ impl PixelFilter {
                 FilterKind::Box => 0,
                 _ => r.filter_steps.unwrap_or(0),
             },
+            // the box's splat is the sample's own pixel: the same as drawing from it
+            splat: r.reconstruction == Reconstruction::Splat && r.filter != FilterKind::Box,
         }
     }
 
@@ -329,6 +364,7 @@ impl Default for RenderDesc {
             filter_radius: None,
             filter_stddev: None,
             filter_steps: None,
+            reconstruction: Reconstruction::default(),
             energy_compensation: false,
             shading_normals: ShadingNormals::default(),
             sample_border: true,

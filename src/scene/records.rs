@@ -188,6 +188,9 @@ shared_constants! {
     FILTER_BOX: u32 = 0;
     FILTER_TENT: u32 = 1;
     FILTER_GAUSSIAN: u32 = 2;
+    /// A splatted sample whose colour (or its square) was not finite, in the first word of
+    /// its place in the sample buffer (`trace.wgsl`'s `splat_record`): dropped.
+    SPLAT_DROPPED: u32 = 0xffff_ffff;
 
     /// Light-sampling strategies (`Params::light_sampling`).
     LIGHT_SAMPLING_BSDF: u32 = 0;
@@ -573,7 +576,10 @@ pub struct Params {
     /// the filter's value at its inner end (`[render] filter_steps`, Mitsuba's film's
     /// table); 0: the filter itself.
     pub filter_steps: u32,
-    pub pad2: u32,
+    /// 1: each sample lies uniformly in its pixel and is splatted over the pixels the
+    /// filter reaches, by the gather pass (`[render] reconstruction = "splat"`); 0: each
+    /// pixel's samples are drawn from the filter.
+    pub splat: u32,
     /// The filter's radius in pixels, a Gaussian's standard deviation, its value at the
     /// radius (subtracted, so it falls to 0 there), and 1 when samples stay on the image
     /// (`[render] sample_border = false`: a border pixel's filter restricted to the
@@ -919,7 +925,7 @@ shared_record!(Params {
     hide_emitters,
     near_clip,
     filter_steps,
-    pad2,
+    splat,
     filter_shape
 });
 shared_record!(KernelRay { origin, dir });

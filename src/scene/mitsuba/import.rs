@@ -176,8 +176,6 @@ fn children<'t>(
 }
 
 const MEDIA: &str = "participating media are not rendered yet (issue 43)";
-/// The steps of the table Mitsuba's film weighs samples by (its `MI_FILTER_RESOLUTION`).
-const MITSUBA_FILTER_STEPS: i64 = 31;
 
 impl<'a> Importer<'a> {
     fn obj(&self, i: usize) -> &'a Object {
@@ -613,6 +611,7 @@ impl<'a> Importer<'a> {
                 self.render.insert("filter".into(), text("gaussian"));
                 self.render
                     .insert("sample_border".into(), T::Boolean(false));
+                self.render.insert("reconstruction".into(), text("splat"));
                 (768, 576)
             }
         };
@@ -819,7 +818,8 @@ impl<'a> Importer<'a> {
                 "high_quality_edges",
             ],
         )?;
-        if !self.boolean(f, "sample_border", false)? {
+        let border = self.boolean(f, "sample_border", false)?;
+        if !border {
             // Mitsuba's film keeps a wide filter's samples on the image
             self.render
                 .insert("sample_border".into(), T::Boolean(false));
@@ -851,16 +851,20 @@ impl<'a> Importer<'a> {
                 T::Array(c.iter().map(|&v| T::Integer(v)).collect()),
             );
         }
-        // Mitsuba's film weighs a sample by a table of its filter's values, 31 steps over
-        // the radius (MI_FILTER_RESOLUTION), not by the filter itself: near the radius the
-        // Gaussian's last step keeps 8 times its value.
-        let stepped = |render: &mut Table| {
-            render.insert("filter_steps".into(), T::Integer(MITSUBA_FILTER_STEPS));
+        // Mitsuba's film splats each sample over the pixels its filter reaches, weighed by
+        // the filter itself in its vectorized variants (llvm_ad_rgb, cuda_ad_rgb; its
+        // scalar ones by a table of 31 steps, `[render] filter_steps`); with
+        // sample_border its samples also come from beyond the image, which only drawing
+        // from the filter gives
+        let splatted = |render: &mut Table| {
+            if !border {
+                render.insert("reconstruction".into(), text("splat"));
+            }
         };
         match children(self.tree, f, "rfilter").next() {
             None => {
                 self.render.insert("filter".into(), text("gaussian"));
-                stepped(&mut self.render);
+                splatted(&mut self.render);
             }
             Some(r) => {
                 let r = self.obj(r);
@@ -872,7 +876,7 @@ impl<'a> Importer<'a> {
                     "tent" => {
                         self.check_known(r, &["radius"], &[])?;
                         self.render.insert("filter".into(), text("tent"));
-                        stepped(&mut self.render);
+                        splatted(&mut self.render);
                         if r.get("radius").is_some() {
                             self.render.insert("filter_radius".into(), float(self.float(r, "radius", 1.0)?));
                         }
@@ -880,7 +884,7 @@ impl<'a> Importer<'a> {
                     "gaussian" => {
                         self.check_known(r, &["stddev"], &[])?;
                         self.render.insert("filter".into(), text("gaussian"));
-                        stepped(&mut self.render);
+                        splatted(&mut self.render);
                         if r.get("stddev").is_some() {
                             self.render.insert("filter_stddev".into(), float(self.float(r, "stddev", 0.5)?));
                         }
