@@ -825,6 +825,51 @@ fn dielectric_refracts_by_snell_reflects_by_fresnel_and_conserves_energy() {
     }
 }
 
+/// Glass whose reflection and transmission are tinted apart (`specular` and `tint`,
+/// Mitsuba's `specular_reflectance` and `specular_transmittance`): every reflection,
+/// from outside, inside and by total internal reflection, weighs `specular`, every
+/// refraction `tint`; without `specular` both weigh `tint`.
+#[test]
+fn glass_tints_its_reflection_and_its_transmission_apart() {
+    let (tint, specular) = (Vec3::new(0.9, 0.7, 0.5), Vec3::new(0.4, 0.8, 1.0));
+    let apart = material(&format!(
+        "{GLASS}
+tint = [0.9, 0.7, 0.5]
+specular = [0.4, 0.8, 1]"
+    ));
+    let alike = material(&format!(
+        "{GLASS}
+tint = [0.9, 0.7, 0.5]"
+    ));
+    for (m, want_r) in [(&apart, specular), (&alike, tint)] {
+        let (mut reflected, mut refracted) = (0, 0);
+        for angle in [0.0f32, 45.0, 70.0] {
+            let t = angle.to_radians();
+            for inside in [false, true] {
+                let d = Vec3::new(t.sin(), 0.0, -t.cos());
+                let d = if inside { -d } else { d };
+                let (ray, hit) = hit_at_origin(d, -d);
+                for u in grid() {
+                    let s = scatter(m, &ray, &hit, u);
+                    let reflects = (s.dir.z > 0.0) == (d.z < 0.0);
+                    let want = if reflects { want_r } else { tint };
+                    assert!(
+                        s.ok && (s.weight - want).abs().max_element() < 1e-6,
+                        "{angle} deg, inside {inside}: {} vs {want}",
+                        s.weight
+                    );
+                    if reflects {
+                        reflected += 1;
+                    } else {
+                        refracted += 1;
+                    }
+                }
+            }
+        }
+        assert!(reflected > 0 && refracted > 0, "{reflected} / {refracted}");
+    }
+}
+
 #[test]
 fn total_internal_reflection_inside_glass_at_grazing_angles() {
     let glass = material(GLASS);
@@ -986,9 +1031,13 @@ fn rough_glass_without_absorption_has_the_density_it_samples() {
         p.write(m);
     };
     assert_transmitter_has_the_density_it_samples("rough glass", keys, back_face);
+    // its reflection and transmission tinted apart
+    let apart = format!("{keys}\nspecular = [0.4, 0.7, 0.2]");
+    assert_transmitter_has_the_density_it_samples("rough glass tinted apart", &apart, back_face);
     // with energy compensation: its lobe's cosine directions on both sides as well
     for compensated in [
         format!("{keys}\nenergy_compensation = true"),
+        format!("{apart}\nenergy_compensation = true"),
         "type = \"dielectric\"\nior = 1.33\nroughness_u = 0.9\nroughness_v = 0.6\ndistribution = \"beckmann\"\nenergy_compensation = true".into(),
     ] {
         assert_transmitter_has_the_density_it_samples("compensated", &compensated, back_face);

@@ -321,6 +321,13 @@ fn checkerboards_read_as_scalars_agree_with_mitsuba() {
     agrees_with_mitsuba("checker-scalars", 256);
 }
 
+/// glass-tints.xml: smooth, rough and thin glass with their reflection and transmission
+/// tinted apart, under the default Gaussian film, whose samples both splat.
+#[test]
+fn glass_tinted_apart_and_splatted_samples_agree_with_mitsuba() {
+    agrees_with_mitsuba("glass-tints", 256);
+}
+
 #[test]
 fn film_crop_windows_agree_with_mitsuba() {
     agrees_with_mitsuba("crop", 256);

@@ -7,33 +7,34 @@
 // eta = eta_i / eta_t (1 / ior entering, ior leaving, the normal turned toward the
 // incoming ray). Snell's law in vector form, t = eta d + (eta cos_i - cos_t) n; total
 // internal reflection when eta^2 sin^2(theta_i) >= 1; otherwise reflection with the exact
-// Fresnel probability (fresnel_dielectric; ior 1 is invisible). Weight = tint, times the
-// Beer-Lambert transmittance exp(-absorption x distance) for a segment that ran inside.
+// Fresnel probability (fresnel_dielectric; ior 1 is invisible). Weight = specular for a
+// reflection, tint for a refraction, times the Beer-Lambert transmittance
+// exp(-absorption x distance) for a segment that ran inside.
 // Deltas when smooth; a rough one (an alpha at least ALPHA_SMOOTH) scatters by
 // dielectric_rough_scatter.
 fn dielectric_scatter(p: DielectricParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     let entering = hit.front_face;
     let n = select(-hit.ns, hit.ns, entering);
     let eta = select(p.ior, 1.0 / p.ior, entering);
-    var weight = p.tint;
+    var inside = vec3<f32>(1.0);
     if (!entering) {
-        weight *= exp(-p.absorption * length(hit.p - ray.origin));
+        inside = exp(-p.absorption * length(hit.p - ray.origin));
     }
 #ifdef HAS_ROUGH_DIELECTRIC
     if (max(p.alpha, p.alpha_v) >= ALPHA_SMOOTH) {
-        return dielectric_rough_scatter(p, ray, hit, n, eta, weight, u);
+        return dielectric_rough_scatter(p, ray, hit, n, eta, inside, u);
     }
 #endif
     let cos_i = clamp(-dot(ray.dir, n), 0.0, 1.0);
     let sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
     if (sin2_t >= 1.0) {
-        return Scatter(true, reflect_dir(ray.dir, n), weight, 0.0, true);
+        return Scatter(true, reflect_dir(ray.dir, n), inside * p.specular, 0.0, true);
     }
     let cos_t = sqrt(1.0 - sin2_t);
     if (u.x < fresnel_dielectric(cos_i, cos_t, eta)) {
-        return Scatter(true, reflect_dir(ray.dir, n), weight, 0.0, true);
+        return Scatter(true, reflect_dir(ray.dir, n), inside * p.specular, 0.0, true);
     }
-    return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), weight, 0.0, true);
+    return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), inside * p.tint, 0.0, true);
 }
 
 #ifdef HAS_ROUGH_DIELECTRIC
@@ -192,11 +193,11 @@ fn dielectric_ms_lobes(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec
 // through it (the mirror direction where h reflects totally); with energy compensation,
 // first its lobe with dielectric_ms_probs (a cosine direction, mirrored through the
 // surface where it transmits). Weight = BSDF x cos / pdf (dielectric_lobes) times the
-// tint (and absorption) in `weight`. A direction on the wrong side of the geometric
+// transmittance `inside` and specular (reflected) or tint (transmitted). A direction on the wrong side of the geometric
 // surface is absorbed. Without absorption it has a density, which next-event estimation
 // weighs (dielectric_eval, dielectric_pdf); absorbing rough glass is sampled as a delta
 // (scene::materials::dielectric::has_density says why).
-fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, weight: vec3<f32>, u0: vec2<f32>) -> Scatter {
+fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, inside: vec3<f32>, u0: vec2<f32>) -> Scatter {
     let wo = -ray.dir;
     let cos_o = dot(n, wo);
     if (cos_o <= 0.0) {
@@ -249,6 +250,7 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
         return absorbed();
     }
     let delta = !dielectric_has_density(p);
+    let weight = inside * select(p.tint, p.specular, is_reflection);
     return Scatter(true, wi, weight * (lobes.x / lobes.y), select(lobes.y, 0.0, delta), delta);
 }
 
@@ -264,13 +266,13 @@ fn dielectric_eta(p: DielectricParams) -> f32 {
 }
 #endif
 
-// Rough glass without absorption: tint x BSDF x |cos(theta_i)| toward wi, reflected or
-// transmitted (dielectric_lobes), n on wo's side; 0 for the deltas (smooth glass,
-// absorbing rough glass).
+// Rough glass without absorption: specular (reflected) or tint (transmitted) x BSDF x
+// |cos(theta_i)| toward wi (dielectric_lobes), n on wo's side; 0 for the deltas (smooth
+// glass, absorbing rough glass).
 fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 #ifdef HAS_ROUGH_DIELECTRIC
     if (dielectric_has_density(p)) {
-        return p.tint * dielectric_lobes(p, n, wo, wi, dielectric_eta(p)).x;
+        return select(p.tint, p.specular, dot(n, wi) > 0.0) * dielectric_lobes(p, n, wo, wi, dielectric_eta(p)).x;
     }
 #endif
     return vec3<f32>(0.0);

@@ -384,6 +384,18 @@ pub const MATERIALS: &[TestMaterial] = &[
         false,
     ),
     row(
+        "glass 1.5 reflecting and transmitting apart",
+        "type = \"dielectric\"\nior = 1.5\ntint = [0.9, 0.7, 0.5]\nspecular = [0.4, 0.8, 1]",
+        false,
+        false,
+    ),
+    row(
+        "rough glass 0.5 reflecting and transmitting apart",
+        "type = \"dielectric\"\nior = 1.5\nroughness = 0.5\ntint = [0.9, 0.7, 0.5]\nspecular = [0.4, 0.8, 1]",
+        false,
+        false,
+    ),
+    row(
         "microfacet smooth",
         "type = \"microfacet\"\nalbedo = [1, 1, 1]\nspecular = [1, 1, 1]\nroughness = 0",
         false,

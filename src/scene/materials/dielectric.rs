@@ -3,7 +3,8 @@
 //! roughness^2, or `roughness_u` along the tangent and `roughness_v` along the
 //! bitangent), GGX or Beckmann microfacets (`distribution`) reflect and refract as Walter
 //! et al. 2007 define them, with Smith's height-correlated masking-shadowing, sampled by
-//! their visible normals. `tint` multiplies every scattering and `absorption`
+//! their visible normals. `tint` multiplies what goes through, `specular` (default:
+//! `tint`) what reflects, and `absorption`
 //! (per unit length, Beer-Lambert) acts inside. glTF's KHR_materials_transmission (with
 //! KHR_materials_volume) and .mtl's refracting illumination models map onto it. Shading:
 //! `shaders/materials/dielectric.wgsl`, CPU twin `cpu/materials/dielectric.rs`.
@@ -17,7 +18,7 @@ use super::common::{
 use crate::scene::gltf::error::{GltfError, Result};
 use crate::scene::gltf::reader::{self, MaterialReader};
 use crate::scene::records::{
-    Material, ALPHA_SMOOTH, MAT_FLAG_ANISOTROPIC, MAT_FLAG_ENERGY,
+    Material, ALPHA_SMOOTH, MAT_FLAG_ANISOTROPIC, MAT_FLAG_COLOR2_CLAMPED, MAT_FLAG_ENERGY,
     MS_DIELECTRIC_BECKMANN_CORRELATED, MS_DIELECTRIC_GGX_CORRELATED,
 };
 
@@ -26,8 +27,12 @@ use crate::scene::records::{
 #[serde(deny_unknown_fields)]
 pub struct Desc {
     pub ior: f32,
+    /// Multiplies what goes through (and what reflects, unless `specular` says).
     #[serde(default = "white_color")]
     pub tint: ColorDesc,
+    /// Multiplies what reflects (Mitsuba's `specular_reflectance`); default: `tint`.
+    #[serde(default)]
+    pub specular: Option<ColorDesc>,
     #[serde(default)]
     pub absorption: [f32; 3],
     /// Perceptual roughness in [0, 1] (alpha = its square); 0 is smooth glass. Or
@@ -63,13 +68,16 @@ pub struct Desc {
 material_view! {
     /// What the shaders read of it.
     pub struct Params("DielectricParams") {
-        /// Multiplies every scattering.
+        /// Multiplies the transmission.
         tint: rgb = color,
         tint_texture: u32 = tex_color,
+        /// Multiplies the reflection (a reflectance: its texture is clamped to 1).
+        specular: rgb = color2,
+        specular_texture: u32 = tex_color2,
         /// Index of refraction inside (outside is 1).
         ior: f32 = scalars.x,
         /// Beer-Lambert coefficient per unit length inside.
-        absorption: rgb = color2,
+        absorption: rgb = color3,
         /// Alpha = roughness^2 (along the tangent where it is anisotropic); below
         /// ALPHA_SMOOTH on both axes smooth glass.
         alpha: f32 = scalars.y,
@@ -162,6 +170,9 @@ impl Model for Desc {
     fn check(&self, c: &mut Check) {
         c.positive("ior", self.ior);
         c.color("tint", &self.tint, true);
+        if let Some(specular) = &self.specular {
+            c.color("specular", specular, true);
+        }
         c.nonnegative3("absorption", self.absorption);
         self.roughness().check(c);
         c.color("emission", &self.emission, false);
@@ -203,10 +214,13 @@ impl Model for Desc {
 
     fn pack(&self, t: &TextureNames, record: &mut Material) {
         let (tint, tint_texture) = t.color(&self.tint);
+        let (specular, specular_texture) = t.color(self.specular.as_ref().unwrap_or(&self.tint));
         let (alpha, alpha_v) = self.alpha();
         Params {
             tint,
             tint_texture,
+            specular,
+            specular_texture,
             ior: self.ior,
             absorption: self.absorption.into(),
             alpha,
@@ -217,6 +231,7 @@ impl Model for Desc {
             flags: record.flags,
         }
         .write(record);
+        record.flags |= MAT_FLAG_COLOR2_CLAMPED;
         if self.anisotropic() {
             record.flags |= MAT_FLAG_ANISOTROPIC;
         }
@@ -295,6 +310,7 @@ pub fn from_gltf(
         }
     }
     Ok(Desc {
+        specular: None,
         ior,
         tint,
         absorption,
@@ -327,6 +343,7 @@ pub fn from_mtl(m: &tobj::Material) -> std::result::Result<Desc, String> {
         return Err(format!("Ni: must be >= 1, got {ior}"));
     }
     Ok(Desc {
+        specular: None,
         ior,
         tint,
         absorption: [0.0; 3],

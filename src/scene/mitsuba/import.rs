@@ -1244,17 +1244,10 @@ impl<'a> Importer<'a> {
                 self.check_known(o, &known, &["sample_visible"])?;
                 let refl = self.color(o, "specular_reflectance", 1.0, Use::Reflectance)?;
                 let trans = self.color(o, "specular_transmittance", 1.0, Use::Reflectance)?;
-                if thin {
+                if thin || refl != trans {
                     t.insert("specular".into(), refl);
-                    t.insert("tint".into(), trans);
-                } else if refl == trans {
-                    t.insert("tint".into(), refl);
-                } else {
-                    return err(
-                        &o.pos,
-                        format!("{}: wgtrace's dielectric tints reflection and transmission alike; these differ", what(o)),
-                    );
                 }
+                t.insert("tint".into(), trans);
                 t
             }
             "plastic" | "roughplastic" => {
