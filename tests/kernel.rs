@@ -370,7 +370,9 @@ fn gpu_materials_match_cpu_query_by_query() {
          cells = { type = \"checker\", even = [0.9, 0.2, 0.1], odd = \"noise\", scale = 3 }\n\
          noise = { type = \"noise\", scale = 2, color = [1, 0.8, 0.6] }\n\
          bright = { type = \"constant\", color = [2.5, 0.5, 1.5] }\n\
-         mr = { type = \"constant\", color = [1, 0.5, 0.8] }\n",
+         mr = { type = \"constant\", color = [1, 0.5, 0.8] }\n\
+         turned = { type = \"checker\", even = [0.2, 0.3, 0.9], odd = [0.8, 0.7, 0.1], scale = 2, \
+         transform = { matrix = [[1.5, -0.7, 0.2], [0.4, 2.5, -0.3]] } }\n",
     );
     let textured = [
         "type = \"lambertian\"\nalbedo = \"cells\"",
@@ -379,6 +381,8 @@ fn gpu_materials_match_cpu_query_by_query() {
          roughness = 0.6\nmetallic_roughness = \"mr\"\nspecular_texture = \"mr\"",
         "type = \"emissive\"\nradiance = \"cells\"\ntwo_sided = true",
         "type = \"dielectric\"\nior = 1.7\ntint = \"noise\"\nabsorption = [0.3, 0.1, 0.05]",
+        "type = \"lambertian\"\nalbedo = \"turned\"",
+        "type = \"dielectric\"\nior = 1.4\ntint = [0.9, 0.9, 0.9]\nspecular = \"turned\"\nroughness = 0.4",
     ];
     let keys: Vec<&str> = common::MATERIALS
         .iter()

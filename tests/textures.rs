@@ -79,6 +79,33 @@ fn checker_cells_alternate_in_uv_and_in_space() {
     assert_close(value(&s, 2, [0.0; 2], [1.5, -0.5, 0.5]), Vec3::ZERO);
 }
 
+/// A uv checker's `transform` maps uv before its `scale`: cells of scale x M (u, v, 1),
+/// here M turning uv by 90 degrees and moving it by (0.25, 0), so the cell of (u, v) is
+/// that of (0.25 - v, u) times 2; the rows of a matrix say the same.
+#[test]
+fn checker_cells_follow_their_uv_transform() {
+    let s = scene(
+        "t = { type = \"checker\", even = [0, 0, 0], odd = [1, 1, 1], scale = 2, transform = { rotation = 90, offset = [0.25, 0] } }\n\
+         u = { type = \"checker\", even = [0, 0, 0], odd = [1, 1, 1], scale = 2, transform = { matrix = [[0, -1, 0.25], [1, 0, 0]] } }",
+        Path::new("."),
+    );
+    for t in 0..2 {
+        for uv in [
+            [0.1f32, 0.1],
+            [0.1, 0.3],
+            [0.3, 0.1],
+            [0.6, 0.2],
+            [0.2, 0.6],
+            [0.9, 0.7],
+        ] {
+            let (x, y) = (2.0 * (0.25 - uv[1]), 2.0 * uv[0]);
+            let odd = (x.floor() as i32 + y.floor() as i32) & 1 == 1;
+            let want = if odd { Vec3::ONE } else { Vec3::ZERO };
+            assert_close(value(&s, t, uv, [0.0; 3]), want);
+        }
+    }
+}
+
 #[test]
 fn images_decode_srgb_filter_bilinearly_and_wrap() {
     let dir = image_dir("images");
@@ -172,6 +199,8 @@ fn textures_and_material_references_are_validated() {
     );
     let e = err("a = { type = \"checker\", even = [0, 0, 0], odd = [1, 1, 1] }\nb = { type = \"checker\", even = \"a\", odd = [1, 1, 1] }", "");
     assert!(e.contains("textures.b.even: \"a\" is a checker"), "{e}");
+    let e = err("s = { type = \"checker\", even = [0, 0, 0], odd = [1, 1, 1], mapping = \"solid\", transform = { scale = [2, 1] } }", "");
+    assert!(e.contains("textures.s.transform: maps uv"), "{e}");
     let e = err("i = { type = \"image\", path = \"missing.png\" }", "");
     assert!(
         e.contains("bad.toml:5:") && e.contains("textures.i.path") && e.contains("missing.png"),

@@ -157,7 +157,10 @@ fn checker_odd(tex: Texture, uv: vec2<f32>, p: vec3<f32>) -> bool {
         let c = vec3<i32>(floor(s * p));
         return ((c.x + c.y + c.z) & 1) == 1;
     }
-    let c = vec2<i32>(floor(s * uv));
+    // the uv checker's map (scale x transform): params.xyz its first row, its second in
+    // (params.w, color0.w, color1.w)
+    let q = vec3<f32>(uv, 1.0);
+    let c = vec2<i32>(floor(vec2<f32>(dot(tex.params.xyz, q), dot(vec3<f32>(tex.params.w, tex.color0.w, tex.color1.w), q))));
     return ((c.x + c.y) & 1) == 1;
 }
 

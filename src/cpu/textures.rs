@@ -151,7 +151,11 @@ pub fn checker_odd(tex: &Texture, uv: Vec2, p: Vec3) -> bool {
         let c = (s * p).floor().as_ivec3();
         return (c.x.wrapping_add(c.y).wrapping_add(c.z) & 1) == 1;
     }
-    let c = (s * uv).floor().as_ivec2();
+    // the uv checker's map (scale x transform), as textures.wgsl reads it
+    let q = uv.extend(1.0);
+    let p0 = Vec3::new(tex.params[0], tex.params[1], tex.params[2]);
+    let p1 = Vec3::new(tex.params[3], tex.color0[3], tex.color1[3]);
+    let c = Vec2::new(p0.dot(q), p1.dot(q)).floor().as_ivec2();
     (c.x.wrapping_add(c.y) & 1) == 1
 }
 

@@ -456,6 +456,10 @@ pub enum TextureDesc {
         scale: f32,
         #[serde(default)]
         mapping: CheckerMapping,
+        /// With `mapping = "uv"`: maps the surface's uv before `scale` cells per unit
+        /// (the image's `transform`: offset, rotation and scale, or a matrix).
+        #[serde(default)]
+        transform: Option<UvTransformDesc>,
     },
     /// An image file (PNG, JPEG, HDR, EXR, PPM, PFM, BMP), `path` relative to the scene file; 8- and
     /// 16-bit images are sRGB-decoded to linear unless `color_space = "linear"` (data such

@@ -459,21 +459,30 @@ pub fn texture_records(
                 odd,
                 scale,
                 mapping,
+                transform,
             } => {
-                let (color0, even) = color_slot(even, &names);
-                let (color1, odd) = color_slot(odd, &names);
+                let (mut color0, even) = color_slot(even, &names);
+                let (mut color1, odd) = color_slot(odd, &names);
+                let solid = *mapping == CheckerMapping::Solid;
+                let params = if solid {
+                    [*scale, 0.0, 0.0, 0.0]
+                } else {
+                    // the cells' map, scale x transform: its first row and the second's
+                    // first entry in params, the second's others in the colours' .w
+                    let [r0, r1] =
+                        transform.map_or([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], |t| t.rows());
+                    color0[3] = scale * r1[1];
+                    color1[3] = scale * r1[2];
+                    [scale * r0[0], scale * r0[1], scale * r0[2], scale * r1[0]]
+                };
                 Texture {
                     tag: records::TEX_CHECKER,
-                    flags: if *mapping == CheckerMapping::Solid {
-                        TEX_FLAG_SOLID
-                    } else {
-                        0
-                    },
+                    flags: if solid { TEX_FLAG_SOLID } else { 0 },
                     even,
                     odd,
                     color0,
                     color1,
-                    params: [*scale, 0.0, 0.0, 0.0],
+                    params,
                     ..Default::default()
                 }
             }

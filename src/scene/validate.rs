@@ -6,8 +6,8 @@ use super::error::Problem;
 use toml::Spanned;
 
 use super::format::{
-    CameraDesc, FilterKind, LightDesc, ObjectDesc, Projection, RenderDesc, SceneFile, TextureDesc,
-    TransformDesc, MESH_ATTRIBUTES,
+    CameraDesc, CheckerMapping, FilterKind, LightDesc, ObjectDesc, Projection, RenderDesc,
+    SceneFile, TextureDesc, TransformDesc, UvTransformDesc, MESH_ATTRIBUTES,
 };
 use super::materials::common::ColorDesc;
 use super::materials::{blend, MaterialDesc};
@@ -308,7 +308,11 @@ impl Validator<'_> {
                 self.nonnegative3(&format!("{key}.color"), *color, at)
             }
             TextureDesc::Checker {
-                even, odd, scale, ..
+                even,
+                odd,
+                scale,
+                mapping,
+                transform,
             } => {
                 for (cell, c) in [("even", even), ("odd", odd)] {
                     let ckey = format!("{key}.{cell}");
@@ -327,6 +331,16 @@ impl Validator<'_> {
                     }
                 }
                 self.positive(&format!("{key}.scale"), *scale, at);
+                if let Some(t) = transform {
+                    if *mapping == CheckerMapping::Solid {
+                        self.push(
+                            at,
+                            &format!("{key}.transform"),
+                            "maps uv: a solid checker has none".into(),
+                        );
+                    }
+                    self.uv_transform(&format!("{key}.transform"), t, at);
+                }
             }
             TextureDesc::Image {
                 path,
@@ -347,22 +361,7 @@ impl Validator<'_> {
                 }
                 self.nonnegative3(&format!("{key}.factor"), *factor, at);
                 if let Some(t) = transform {
-                    let [a, b] = t.scale;
-                    let matrix = t.matrix.unwrap_or_default();
-                    if ![a, b, t.rotation, t.offset[0], t.offset[1]]
-                        .iter()
-                        .chain(matrix.iter().flatten())
-                        .all(|x| x.is_finite())
-                    {
-                        self.push(at, &format!("{key}.transform"), "must be finite".into());
-                    }
-                    if t.matrix.is_some() && t.has_parts() {
-                        self.push(
-                            at,
-                            &format!("{key}.transform.matrix"),
-                            "replaces offset, rotation and scale: give one or the others".into(),
-                        );
-                    }
+                    self.uv_transform(&format!("{key}.transform"), t, at);
                 }
             }
             TextureDesc::MeshAttribute { name } => {
@@ -874,6 +873,26 @@ impl Validator<'_> {
     fn direction(&mut self, key: &str, d: [f32; 3], at: usize) {
         if self.finite3(key, d, at) && Vec3::from(d).length_squared() == 0.0 {
             self.push(at, key, "must be non-zero".into());
+        }
+    }
+
+    /// A texture's uv `transform`: finite, and a matrix or the parts, not both.
+    fn uv_transform(&mut self, key: &str, t: &UvTransformDesc, at: usize) {
+        let [a, b] = t.scale;
+        let matrix = t.matrix.unwrap_or_default();
+        if ![a, b, t.rotation, t.offset[0], t.offset[1]]
+            .iter()
+            .chain(matrix.iter().flatten())
+            .all(|x| x.is_finite())
+        {
+            self.push(at, key, "must be finite".into());
+        }
+        if t.matrix.is_some() && t.has_parts() {
+            self.push(
+                at,
+                &format!("{key}.matrix"),
+                "replaces offset, rotation and scale: give one or the others".into(),
+            );
         }
     }
 

@@ -994,18 +994,26 @@ impl<'a> Importer<'a> {
                 self.check_known(o, &["color0", "color1", "to_uv"], &[])?;
                 let c0 = self.color(o, "color0", 0.4, Use::Reflectance)?;
                 let c1 = self.color(o, "color1", 0.2, Use::Reflectance)?;
-                // Mitsuba: color0 where the halves of u and v agree, 2 cells per unit (of
-                // v down); in wgtrace's v up those are the odd cells
-                let s = uniform_uv_scale(to_uv).filter(|s| (2.0 * s).fract() == 0.0 && *s > 0.0);
-                let Some(s) = s else {
-                    return err(&o.get("to_uv").unwrap().pos, "texture checkerboard: wgtrace's checker takes a to_uv that is a uniform scale by a multiple of 0.5 only");
+                // Mitsuba: color0 where the halves of to_uv's u and v agree (of v down),
+                // the cells of 2 to_uv (u, 1 - v) whose coordinates sum to an even number;
+                // a uniform scale s by a multiple of 1/2 is wgtrace's scale 2 s with v up,
+                // whose cells are the same, their parity that of 2 s - 1
+                let uniform = uniform_uv_scale(to_uv).filter(|s| (2.0 * s).fract() == 0.0 && *s > 0.0);
+                let (even, odd, map) = match uniform {
+                    Some(s) if (2.0 * s) as i64 % 2 == 0 => (c1, c0, ("scale", float(2.0 * s))),
+                    Some(s) => (c0, c1, ("scale", float(2.0 * s))),
+                    None => (c0, c1, ("transform", checker_matrix(o, to_uv)?)),
                 };
-                let (even, odd) = if (2.0 * s) as i64 % 2 == 0 { (c1, c0) } else { (c0, c1) };
                 // Mitsuba's checkerboard read as a scalar (eval_1) gives color0 where the
                 // halves differ, the other cells than as a colour (eval): measured against
                 // Mitsuba 3.9.1, a principled metallic checker agrees only so
                 let (even, odd) = if scalar { (odd, even) } else { (even, odd) };
-                table([("type", text("checker")), ("even", even), ("odd", odd), ("scale", float(2.0 * s))])
+                let general = map.0 == "transform";
+                let mut t = table([("type", text("checker")), ("even", even), ("odd", odd), map]);
+                if general {
+                    t.insert("scale".into(), float(1.0));
+                }
+                t
             }
             "mesh_attribute" => {
                 self.check_known(o, &["name"], &[])?;
@@ -1890,19 +1898,39 @@ impl<'a> Importer<'a> {
 /// A 2 x 3 uv matrix for wgtrace's image transform from Mitsuba's `to_uv` (conjugated by
 /// the v flip between the two conventions: F T F, F(u, v) = (u, 1 - v)).
 fn uv_matrix(o: &Object, to_uv: DMat4) -> Result<T> {
+    uv_map(o, flip_v() * uv_affine(to_uv) * flip_v())
+}
+
+/// The cells of Mitsuba's checkerboard under `to_uv`, in wgtrace's uv (v up): the rows of
+/// 2 T F, as a checker's `transform` (its scale 1).
+fn checker_matrix(o: &Object, to_uv: DMat4) -> Result<T> {
+    uv_map(
+        o,
+        DMat3::from_diagonal(DVec3::new(2.0, 2.0, 1.0)) * uv_affine(to_uv) * flip_v(),
+    )
+}
+
+/// `to_uv` as it acts on (u, v, 0, 1): its upper-left 2 x 2 and its translation column.
+fn uv_affine(to_uv: DMat4) -> DMat3 {
     let c = to_uv.to_cols_array_2d();
-    // to_uv acts on (u, v, 0, 1): its upper-left 2 x 2 and the translation column
-    let t = DMat3::from_cols(
-        glam::DVec3::new(c[0][0], c[0][1], 0.0),
-        glam::DVec3::new(c[1][0], c[1][1], 0.0),
-        glam::DVec3::new(c[3][0], c[3][1], 1.0),
-    );
-    let f = DMat3::from_cols(
+    DMat3::from_cols(
+        DVec3::new(c[0][0], c[0][1], 0.0),
+        DVec3::new(c[1][0], c[1][1], 0.0),
+        DVec3::new(c[3][0], c[3][1], 1.0),
+    )
+}
+
+/// F(u, v) = (u, 1 - v): between Mitsuba's v down and wgtrace's v up.
+fn flip_v() -> DMat3 {
+    DMat3::from_cols(
         DVec3::X,
         DVec3::new(0.0, -1.0, 0.0),
         DVec3::new(0.0, 1.0, 1.0),
-    );
-    let m = f * t * f;
+    )
+}
+
+/// A uv `transform` table of the first two rows of `m`.
+fn uv_map(o: &Object, m: DMat3) -> Result<T> {
     if !m.is_finite() {
         return err(&o.pos, format!("{}: to_uv is not finite", what(o)));
     }
