@@ -1453,23 +1453,66 @@ fn gpu_matches_cpu_with_every_pixel_filter() {
 /// steps, 1, 2/3 and 1/3, far from the tent itself) render their step functions' CDFs.
 #[test]
 fn a_step_edge_renders_each_pixel_filters_cdf() {
-    for (filter, extra, r, sd, steps) in [
-        ("box", "", 0.5f64, 0.0f64, 0u32),
-        ("tent", "", 1.0, 0.0, 0),
-        ("tent", "filter_radius = 2", 2.0, 0.0, 0),
-        ("gaussian", "", 2.0, 0.5, 0),
-        ("gaussian", "filter_radius = 1.5", 1.5, 0.5, 0),
-        ("gaussian", "filter_steps = 31", 2.0, 0.5, 31),
-        ("tent", "filter_radius = 2\nfilter_steps = 3", 2.0, 0.0, 3),
-    ] {
+    assert_step_edge_renders_cdfs(
+        &[
+            ("box", "", 0.5f64, 0.0f64, 0u32),
+            ("tent", "", 1.0, 0.0, 0),
+            ("tent", "filter_radius = 2", 2.0, 0.0, 0),
+            ("gaussian", "", 2.0, 0.5, 0),
+            ("gaussian", "filter_radius = 1.5", 1.5, 0.5, 0),
+            ("gaussian", "filter_steps = 31", 2.0, 0.5, 31),
+            ("tent", "filter_radius = 2\nfilter_steps = 3", 2.0, 0.0, 3),
+        ],
+        "spp = 256",
+        |p| (p * (1.0 - p) / 1024.0).sqrt() + 2e-3 / 5.0,
+        false,
+    );
+}
+
+/// Splat reconstruction (`reconstruction = "splat"`, Mitsuba 3's film) renders the same
+/// step edge, on both backends: each sample uniform in its pixel and weighed into every
+/// pixel its filter reaches, pixel i converges to the same 1 - F(7.75 - i) (the expected
+/// image does not change, only how the noise spreads). Pixels the filter keeps on one
+/// side read exactly 0 or 1 (a ratio of equal sums), those within it are within 5
+/// standard errors of the weighted Bernoulli mean: p (1 - p) x 1.3 / n for the n = 1024
+/// samples of a pixel (1.27 is sum w^2 / (sum w)^2 of Mitsuba's Gaussian over a pixel's
+/// neighbours), with the four rows counted as one (they share samples). With the AOVs,
+/// every pixel on the emitter reads its distance 2: the AOVs stay each pixel's own
+/// samples' mean.
+#[test]
+fn splatted_samples_render_each_pixel_filters_cdf() {
+    assert_step_edge_renders_cdfs(
+        &[
+            ("tent", "", 1.0f64, 0.0f64, 0u32),
+            ("gaussian", "", 2.0, 0.5, 0),
+            ("gaussian", "filter_radius = 1.5", 1.5, 0.5, 0),
+            ("gaussian", "filter_steps = 31", 2.0, 0.5, 31),
+        ],
+        "spp = 1024\nreconstruction = \"splat\"\nsample_border = false",
+        |p| (p * (1.0 - p) * 1.3 / 1024.0).sqrt() + 1e-6 / 5.0,
+        true,
+    );
+}
+
+/// The step edge of `a_step_edge_renders_each_pixel_filters_cdf` under each (filter,
+/// extra keys, radius, standard deviation, steps), with `render` keys added: each
+/// column's mean within 5 `se(p)` of 1 - F(7.75 - i), exactly 0 or 1 outside the radius;
+/// with `aovs`, every pixel on the emitter's depth 2.
+fn assert_step_edge_renders_cdfs(
+    cases: &[(&str, &str, f64, f64, u32)],
+    render: &str,
+    se: impl Fn(f64) -> f64,
+    aovs: bool,
+) {
+    for &(filter, extra, r, sd, steps) in cases {
         let src = format!(
             r#"
 [render]
 width = 16
 height = 4
-spp = 256
 max_depth = 1
 filter = "{filter}"
+{render}
 {extra}
 
 [camera]
@@ -1487,7 +1530,8 @@ vertices = [[0.25, -10, 0], [20, -10, 0], [20, 10, 0], [0.25, 10, 0]]
 material = "light"
 "#
         );
-        let scene = scene_from_str(&src);
+        let mut scene = scene_from_str(&src);
+        scene.aovs = aovs;
         // a stepped filter keeps its value at each step's inner end
         let step = |x: f64| match steps {
             0 => x,
@@ -1535,116 +1579,13 @@ material = "light"
                     assert_eq!(mean, want, "{label}: outside the radius");
                 } else {
                     let p = 1.0 - cdf(d);
-                    let se = (p * (1.0 - p) / 1024.0).sqrt();
                     assert!(
-                        (mean - p).abs() <= 5.0 * se + 2e-3,
-                        "{label}: {mean} against {p} (standard error {se})"
+                        (mean - p).abs() <= 5.0 * se(p),
+                        "{label}: {mean} against {p} (standard error {})",
+                        se(p)
                     );
                 }
-            }
-        }
-    }
-}
-
-/// Splat reconstruction (`reconstruction = "splat"`, Mitsuba 3's film) renders the same
-/// step edge as `a_step_edge_renders_each_pixel_filters_cdf`, on both backends: each
-/// sample uniform in its pixel and weighed into every pixel its filter reaches, pixel i
-/// converges to the same 1 - F(7.75 - i) (the expected image does not change, only how
-/// the noise spreads). Pixels the filter keeps on one side read exactly 0 or 1 (a ratio
-/// of equal sums), those within it are within 5 standard errors of the weighted
-/// Bernoulli mean: p (1 - p) x 1.3 / n for the n = 1024 samples of a pixel (1.27 is
-/// sum w^2 / (sum w)^2 of Mitsuba's Gaussian over a pixel's neighbours), with the four
-/// rows counted as one (they share samples). With the AOVs, every pixel on the emitter
-/// reads its distance 2: the AOVs stay each pixel's own samples' mean.
-#[test]
-fn splatted_samples_render_each_pixel_filters_cdf() {
-    for (filter, extra, r, sd, steps) in [
-        ("tent", "", 1.0f64, 0.0f64, 0u32),
-        ("gaussian", "", 2.0, 0.5, 0),
-        ("gaussian", "filter_radius = 1.5", 1.5, 0.5, 0),
-        ("gaussian", "filter_steps = 31", 2.0, 0.5, 31),
-    ] {
-        let src = format!(
-            r#"
-[render]
-width = 16
-height = 4
-spp = 1024
-max_depth = 1
-filter = "{filter}"
-reconstruction = "splat"
-sample_border = false
-{extra}
-
-[camera]
-projection = "orthographic"
-height = 4
-look_from = [0, 0, 2]
-look_at = [0, 0, 0]
-
-[materials]
-light = {{ type = "emissive", radiance = [1, 1, 1] }}
-
-[[objects]]
-type = "polygon"
-vertices = [[0.25, -10, 0], [20, -10, 0], [20, 10, 0], [0.25, 10, 0]]
-material = "light"
-"#
-        );
-        let mut scene = scene_from_str(&src);
-        assert!(scene.filter.splat, "{filter} {extra}");
-        scene.aovs = true;
-        let step = |x: f64| match steps {
-            0 => x,
-            n => (x.abs() * n as f64 / r).floor() * r / n as f64,
-        };
-        let profile = |x: f64| match filter {
-            _ if x.abs() >= r => 0.0,
-            "tent" => (1.0 - step(x).abs() / r).max(0.0),
-            _ => {
-                let g = |t: f64| (-t * t / (2.0 * sd * sd)).exp();
-                (g(step(x)) - g(r)).max(0.0)
-            }
-        };
-        let cdf = |x: f64| {
-            let n = 20_000;
-            let h = 2.0 * r / n as f64;
-            let part = |hi: f64| {
-                (0..n)
-                    .map(|i| -r + (i as f64 + 0.5) * h)
-                    .filter(|&t| t < hi)
-                    .map(profile)
-                    .sum::<f64>()
-            };
-            part(x) / part(r + 1.0)
-        };
-        for (name, render) in [
-            (
-                "gpu",
-                render_gpu as fn(&wgtrace::FlatScene) -> wgtrace::Accumulation,
-            ),
-            ("cpu", render_cpu),
-        ] {
-            let img = render(&scene);
-            for i in 0..16u32 {
-                let mean = (0..4)
-                    .map(|y| img.mean((y * 16 + i) as usize)[0] as f64)
-                    .sum::<f64>()
-                    / 4.0;
-                let d = 7.75 - i as f64;
-                let label = format!("{filter} {extra}, {name}, pixel {i}");
-                if d.abs() >= r {
-                    let want = if d > 0.0 { 0.0 } else { 1.0 };
-                    assert_eq!(mean, want, "{label}: outside the radius");
-                } else {
-                    let p = 1.0 - cdf(d);
-                    let se = (p * (1.0 - p) * 1.3 / 1024.0).sqrt();
-                    assert!(
-                        (mean - p).abs() <= 5.0 * se + 1e-6,
-                        "{label}: {mean} against {p} (standard error {se})"
-                    );
-                }
-                if d < -1.0 {
+                if aovs && d < -1.0 {
                     for y in 0..4 {
                         let depth = img.aov_mean((y * 16 + i) as usize, 2)[3];
                         assert!((depth - 2.0).abs() < 1e-5, "{label}: depth {depth}");

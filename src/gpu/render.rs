@@ -68,6 +68,15 @@ struct BandBuffers {
     group: wgpu::BindGroup,
 }
 
+/// One dispatch of a submission: samples `samples` of rows `rows`, into the accumulation
+/// of `group`'s band, which starts at row `accum_y`.
+struct Dispatch<'a> {
+    group: &'a wgpu::BindGroup,
+    samples: Range<u32>,
+    rows: Band,
+    accum_y: u32,
+}
+
 /// Most dispatches (sample groups of one band) in one submission.
 pub const MAX_DISPATCHES_PER_SUBMISSION: u32 = 256;
 
@@ -455,48 +464,36 @@ impl GpuRenderer {
             .gather
             .as_ref()
             .expect("a splatting plan has a gather pipeline");
-        let stride = self.params_stride as usize;
         for bands in self.bands.chunks(MAX_DISPATCHES_PER_SUBMISSION as usize) {
-            self.write_params(bands.iter().map(|band| {
-                let mut params = self.scene.params(part.start, band.band);
-                params.sample_count = part.len() as u32;
-                params.accum_y = band.band.y;
-                params
-            }));
-            let mut encoder = self
-                .ctx
-                .device
-                .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("gather pass"),
-                    timestamp_writes: None,
-                });
-                pass.set_pipeline(gather);
-                for (i, band) in bands.iter().enumerate() {
-                    pass.set_bind_group(0, &band.group, &[(i * stride) as u32]);
-                    pass.dispatch_workgroups(
-                        band.band.width.div_ceil(WORKGROUP),
-                        band.band.height.div_ceil(WORKGROUP),
-                        1,
-                    );
-                }
-            }
-            self.ctx.queue.submit([encoder.finish()]);
+            let dispatches: Vec<Dispatch> = bands
+                .iter()
+                .map(|band| Dispatch {
+                    group: &band.group,
+                    samples: part.clone(),
+                    rows: band.band,
+                    accum_y: band.band.y,
+                })
+                .collect();
+            let commands = self.encode("gather pass", gather, &dispatches);
+            self.ctx.queue.submit([commands]);
             self.ctx.wait()?;
         }
         Ok(())
     }
 
-    /// One submission: a dispatch per (samples, rows) of band `b`, each with its own
-    /// parameters; waits for it, then adapts the budget to the time it took.
-    fn submit(&mut self, b: usize, dispatches: &[(Range<u32>, Band)]) -> Result<(), GpuError> {
-        let band = &self.bands[b];
+    /// Writes one [`Params`] per dispatch and encodes them in one compute pass of
+    /// `pipeline`, each dispatch binding its group at its parameters' offset.
+    fn encode(
+        &self,
+        label: &str,
+        pipeline: &wgpu::ComputePipeline,
+        dispatches: &[Dispatch],
+    ) -> wgpu::CommandBuffer {
         let stride = self.params_stride as usize;
-        self.write_params(dispatches.iter().map(|(samples, rows)| {
-            let mut params = self.scene.params(samples.start, *rows);
-            params.sample_count = samples.len() as u32;
-            params.accum_y = band.band.y;
+        self.write_params(dispatches.iter().map(|d| {
+            let mut params = self.scene.params(d.samples.start, d.rows);
+            params.sample_count = d.samples.len() as u32;
+            params.accum_y = d.accum_y;
             params
         }));
         let mut encoder = self
@@ -505,21 +502,38 @@ impl GpuRenderer {
             .create_command_encoder(&wgpu::CommandEncoderDescriptor { label: None });
         {
             let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("trace pass"),
+                label: Some(label),
                 timestamp_writes: None,
             });
-            pass.set_pipeline(&self.pipeline.pipeline);
-            for (i, &(_, rows)) in dispatches.iter().enumerate() {
-                pass.set_bind_group(0, &band.group, &[(i * stride) as u32]);
+            pass.set_pipeline(pipeline);
+            for (i, d) in dispatches.iter().enumerate() {
+                pass.set_bind_group(0, d.group, &[(i * stride) as u32]);
                 pass.dispatch_workgroups(
-                    rows.width.div_ceil(WORKGROUP),
-                    rows.height.div_ceil(WORKGROUP),
+                    d.rows.width.div_ceil(WORKGROUP),
+                    d.rows.height.div_ceil(WORKGROUP),
                     1,
                 );
             }
         }
+        encoder.finish()
+    }
+
+    /// One submission: a dispatch per (samples, rows) of band `b`, each with its own
+    /// parameters; waits for it, then adapts the budget to the time it took.
+    fn submit(&mut self, b: usize, dispatches: &[(Range<u32>, Band)]) -> Result<(), GpuError> {
+        let band = &self.bands[b];
+        let traced: Vec<Dispatch> = dispatches
+            .iter()
+            .map(|(samples, rows)| Dispatch {
+                group: &band.group,
+                samples: samples.clone(),
+                rows: *rows,
+                accum_y: band.band.y,
+            })
+            .collect();
+        let commands = self.encode("trace pass", &self.pipeline.pipeline, &traced);
         let start = Instant::now();
-        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.queue.submit([commands]);
         self.ctx.wait_first(&self.pipeline)?;
         let took = start.elapsed();
         let work: u64 = dispatches
