@@ -663,6 +663,47 @@ fn near_clip_is_the_cameras_and_far_clip_a_note() {
     assert!(e.contains("clip.xml:2:1") && e.contains("near_clip"), "{e}");
 }
 
+/// What Bitterli's living-room-2 writes: a mask's opacity as an <rgb>, read as a scalar
+/// by its luminance (Mitsuba's eval_1), and a rough conductor's eta and k with negative
+/// components (an exporter's artefact), taken by their magnitudes with a note: the
+/// Fresnel reflectance of eta + i k is that of its conjugate and of its negative.
+#[test]
+fn rgb_opacities_and_negative_conductor_indices_read_as_mitsuba_reads_them() {
+    let dir = scenes("mitsuba-rgb-scalars");
+    let path = dir.join("rgb-scalars.xml");
+    std::fs::write(
+        &path,
+        r#"<scene version="3.0.0">
+<sensor type="perspective"><float name="fov" value="40"/></sensor>
+<bsdf type="mask" id="shade"><rgb name="opacity" value="0.2, 0.5, 0.9"/><bsdf type="diffuse"/></bsdf>
+<bsdf type="roughconductor" id="knob"><float name="alpha" value="0.1"/>
+<rgb name="eta" value="-0.05, 4.1, 4.7"/><rgb name="k" value="-0.04, 0.09, 1.3"/></bsdf>
+<shape type="sphere"><ref id="shade"/></shape>
+<shape type="sphere"><point name="center" x="3" y="0" z="0"/><ref id="knob"/></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let set = wgtrace::scene::load::convert_mitsuba(&path, &[], &dir).unwrap();
+    let lum = 0.2126 * 0.2 + 0.7152 * 0.5 + 0.0722 * 0.9;
+    let opacity: f64 = set
+        .toml
+        .lines()
+        .find_map(|l| l.strip_prefix("opacity = "))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{}", set.toml));
+    assert!((opacity - lum).abs() < 1e-6, "{opacity} against {lum}");
+    assert!(set.toml.contains("eta = [0.05, 4.1, 4.7]"), "{}", set.toml);
+    assert!(set.toml.contains("k = [0.04, 0.09, 1.3]"), "{}", set.toml);
+    assert!(
+        set.notes
+            .iter()
+            .any(|n| n.contains("5:1") && n.contains("`eta` has negative")),
+        "{:?}",
+        set.notes
+    );
+    wgtrace::load_scene(&path, &Overrides::default()).unwrap();
+}
+
 /// `wgtrace convert` of the scene file at `path`, as a user runs it: the TOML written
 /// beside it (replacing one there).
 fn converted(path: &Path) -> String {

@@ -349,6 +349,30 @@ impl<'a> Importer<'a> {
         Ok(v)
     }
 
+    /// A conductor's `eta` or `k` with each component's sign dropped, with a note where one
+    /// was negative (an exporter's artefact): the Fresnel reflectance of eta + i k is that
+    /// of its conjugate and of its negative, so Mitsuba's image is the same.
+    fn magnitudes(&mut self, o: &Object, name: &str, v: T) -> T {
+        let negative = |x: &T| x.as_float().is_some_and(|f| f < 0.0);
+        let any = match &v {
+            T::Array(a) => a.iter().any(negative),
+            x => negative(x),
+        };
+        if !any {
+            return v;
+        }
+        self.notes.push(format!(
+            "{}: {}: `{name}` has negative components, taken by their magnitude (the same Fresnel reflectance)",
+            self.at(o.get(name).map_or(&o.pos, |p| &p.pos)),
+            what(o)
+        ));
+        let abs = |x: &T| x.as_float().map_or(x.clone(), |f| float(f.abs()));
+        match &v {
+            T::Array(a) => T::Array(a.iter().map(abs).collect()),
+            x => abs(x),
+        }
+    }
+
     /// A scalar-or-texture value (wgtrace reads a texture's luminance).
     fn scalar(&mut self, o: &Object, name: &str) -> Result<Option<T>> {
         let Some(p) = o.get(name) else {
@@ -364,9 +388,14 @@ impl<'a> Importer<'a> {
             }
             Value::Object(i) => self.scalar_texture(*i).map(|n| Some(T::String(n))),
             Value::Spectrum(Spectrum::Uniform(v)) => Ok(Some(float(*v))),
+            // an <rgb> read as a scalar: its luminance, as Mitsuba's eval_1 of it
+            Value::Rgb(c) => Ok(Some(float(0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z))),
             _ => err(
                 &p.pos,
-                format!("{}: `{name}` must be a float or a texture", what(o)),
+                format!(
+                    "{}: `{name}` must be a float, a colour or a texture",
+                    what(o)
+                ),
             ),
         }
     }
@@ -1226,8 +1255,8 @@ impl<'a> Importer<'a> {
                     (None, true) => {
                         let eta = self.color_const(o, "eta", 0.0, Use::Unbounded)?;
                         let k = self.color_const(o, "k", 1.0, Use::Unbounded)?;
-                        t.insert("eta".into(), eta);
-                        t.insert("k".into(), k);
+                        t.insert("eta".into(), self.magnitudes(o, "eta", eta));
+                        t.insert("k".into(), self.magnitudes(o, "k", k));
                     }
                 }
                 if o.get("specular_reflectance").is_some() {
