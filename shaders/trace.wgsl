@@ -419,6 +419,10 @@ fn main(
             if (params.splat != 0u) {
                 samples[splat_slot(pixel, sample)] = splat_record(c, finite, jitter);
                 sum2.w += select(1.0, 0.0, finite);
+#ifdef HAS_LANE_STATS
+                // the lane statistics count samples here; their gather adds nothing
+                sum.w += select(0.0, 1.0, finite);
+#endif
             } else {
 #endif
             if (finite) {
@@ -490,10 +494,18 @@ fn splat_slot(pixel: u32, sample: u32) -> u32 {
 }
 
 // A sample as the sample buffer holds it: its colour's bits (SPLAT_DROPPED in .x when not
-// finite) and its position in the pixel as two 16-bit fixed-point numbers in .w.
+// finite) and its position in the pixel as two 16-bit fixed-point numbers in .w, x in the
+// low half: floor(65536 p), exact on every backend (pack2x16unorm's rounding of ties is
+// the driver's).
 fn splat_record(c: vec3<f32>, finite: bool, jitter: vec2<f32>) -> vec4<u32> {
     let bits = select(vec3<u32>(SPLAT_DROPPED, 0u, 0u), bitcast<vec3<u32>>(c), finite);
-    return vec4<u32>(bits, pack2x16unorm(jitter));
+    let q = min(vec2<u32>(jitter * 65536.0), vec2<u32>(65535u));
+    return vec4<u32>(bits, q.x | (q.y << 16u));
+}
+
+// The position in its pixel a splat_record holds: the middle of its 1/65536 step.
+fn splat_position(packed: u32) -> vec2<f32> {
+    return (vec2<f32>(f32(packed & 0xffffu), f32(packed >> 16u)) + 0.5) / 65536.0;
 }
 
 // 8 x 8 invocations, one per pixel of the band: the samples of the dispatch `main` just
@@ -505,6 +517,10 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= params.band_width || gid.y >= params.band_height) {
         return;
     }
+#ifdef HAS_LANE_STATS
+    // the sums hold the lane statistics
+    return;
+#endif
     let x = params.band_x + gid.x;
     let y = params.band_y + gid.y;
     let slot = (y - params.accum_y) * params.band_width + gid.x;
@@ -533,7 +549,7 @@ fn gather(@builtin(global_invocation_id) gid: vec3<u32>) {
                 if (r.x == SPLAT_DROPPED) {
                     continue;
                 }
-                let at_pos = unpack2x16unorm(r.w);
+                let at_pos = splat_position(r.w);
                 let w = splat_weight(0.5 - at_pos.x - f32(dx)) * splat_weight(0.5 - at_pos.y - f32(dy));
                 let c = bitcast<vec3<f32>>(r.xyz);
                 sum += vec4<f32>(w * c, w);

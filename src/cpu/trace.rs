@@ -465,15 +465,24 @@ pub fn accumulate_aovs(aovs: &mut [[f32; 4]], path: &Path, splat: bool) {
 
 /// A sample as the splat sample buffer holds it (trace.wgsl's `splat_record`): its
 /// colour's bits (`SPLAT_DROPPED` first when it or its square is not finite) and its
-/// position in the pixel as two 16-bit fixed-point numbers (WGSL's `pack2x16unorm`).
+/// position in the pixel as two 16-bit fixed-point numbers, floor(65536 p).
 pub fn splat_record(c: Vec3, jitter: [f32; 2]) -> [u32; 4] {
-    let unorm = |v: f32| ((v.clamp(0.0, 1.0) * 65535.0).round() as u32) & 0xffff;
-    let packed = unorm(jitter[0]) | (unorm(jitter[1]) << 16);
+    // as WGSL's u32(f32): toward zero, negatives to 0
+    let fixed = |v: f32| ((v * 65536.0) as u32).min(65535);
+    let packed = fixed(jitter[0]) | (fixed(jitter[1]) << 16);
     if all_finite(c) && all_finite(c * c) {
         [c.x.to_bits(), c.y.to_bits(), c.z.to_bits(), packed]
     } else {
         [SPLAT_DROPPED, 0, 0, packed]
     }
+}
+
+/// The position in its pixel a [`splat_record`] holds (trace.wgsl's `splat_position`).
+pub fn splat_position(packed: u32) -> [f32; 2] {
+    [
+        ((packed & 0xffff) as f32 + 0.5) / 65536.0,
+        ((packed >> 16) as f32 + 0.5) / 65536.0,
+    ]
 }
 
 /// trace.wgsl's `gather` for pixel (x, y): every sample (`sample_at` a pixel: the pass's
@@ -503,10 +512,7 @@ pub fn gather(
             if r[0] == SPLAT_DROPPED {
                 continue;
             }
-            let at = [
-                (r[3] & 0xffff) as f32 / 65535.0,
-                (r[3] >> 16) as f32 / 65535.0,
-            ];
+            let at = splat_position(r[3]);
             let w =
                 splat_weight(p, 0.5 - at[0] - dx as f32) * splat_weight(p, 0.5 - at[1] - dy as f32);
             let c = Vec3::new(
