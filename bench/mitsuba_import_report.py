@@ -140,27 +140,11 @@ for path in files:
     print(rows[-1])
 
 # why a file differs, where it is known
-TABLE = ("Mitsuba's film weighs its samples by a table of its Gaussian's values in 31 steps over the "
-         "radius, which wgtrace samples too since its importer writes `filter_steps = 31` (without it "
-         "this file read 98.11% for texture_interp, 96.40% and 97.08% for the projectors). What is "
-         "left is the Gaussian's reconstruction: with a box filter instead (the files otherwise the "
-         "same) all four files agree, 100.00% of pixels. Mitsuba splats every sample over the pixels "
-         "its filter reaches; wgtrace draws each pixel's samples from the filter, so a pixel that "
-         "only the filter's last steps carry across an edge sees the other side as a rare sample. "
-         "In texture_interp a pixel of the gap between two rectangles reads 0 at 16 x 64 spp (no "
-         "variance, so the z-test refuses it), 7.1e-5 at 65,536 spp, where Mitsuba reads 4.8e-5.")
 MASK = ("every pixel outside the bound is on the two masked rectangles, lit before a black "
         "background, where Mitsuba 3.9.1's `path` integrator gives a mask's opacity squared and "
         "its own `direct` and `volpath` give the opacity, as wgtrace does "
         "(docs/bench/mitsuba-mask-integrators.md); rendered by Mitsuba's `volpath`, the file "
         "agrees with wgtrace (99.98% for test_pointlight, 99.99% for test_arealight).")
-FILTER = ("Mitsuba's film weighs its samples by a table of each filter's values in 31 steps over the "
-          "radius, which wgtrace samples too (`filter_steps = 31`). What is left is the reconstruction: "
-          "Mitsuba splats every sample over the pixels its filter reaches; wgtrace draws each pixel's "
-          "samples from the filter, so a pixel that only the filter's last steps carry across the "
-          "emitter's edge sees the other side as a rare sample, here mostly never (no variance on "
-          "wgtrace's side, which the z-test refuses). So in Mitsuba's own texture_interp and projector "
-          "scenes, which agree with a box filter (docs/bench/mitsuba-own-scenes.md).")
 MASKED_SPHERE = ("every pixel outside the bound (63 pixels and channels at 16 x 128 spp) is on the "
                  "masked sphere, front row right, lit by the point light and the sky: Mitsuba 3.9.1's "
                  "`path` darkens a mask as in test_pointlight and test_arealight "
@@ -168,14 +152,9 @@ MASKED_SPHERE = ("every pixel outside the bound (63 pixels and channels at 16 x 
                  "sphere agrees, and the differing pixels move to the rough and thin glass spheres "
                  "instead, where the two Mitsuba integrators differ from each other.")
 WHY = {
-    "bench/filter.xml": FILTER,
     "tests/mitsuba/materials.xml": MASKED_SPHERE,
     "scenes/bsdf_spheres/test_pointlight.xml": MASK,
     "scenes/bsdf_spheres/test_arealight.xml": MASK,
-    "scenes/texture_interp/test_texture_interp.xml": TABLE,
-    "scenes/texture_interp/test_texture_interp_direct.xml": TABLE,
-    "scenes/projector/test_projector_constant_direct.xml": TABLE,
-    "scenes/projector/test_projector_textured_direct.xml": TABLE,
 }
 agree = sum("agrees" in r for r in rows)
 STANDINS = """

@@ -100,8 +100,8 @@ pub struct RenderDesc {
     /// The Gaussian's standard deviation in pixels (default 0.5, Mitsuba's and pbrt's).
     pub filter_stddev: Option<f32>,
     /// The tent or Gaussian as a step function of this many steps over [0, radius], each
-    /// step the filter's value at its inner end (Mitsuba 3's film weighs its samples by
-    /// such a table of 31 steps); none: the filter itself.
+    /// step the filter's value at its inner end (Mitsuba 3's scalar variants weigh their
+    /// samples by such a table of 31 steps); none: the filter itself.
     pub filter_steps: Option<u32>,
     /// How the filter weighs samples: each pixel's own samples drawn from it
     /// (`importance`), or every sample weighed into the pixels its filter reaches

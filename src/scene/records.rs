@@ -72,7 +72,8 @@ shared_constants! {
     /// rgb, samples dropped as not finite).
     ACCUM_ENTRIES: u32 = 2;
     /// Entries per pixel with AOVs (`HAS_AOVS`): the two above, then (albedo rgb, depth),
-    /// (normal xyz, 0), (position xyz, 0), each summed over every sample.
+    /// (normal xyz, 0; a splat render's sample count), (position xyz, 0), each summed over
+    /// every sample of the pixel.
     ACCUM_ENTRIES_AOVS: u32 = 5;
 
     /// Size of the BVH traversal stack in `intersect.wgsl`: an entry per ancestor of the
@@ -184,7 +185,7 @@ shared_constants! {
     SAMPLER_HAMMERSLEY: u32 = 2;
     SAMPLER_SOBOL: u32 = 3;
 
-    /// Pixel filters (`Params::pixel_filter`), sampled by filter importance sampling.
+    /// Pixel filters (`Params::pixel_filter`): drawn from, or splat weights.
     FILTER_BOX: u32 = 0;
     FILTER_TENT: u32 = 1;
     FILTER_GAUSSIAN: u32 = 2;
