@@ -92,6 +92,39 @@ QUAD_PLY = ("ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty
             "-1 -1 0 0 0 1 0 0\n1 -1 0 0 0 1 1 0\n1 1 0 0 0 1 1 1\n-1 1 0 0 0 1 0 1\n"
             "3 0 1 2\n3 0 2 3\n")
 
+# the PLY octahedron of mesh-attributes.xml: Mitsuba's write_ply names (colour per vertex,
+# colour and weight per face)
+ATTRIBUTES_PLY = ('ply\n'
+                  'format ascii 1.0\n'
+                  'element vertex 6\n'
+                  'property float x\n'
+                  'property float y\n'
+                  'property float z\n'
+                  'property float color_0\n'
+                  'property float color_1\n'
+                  'property float color_2\n'
+                  'element face 8\n'
+                  'property list uchar int vertex_indices\n'
+                  'property float color_0\n'
+                  'property float color_1\n'
+                  'property float color_2\n'
+                  'property float weight_0\n'
+                  'end_header\n'
+                  '1 0 0 0.9 0.2 0.1\n'
+                  '-1 0 0 0.1 0.8 0.2\n'
+                  '0 1 0 0.2 0.3 0.9\n'
+                  '0 -1 0 0.9 0.9 0.1\n'
+                  '0 0 1 0.5 0.5 0.5\n'
+                  '0 0 -1 0.1 0.1 0.1\n'
+                  '3 0 2 4 0.8 0.1 0.1 0\n'
+                  '3 2 1 4 0.1 0.7 0.1 0.25\n'
+                  '3 1 3 4 0.1 0.2 0.8 0.5\n'
+                  '3 3 0 4 0.7 0.7 0.1 0.75\n'
+                  '3 2 0 5 0.1 0.6 0.6 1\n'
+                  '3 1 2 5 0.6 0.1 0.6 0.1\n'
+                  '3 3 1 5 0.9 0.5 0.2 0.6\n'
+                  '3 0 3 5 0.3 0.3 0.3 0.9\n')
+
 
 def write_assets(folder, write_exr):
     """Writes the assets under folder/generated; write_exr(path, float32 array) writes EXR."""
@@ -105,6 +138,8 @@ def write_assets(folder, write_exr):
         f.write(serialized(QUADS))
     with open(os.path.join(folder, "generated", "quad.ply"), "w") as f:
         f.write(QUAD_PLY)
+    with open(os.path.join(folder, "generated", "attributes.ply"), "w") as f:
+        f.write(ATTRIBUTES_PLY)
     with open(os.path.join(folder, "generated", "octahedron.obj"), "w") as f:
         f.write("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n")
         f.write("vn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\n")

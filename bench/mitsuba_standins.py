@@ -11,7 +11,8 @@ where Mitsuba looks first (the scene's latest `<path>` folder, else the scene's 
   CRC-32 puts it in [-1.2, 1.2]^3, so that no two such meshes coincide (which would leave
   each renderer's choice between their materials to rounding); each with normals and uv;
 - ASCII PLY: the rectangle with normals and uv ("rectangle"), a sphere with a colour per
-  vertex and one per face ("attribute"), any other name the placed sphere of an OBJ;
+  vertex, one per face and a weight per face ("attribute"), any other name the placed
+  sphere of an OBJ;
   `.serialized`: 8 shapes (for any `shape_index`), each the rectangle ("rectangle") or
   a placed sphere (positions; each shape placed by the name and its index);
 - PNG/JPG/BMP: a 64 x 64 pattern of colour gradients and checks (names with "normalmap": a
@@ -115,11 +116,10 @@ def quad_ply():
 
 
 def attribute_sphere_ply():
-    """A UV sphere of radius 1 as ASCII PLY with the attributes Mitsuba's reader names
-    `vertex_color` and `face_color` (float r, g, b per vertex and per face, the face's
-    before its indices, as that reader wants them; triangles only, none degenerate: one
-    vertex at each pole). Mitsuba reads no one-channel attribute without a postfix, so a
-    scene's `face_weight` is left out."""
+    """A UV sphere of radius 1 as ASCII PLY with the attributes `vertex_color`,
+    `face_color` and `face_weight`, named as Mitsuba's `Mesh.write_ply` names them (float
+    `color_0`, `color_1`, `color_2` per vertex and per face, and `weight_0` per face, after
+    the face's indices; triangles only, none degenerate: one vertex at each pole)."""
     rings, segs = 12, 24
     points = [(0.0, 0.0, 1.0)]
     for i in range(1, rings):
@@ -135,14 +135,13 @@ def attribute_sphere_ply():
             tris += [(a, b, c), (a, c, d)]
     tris += [(ring(rings - 1, j), len(points) - 1, ring(rings - 1, j + 1)) for j in range(segs)]
     verts = ["%.6f %.6f %.6f %.6f %.6f %.6f" % (p + tuple(0.5 + 0.5 * a for a in p)) for p in points]
-    faces = ["%.4f %.4f %.4f 3 %d %d %d" % (((n * 7) % 5 / 4, (n * 3) % 4 / 3, n % 2) + t)
+    faces = ["3 %d %d %d %.4f %.4f %.4f %.4f" % (t + ((n * 7) % 5 / 4, (n * 3) % 4 / 3, n % 2, (n * 5) % 7 / 6))
              for n, t in enumerate(tris)]
+    color = ["property float color_0", "property float color_1", "property float color_2"]
     head = ["ply", "format ascii 1.0", f"element vertex {len(verts)}",
-            "property float x", "property float y", "property float z",
-            "property float r", "property float g", "property float b",
-            f"element face {len(faces)}",
-            "property float r", "property float g", "property float b",
-            "property list uchar int vertex_indices", "end_header"]
+            "property float x", "property float y", "property float z", *color,
+            f"element face {len(faces)}", "property list uchar int vertex_indices", *color,
+            "property float weight_0", "end_header"]
     return "\n".join(head + verts + faces) + "\n"
 
 

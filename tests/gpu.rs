@@ -628,7 +628,10 @@ material = "d"
 /// of `vertex_color` shows (1, 1, 0), not its square; an albedo of 0.5 is tinted by them
 /// as before, (0.5, 0.5, 0). With face colours, red and blue, `face_color` shows each
 /// face's colour, constant over it: every pixel is red or blue, and both occur. A file
-/// with both gives each material the set it reads.
+/// with both gives each material the set it reads. Named as Mitsuba writes them (`color_0`,
+/// `color_1`, `color_2`, and a face `weight_0`, its `face_weight`), the colours read the
+/// same, and a blend of a red and a blue material weighed by `face_weight` (0 and 1) shows
+/// each face's part untinted by the weights.
 #[test]
 fn mesh_attributes_read_vertex_and_face_colours() {
     let dir = common::tmp_dir("mesh-attribute");
@@ -653,10 +656,23 @@ fn mesh_attributes_read_vertex_and_face_colours() {
     let both_ply = header(true, true)
         + &corners.map(|c| format!("{c} 255 255 0\n")).concat()
         + "3 0 3 2 255 0 0\n3 0 2 1 0 0 255\n";
+    let color = "property float color_0\nproperty float color_1\nproperty float color_2\n";
+    let named_ply = format!(
+        "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+         property float z\n{color}element face 2\nproperty list uchar int vertex_indices\n\
+         {color}property float weight_0\nend_header\n"
+    ) + &corners.map(|c| format!("{c} 1 1 0\n")).concat()
+        + "3 0 3 2 1 0 0 0\n3 0 2 1 0 0 1 1\n";
+    std::fs::write(dir.join("named.ply"), named_ply).unwrap();
     std::fs::write(dir.join("vertex.ply"), vertex_ply).unwrap();
     std::fs::write(dir.join("face.ply"), face_ply).unwrap();
     std::fs::write(dir.join("both.ply"), both_ply).unwrap();
     let src = |mesh: &str, albedo: &str| {
+        let material = if albedo == "blend" {
+            r#"{ type = "blend", first = "red", second = "blue", weight = "fw" }"#.to_string()
+        } else {
+            format!("{{ type = \"lambertian\", albedo = {albedo} }}")
+        };
         format!(
             r#"
 [render]
@@ -674,8 +690,11 @@ color = [1, 1, 1]
 [textures]
 vc = {{ type = "mesh_attribute", name = "vertex_color" }}
 fc = {{ type = "mesh_attribute", name = "face_color" }}
+fw = {{ type = "mesh_attribute", name = "face_weight" }}
 [materials]
-m = {{ type = "lambertian", albedo = {albedo} }}
+m = {material}
+red = {{ type = "lambertian", albedo = [1, 0, 0] }}
+blue = {{ type = "lambertian", albedo = [0, 0, 1] }}
 [[objects]]
 type = "mesh"
 path = "{mesh}"
@@ -691,6 +710,7 @@ material = "m"
         ("vertex.ply", "\"vc\"", [1.0f32, 1.0, 0.0]),
         ("vertex.ply", "[0.5, 0.5, 0.5]", [0.5, 0.5, 0.0]),
         ("both.ply", "\"vc\"", [1.0, 1.0, 0.0]),
+        ("named.ply", "\"vc\"", [1.0, 1.0, 0.0]),
     ] {
         let s = load(src(mesh, albedo));
         for (name, img) in [("gpu", render_gpu(&s)), ("cpu", render_cpu(&s))] {
@@ -705,11 +725,17 @@ material = "m"
             );
         }
     }
-    for (name, img) in ["face.ply", "both.ply"].into_iter().flat_map(|mesh| {
-        let s = load(src(mesh, "\"fc\""));
+    let cases = [
+        ("face.ply", "\"fc\""),
+        ("both.ply", "\"fc\""),
+        ("named.ply", "\"fc\""),
+        ("named.ply", "blend"),
+    ];
+    for (name, img) in cases.into_iter().flat_map(|(mesh, albedo)| {
+        let s = load(src(mesh, albedo));
         [
-            (format!("{mesh}, gpu"), render_gpu(&s)),
-            (format!("{mesh}, cpu"), render_cpu(&s)),
+            (format!("{mesh}, {albedo}, gpu"), render_gpu(&s)),
+            (format!("{mesh}, {albedo}, cpu"), render_cpu(&s)),
         ]
     }) {
         let is = |i: usize, c: [f32; 3]| (0..3).all(|k| (img.mean(i)[k] - c[k]).abs() <= 1e-5);

@@ -1422,10 +1422,15 @@ fn mesh_attributes_are_validated() {
             .unwrap_err()
             .to_string()
     };
-    let e = err("a = { type = \"mesh_attribute\", name = \"vertex_normal\" }");
+    let e = err("a = { type = \"mesh_attribute\", name = \"face_\" }");
+    assert!(
+        e.contains("textures.a.name: unknown mesh attribute \"face_\""),
+        "{e}"
+    );
+    let e = err("a = { type = \"mesh_attribute\", name = \"corner_color\" }");
     assert!(
         e.contains("bad.toml:5:")
-            && e.contains("textures.a.name: unknown mesh attribute \"vertex_normal\" (known: vertex_color, face_color)"),
+            && e.contains("textures.a.name: unknown mesh attribute \"corner_color\" (known: vertex_color, face_color, or a PLY file's vertex_NAME or face_NAME)"),
         "{e}"
     );
     let e = err("a = { type = \"mesh_attribute\", name = \"face_color\" }\nc = { type = \"checker\", even = \"a\", odd = [0, 0, 0] }");
@@ -1433,6 +1438,62 @@ fn mesh_attributes_are_validated() {
         e.contains("bad.toml:6:") && e.contains("textures.c.even: \"a\" is a mesh attribute"),
         "{e}"
     );
+}
+
+/// A PLY file's named attributes are found by Mitsuba's names or refused with the file,
+/// the key and the attributes the element has: one that is missing, one of two channels,
+/// one asked of an OBJ file, and a material that reads two.
+#[test]
+fn named_mesh_attributes_are_found_or_refused_by_name() {
+    let dir = common::tmp_dir("named-attributes");
+    std::fs::write(
+        dir.join("a.ply"),
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n\
+         property float z\nproperty float uv_0\nproperty float uv_1\nelement face 1\n\
+         property list uchar int vertex_indices\nproperty uchar tint_r\nproperty uchar tint_g\n\
+         property uchar tint_b\nproperty float weight_x\nend_header\n\
+         0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n3 0 1 2 255 0 0 0.5\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("a.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n").unwrap();
+    let load = |mesh: &str, albedo: &str, weight: &str| {
+        let src = format!(
+            "[camera]\nlook_from = [0, 0, 5]\nlook_at = [0, 0, 0]\n[textures]\n\
+             a = {{ type = \"mesh_attribute\", name = \"{albedo}\" }}\n\
+             w = {{ type = \"mesh_attribute\", name = \"{weight}\" }}\n[materials]\n\
+             p = {{ type = \"lambertian\", albedo = \"a\" }}\nq = {{ type = \"lambertian\", albedo = [1, 1, 1] }}\n\
+             m = {{ type = \"blend\", first = \"p\", second = \"q\", weight = \"w\" }}\n\
+             [[objects]]\ntype = \"mesh\"\npath = \"{mesh}\"\nmaterial = \"m\"\n"
+        );
+        wgtrace::load_scene_str(&src, &dir.join("s.toml"), &Default::default())
+            .map(|_| ())
+            .map_err(|e| e.to_string())
+    };
+    // found: three channels named _r _g _b (`face_tint_color`), one named _x
+    load("a.ply", "face_tint_color", "face_tint_color").unwrap();
+    load("a.ply", "face_weight", "face_weight").unwrap();
+    let e = load("a.ply", "face_tint", "face_tint").unwrap_err();
+    assert!(
+        e.contains("s.toml:") && e.contains("objects[0].path") && e.contains("a.ply")
+            && e.contains("has no face attribute \"face_tint\" (its face attributes: face_tint_color, face_weight)"),
+        "{e}"
+    );
+    let e = load("a.ply", "vertex_uv", "vertex_uv").unwrap_err();
+    assert!(
+        e.contains("has the vertex attribute \"vertex_uv\" with 2 channels"),
+        "{e}"
+    );
+    let e = load("a.obj", "face_weight", "face_weight").unwrap_err();
+    assert!(
+        e.contains("reads the mesh attribute face_weight, which only a PLY file names"),
+        "{e}"
+    );
+    let e = load("a.ply", "face_tint_color", "face_weight").unwrap_err();
+    assert!(
+        e.contains("reads the mesh attributes face_tint_color and face_weight"),
+        "{e}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 /// Mitsuba's principled BSDF is not energy-conserving (its diffuse retro-reflection,

@@ -111,6 +111,40 @@ fn quads() -> Vec<u8> {
     ])
 }
 
+/// The PLY octahedron of mesh-attributes.xml (as bench/mitsuba_assets.py writes it), its
+/// attributes named as Mitsuba's `write_ply` names them: a colour per vertex (`color_0`,
+/// `color_1`, `color_2`), a colour and a weight (`weight_0`) per face.
+const ATTRIBUTES_PLY: &str = "ply\n\
+    format ascii 1.0\n\
+    element vertex 6\n\
+    property float x\n\
+    property float y\n\
+    property float z\n\
+    property float color_0\n\
+    property float color_1\n\
+    property float color_2\n\
+    element face 8\n\
+    property list uchar int vertex_indices\n\
+    property float color_0\n\
+    property float color_1\n\
+    property float color_2\n\
+    property float weight_0\n\
+    end_header\n\
+    1 0 0 0.9 0.2 0.1\n\
+    -1 0 0 0.1 0.8 0.2\n\
+    0 1 0 0.2 0.3 0.9\n\
+    0 -1 0 0.9 0.9 0.1\n\
+    0 0 1 0.5 0.5 0.5\n\
+    0 0 -1 0.1 0.1 0.1\n\
+    3 0 2 4 0.8 0.1 0.1 0\n\
+    3 2 1 4 0.1 0.7 0.1 0.25\n\
+    3 1 3 4 0.1 0.2 0.8 0.5\n\
+    3 3 0 4 0.7 0.7 0.1 0.75\n\
+    3 2 0 5 0.1 0.6 0.6 1\n\
+    3 1 2 5 0.6 0.1 0.6 0.1\n\
+    3 3 1 5 0.9 0.5 0.2 0.6\n\
+    3 0 3 5 0.3 0.3 0.3 0.9\n";
+
 /// The PLY quad of mesh-uvs.xml (as bench/mitsuba_assets.py writes it): the same square
 /// with normals +z and the same uvs.
 const QUAD_PLY: &str = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n\
@@ -159,6 +193,7 @@ fn scenes(name: &str) -> PathBuf {
     std::fs::write(generated.join("octahedron.obj"), octahedron()).unwrap();
     std::fs::write(generated.join("quads.serialized"), quads()).unwrap();
     std::fs::write(generated.join("quad.ply"), QUAD_PLY).unwrap();
+    std::fs::write(generated.join("attributes.ply"), ATTRIBUTES_PLY).unwrap();
     dir
 }
 
@@ -326,6 +361,13 @@ fn checkerboards_read_as_scalars_agree_with_mitsuba() {
 #[test]
 fn glass_tinted_apart_and_splatted_samples_agree_with_mitsuba() {
     agrees_with_mitsuba("glass-tints", 256);
+}
+
+/// PLY attributes named as Mitsuba writes them (face_weight as a blend's weight,
+/// face_color, vertex_color), under a splatting Gaussian film.
+#[test]
+fn mesh_attributes_agree_with_mitsuba() {
+    agrees_with_mitsuba("mesh-attributes", 64);
 }
 
 #[test]

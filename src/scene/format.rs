@@ -492,16 +492,26 @@ pub enum TextureDesc {
     },
     /// A mesh's own colours at the hit (Mitsuba's `mesh_attribute`): `vertex_color`, its
     /// vertex colours interpolated, or `face_color`, its faces' colours (a PLY file's face
-    /// `red`, `green`, `blue`); white where the surface has none. A material that reads one
-    /// is not also tinted by the vertex colours.
+    /// `red`, `green`, `blue`), or a PLY file's named attribute, `vertex_NAME` or
+    /// `face_NAME` ([`is_mesh_attribute`]); white where the surface has none. A material
+    /// that reads one is not also tinted by the vertex colours.
     #[serde(rename = "mesh_attribute")]
     MeshAttribute {
         name: String,
     },
 }
 
-/// The names a `mesh_attribute` texture may take.
+/// The colours every mesh file may have, as a `mesh_attribute` texture names them.
 pub const MESH_ATTRIBUTES: [&str; 2] = ["vertex_color", "face_color"];
+
+/// Whether `name` may name a mesh attribute: one of [`MESH_ATTRIBUTES`], or a PLY file's
+/// named vertex or face attribute, `vertex_NAME` or `face_NAME`.
+pub fn is_mesh_attribute(name: &str) -> bool {
+    MESH_ATTRIBUTES.contains(&name)
+        || ["vertex_", "face_"]
+            .iter()
+            .any(|p| name.strip_prefix(p).is_some_and(|rest| !rest.is_empty()))
+}
 
 fn ten() -> f32 {
     10.0

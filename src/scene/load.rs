@@ -14,7 +14,7 @@ use super::flat::FlatScene;
 use super::flatten::{self, Build, FlattenError, SceneFiles};
 use super::format::{
     BackgroundDesc, CameraDesc, ColorSpace, FilterKind, LightSampling, ObjectDesc, Projection,
-    RenderDesc, SamplerKind, SceneFile, TextureDesc,
+    RenderDesc, SamplerKind, SceneFile, TextureDesc, MESH_ATTRIBUTES,
 };
 use super::gltf::{self, GltfError};
 use super::imported::ImportedScene;
@@ -506,17 +506,26 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
                 obj.span().start,
                 format!("{}.path", file.object_key(i)),
                 |p| {
-                    let reads = |attribute: &str| reads_attribute(file, material, attribute);
-                    let faces = reads("face_color");
-                    if faces && reads("vertex_color") {
+                    let read = attributes_read(file, material);
+                    if let [a, b, ..] = &read[..] {
                         return Err(format!(
-                            "material \"{material}\" reads both face_color and vertex_color; \
-                             a mesh keeps one of its file's colour sets"
+                            "material \"{material}\" reads the mesh attributes {a} and {b}; \
+                             a mesh keeps one of its file's attributes as its colours"
+                        ));
+                    }
+                    let named = read
+                        .first()
+                        .filter(|a| !MESH_ATTRIBUTES.contains(&a.as_str()));
+                    if named.is_some() && !mesh::is_ply(p) {
+                        return Err(format!(
+                            "material \"{material}\" reads the mesh attribute {}, which only \
+                             a PLY file names",
+                            read[0]
                         ));
                     }
                     let colors = mesh::ColorChoice {
                         space: *color_space,
-                        faces,
+                        attribute: read.first().map(String::as_str),
                     };
                     if *flip_tex_coords && !mesh::is_ply(p) {
                         return Err("flip_tex_coords applies to PLY files (a .serialized \
@@ -598,15 +607,21 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
     }
 }
 
-/// Whether material `name` (or a part of it, for a blend) reads the mesh attribute
-/// `attribute` (`vertex_color`, `face_color`) through a `mesh_attribute` texture. The file
-/// is validated.
-fn reads_attribute(file: &SceneFile, name: &str, attribute: &str) -> bool {
-    reads_any(
-        file,
-        name,
-        |t| matches!(t, TextureDesc::MeshAttribute { name } if name == attribute),
-    )
+/// The mesh attributes (`vertex_color`, `face_color`, a PLY file's named ones) material
+/// `name` (or a part of it, for a blend) reads through `mesh_attribute` textures, each
+/// once, in the textures' order. The file is validated.
+fn attributes_read(file: &SceneFile, name: &str) -> Vec<String> {
+    let mut read: Vec<String> = Vec::new();
+    for t in file.textures.values() {
+        if let TextureDesc::MeshAttribute { name: a } = t.get_ref() {
+            let this =
+                |u: &TextureDesc| matches!(u, TextureDesc::MeshAttribute { name: b } if b == a);
+            if !read.contains(a) && reads_any(file, name, this) {
+                read.push(a.clone());
+            }
+        }
+    }
+    read
 }
 
 /// Whether material `name` (or a part of a blend) reads a texture other than a mesh

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::format::ColorSpace;
+use super::format::{ColorSpace, MESH_ATTRIBUTES};
 use super::texels::srgb_to_linear;
 use glam::{DVec2, DVec3, Vec2, Vec3, Vec4};
 use ply_rs_bw::parser::{Parser, Reader};
@@ -439,12 +439,13 @@ pub fn obj_colors(m: &tobj::Mesh, space: ColorSpace) -> Vec<Vec4> {
 
 /// Which of a mesh file's colours the mesh keeps, and how it reads them.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct ColorChoice {
+pub struct ColorChoice<'a> {
     /// How the colours become linear ones (`color_space`).
     pub space: ColorSpace,
-    /// A PLY file's face colours even where it has vertex colours (its material reads
-    /// `face_color`).
-    pub faces: bool,
+    /// The mesh attribute its material reads, if any: `face_color` keeps a PLY file's face
+    /// colours even where it has vertex colours; a named one (`vertex_NAME`, `face_NAME`)
+    /// becomes the mesh's colours in their place.
+    pub attribute: Option<&'a str>,
 }
 
 /// Every object of an OBJ file as one mesh (polygons are triangulated).
@@ -698,19 +699,40 @@ fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
         declares(element, &["red", "green", "blue"]) || declares(element, &["r", "g", "b"])
     };
     let vertex_colors = rgb("vertex");
-    let mut vertices = Vec::new();
-    let mut faces = Vec::new();
+    // a named attribute and its element: one not among the colours every reader knows,
+    // or one of those where the file names its colours as Mitsuba writes them (`color_0`,
+    // `color_1`, `color_2`), not `red`, `green`, `blue`
+    let named = colors
+        .attribute
+        .and_then(|a| a.split_once('_'))
+        .filter(|&(element, _)| {
+            !MESH_ATTRIBUTES.contains(&colors.attribute.unwrap_or_default()) || !rgb(element)
+        });
+    // the named attribute's columns among its element's scalar properties
+    // (a file without the colours a material reads is white, as any mesh without them)
+    let columns = match named {
+        Some((element, attribute)) => {
+            match attribute_columns(&header.elements[element], element, attribute) {
+                Ok(c) => Some(c),
+                Err(_) if MESH_ATTRIBUTES.contains(&colors.attribute.unwrap_or_default()) => None,
+                Err(e) => return Err(e),
+            }
+        }
+        None => None,
+    };
+    let keeps = |element: &str| columns.is_some() && named.is_some_and(|(e, _)| e == element);
+    let mut vertices: Vec<PlyVertex> = Vec::new();
+    let mut faces: Vec<PlyFace> = Vec::new();
+    let mut values = Vec::new();
     for (name, def) in &header.elements {
         match name.as_str() {
             "vertex" => {
-                vertices = Parser::<PlyVertex>::new()
-                    .read_payload_for_element(&mut reader, def, &header)
-                    .map_err(bad)?
+                (vertices, values) =
+                    read_element(&mut reader, def, &header, keeps("vertex"), values).map_err(bad)?
             }
             "face" => {
-                faces = Parser::<PlyFace>::new()
-                    .read_payload_for_element(&mut reader, def, &header)
-                    .map_err(bad)?
+                (faces, values) =
+                    read_element(&mut reader, def, &header, keeps("face"), values).map_err(bad)?
             }
             _ => {
                 Parser::<PlySkip>::new()
@@ -765,19 +787,168 @@ fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
     // face colours (Mitsuba's `face_color`), where there are no vertex colours or the
     // mesh asks for them: one per triangle of the face's fan, which `adjust` gives the
     // triangle's corners
-    if (colors.faces || !vertex_colors) && rgb("face") {
-        mesh.colors.clear();
-        mesh.face_colors = faces
+    let faces_read = colors.attribute == Some("face_color");
+    let fan = |colours: &mut dyn Iterator<Item = Vec4>| -> Vec<Vec4> {
+        faces
             .iter()
-            .flat_map(|f| {
-                std::iter::repeat_n(
-                    file_color(f.c, colors.space),
-                    f.indices.len().saturating_sub(2),
-                )
-            })
-            .collect();
+            .zip(colours)
+            .flat_map(|(f, c)| std::iter::repeat_n(c, f.indices.len().saturating_sub(2)))
+            .collect()
+    };
+    if (faces_read || !vertex_colors) && rgb("face") {
+        mesh.colors.clear();
+        mesh.face_colors = fan(&mut faces.iter().map(|f| file_color(f.c, colors.space)));
+    }
+    // a named attribute as the mesh's colours: one channel as grey, three as rgb, each
+    // as it is (integers over their type's largest value)
+    if let (Some((element, _)), Some((columns, stride))) = (named, columns) {
+        let colour = |v: &[f64]| {
+            let c = columns.iter().map(|&k| v[k] as f32).collect::<Vec<_>>();
+            match c[..] {
+                [w] => Vec4::new(w, w, w, 1.0),
+                [r, g, b] => Vec4::new(r, g, b, 1.0),
+                _ => unreachable!("attribute_columns gives one or three"),
+            }
+        };
+        let per_element = values.chunks_exact(stride);
+        mesh.colors.clear();
+        mesh.face_colors.clear();
+        if element == "vertex" {
+            mesh.colors = per_element.map(colour).collect();
+        } else {
+            mesh.face_colors = fan(&mut per_element.map(colour));
+        }
     }
     Ok(mesh)
+}
+
+/// The PLY element `element`'s records as `T` reads them and, when `keep`, the values of
+/// every scalar property of each, in the header's order, appended to `values` (for a named
+/// attribute; see [`attribute_columns`]).
+fn read_element<T: PropertyAccess>(
+    reader: &mut Reader<std::io::BufReader<std::fs::File>>,
+    def: &ply_rs_bw::ply::ElementDef,
+    header: &ply_rs_bw::ply::Header,
+    keep: bool,
+    mut values: Vec<f64>,
+) -> Result<(Vec<T>, Vec<f64>), ply_rs_bw::parser::ParseError> {
+    if !keep {
+        return Ok((
+            Parser::<T>::new().read_payload_for_element(reader, def, header)?,
+            values,
+        ));
+    }
+    let records = Parser::<WithValues<T>>::new().read_payload_for_element(reader, def, header)?;
+    let mut out = Vec::with_capacity(records.len());
+    for r in records {
+        values.extend(r.values);
+        out.push(r.inner);
+    }
+    Ok((out, values))
+}
+
+/// A PLY record as `T` reads it, with the value of each of its scalar properties kept
+/// ([`ply_value`]), in the order the parser gives them: the header's.
+struct WithValues<T> {
+    inner: T,
+    values: Vec<f64>,
+}
+
+impl<T: PropertyAccess> PropertyAccess for WithValues<T> {
+    fn new() -> Self {
+        WithValues {
+            inner: T::new(),
+            values: Vec::new(),
+        }
+    }
+
+    fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        if let Some(v) = ply_value(&property) {
+            self.values.push(v);
+        }
+        self.inner.set_property(name, property)
+    }
+}
+
+/// A scalar property's value as an attribute's: an integer over its type's largest value
+/// (Mitsuba's normalized integers), a float as it is; None for a list.
+fn ply_value(p: &Property) -> Option<f64> {
+    Some(match *p {
+        Property::Char(v) => f64::from(v) / f64::from(i8::MAX),
+        Property::Short(v) => f64::from(v) / f64::from(i16::MAX),
+        Property::Int(v) => f64::from(v) / f64::from(i32::MAX),
+        _ => return ply_unit(p),
+    })
+}
+
+/// Where a PLY element's named attribute lies among its scalar properties, as Mitsuba 3's
+/// PLY reader names attributes: consecutive properties `P_x`, `P_y`, `P_z` (or `_0 _1 _2`,
+/// `_1 _2 _3`; one to three of them) are the attribute `P`, and `P_r`, `P_g`, `P_b` the
+/// attribute `P_color`. One channel or three are read; anything else is an error listing
+/// the attributes the element has. Also gives the count of scalar properties (at least 1).
+fn attribute_columns(
+    def: &ply_rs_bw::ply::ElementDef,
+    element: &str,
+    attribute: &str,
+) -> Result<(Vec<usize>, usize), String> {
+    const SERIES: [&str; 4] = ["xyzw", "rgba", "0123", "1234"];
+    let scalars: Vec<&str> = def
+        .properties
+        .values()
+        .filter(|p| matches!(p.data_type, ply_rs_bw::ply::PropertyType::Scalar(_)))
+        .map(|p| p.name.as_str())
+        .collect();
+    // (name, columns) of each attribute, in order
+    let mut found: Vec<(String, Vec<usize>)> = Vec::new();
+    let mut open: Option<(&str, usize, Vec<usize>)> = None; // (prefix, series, columns)
+    for (k, name) in scalars.iter().enumerate() {
+        let split = name
+            .rsplit_once('_')
+            .filter(|(p, s)| !p.is_empty() && s.chars().count() == 1);
+        if let (Some((prefix, s)), Some((open_prefix, series, columns))) = (split, &mut open) {
+            let next = SERIES[*series].chars().nth(columns.len());
+            if prefix == *open_prefix && next == s.chars().next() {
+                columns.push(k);
+                continue;
+            }
+        }
+        if let Some((prefix, series, columns)) = open.take() {
+            let suffix = if series == 1 { "_color" } else { "" };
+            found.push((format!("{prefix}{suffix}"), columns));
+        }
+        if let Some((prefix, s)) = split {
+            let c = s.chars().next();
+            if let Some(series) = SERIES.iter().position(|x| x.chars().next() == c) {
+                open = Some((prefix, series, vec![k]));
+            }
+        }
+    }
+    if let Some((prefix, series, columns)) = open.take() {
+        let suffix = if series == 1 { "_color" } else { "" };
+        found.push((format!("{prefix}{suffix}"), columns));
+    }
+    match found.iter().find(|(name, _)| name == attribute) {
+        Some((_, columns)) if columns.len() == 1 || columns.len() == 3 => {
+            Ok((columns.clone(), scalars.len()))
+        }
+        Some((_, columns)) => Err(format!(
+            "has the {element} attribute \"{element}_{attribute}\" with {} channels; a \
+             mesh_attribute reads one (as grey) or three",
+            columns.len()
+        )),
+        None => Err(format!(
+            "has no {element} attribute \"{element}_{attribute}\" (its {element} attributes: {})",
+            if found.is_empty() {
+                "none".to_string()
+            } else {
+                found
+                    .iter()
+                    .map(|(n, _)| format!("{element}_{n}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            }
+        )),
+    }
 }
 
 /// The mesh with three corners of its own per triangle (positions, normals, uvs and vertex

@@ -6,8 +6,8 @@ use super::error::Problem;
 use toml::Spanned;
 
 use super::format::{
-    CameraDesc, CheckerMapping, FilterKind, LightDesc, ObjectDesc, Projection, RenderDesc,
-    SceneFile, TextureDesc, TransformDesc, UvTransformDesc, MESH_ATTRIBUTES,
+    is_mesh_attribute, CameraDesc, CheckerMapping, FilterKind, LightDesc, ObjectDesc, Projection,
+    RenderDesc, SceneFile, TextureDesc, TransformDesc, UvTransformDesc, MESH_ATTRIBUTES,
 };
 use super::materials::common::ColorDesc;
 use super::materials::{blend, MaterialDesc};
@@ -365,12 +365,13 @@ impl Validator<'_> {
                 }
             }
             TextureDesc::MeshAttribute { name } => {
-                if !MESH_ATTRIBUTES.contains(&name.as_str()) {
+                if !is_mesh_attribute(name) {
                     self.push(
                         at,
                         &format!("{key}.name"),
                         format!(
-                            "unknown mesh attribute \"{name}\" (known: {})",
+                            "unknown mesh attribute \"{name}\" (known: {}, or a PLY \
+                             file's vertex_NAME or face_NAME)",
                             MESH_ATTRIBUTES.join(", ")
                         ),
                     );

@@ -1047,8 +1047,8 @@ impl<'a> Importer<'a> {
             "mesh_attribute" => {
                 self.check_known(o, &["name"], &[])?;
                 let name = self.string(o, "name")?.unwrap_or("");
-                if name != "vertex_color" && name != "face_color" {
-                    return err(&o.pos, format!("texture mesh_attribute: name \"{name}\": wgtrace reads vertex_color and face_color"));
+                if !crate::scene::format::is_mesh_attribute(name) {
+                    return err(&o.pos, format!("texture mesh_attribute: name \"{name}\": wgtrace reads vertex_color, face_color and a PLY file's vertex_NAME or face_NAME"));
                 }
                 table([("type", text("mesh_attribute")), ("name", text(name))])
             }
