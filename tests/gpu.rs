@@ -6,43 +6,54 @@ mod common;
 use common::{compare, render_cpu, render_gpu, scene_from_str};
 use wgtrace::Overrides;
 
-/// Every scene in `scenes/`, small, same seed: GPU and CPU agree statistically per tile, and
-/// most pixels agree to 1e-3 (the random numbers are identical; only the math library's
-/// last bits differ, and a path that flips a decision near an edge diverges).
+/// Every scene in `scenes/` but the showcase (its own test, below), small, same seed: GPU
+/// and CPU agree statistically per tile, and most pixels agree to 1e-3 (the random numbers
+/// are identical; only the math library's last bits differ, and a path that flips a
+/// decision near an edge diverges).
 #[test]
 fn gpu_matches_cpu_on_every_scene() {
-    for path in common::scene_files() {
-        let o = Overrides {
-            width: Some(64),
-            height: Some(48),
-            spp: Some(32),
-            seed: Some(7),
-            ..Default::default()
-        };
-        let scene = wgtrace::load_scene(&path, &o).unwrap_or_else(|e| panic!("{e}"));
-        let gpu = render_gpu(&scene);
-        let cpu = render_cpu(&scene);
-        let c = compare(&gpu, &cpu, 8);
-        eprintln!(
-            "{}: {} tiles, {} outside the bound, {:.4} of pixels agree to 1e-3",
-            path.display(),
-            c.tiles,
-            c.failed_tiles.len(),
-            c.agree_fraction
-        );
-        assert!(
-            c.failed_tiles.is_empty(),
-            "{}: GPU and CPU differ beyond noise:\n{}",
-            path.display(),
-            c.failed_tiles.join("\n")
-        );
-        assert!(
-            c.agree_fraction >= 0.99,
-            "{}: only {:.4} of pixels agree to 1e-3",
-            path.display(),
-            c.agree_fraction
-        );
+    for path in common::scene_files_but_showcase() {
+        gpu_matches_cpu_on(&path);
     }
+}
+
+/// [`gpu_matches_cpu_on_every_scene`] on the showcase (`common::SHOWCASE` says why apart).
+#[test]
+fn gpu_matches_cpu_on_the_showcase() {
+    gpu_matches_cpu_on(&common::repo_path(common::SHOWCASE));
+}
+
+fn gpu_matches_cpu_on(path: &std::path::Path) {
+    let o = Overrides {
+        width: Some(64),
+        height: Some(48),
+        spp: Some(32),
+        seed: Some(7),
+        ..Default::default()
+    };
+    let scene = wgtrace::load_scene(path, &o).unwrap_or_else(|e| panic!("{e}"));
+    let gpu = render_gpu(&scene);
+    let cpu = render_cpu(&scene);
+    let c = compare(&gpu, &cpu, 8);
+    eprintln!(
+        "{}: {} tiles, {} outside the bound, {:.4} of pixels agree to 1e-3",
+        path.display(),
+        c.tiles,
+        c.failed_tiles.len(),
+        c.agree_fraction
+    );
+    assert!(
+        c.failed_tiles.is_empty(),
+        "{}: GPU and CPU differ beyond noise:\n{}",
+        path.display(),
+        c.failed_tiles.join("\n")
+    );
+    assert!(
+        c.agree_fraction >= 0.99,
+        "{}: only {:.4} of pixels agree to 1e-3",
+        path.display(),
+        c.agree_fraction
+    );
 }
 
 /// Every pixel sampler gives the same image on both backends (the default, Sobol', is

@@ -107,6 +107,21 @@ pub fn repo_path(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
+/// The showcase scene: every primitive, material and texture kind at once, so nearly the
+/// full shader. Mesa 25's llvmpipe (LLVM 15) compiles its shader cold in over 28 minutes
+/// on 2 cores (Mesa 22's in 91 s), so the GPU tests that render every scene give it a test
+/// of its own, which CI's second-driver pass leaves to the first (.ci/run).
+pub const SHOWCASE: &str = "scenes/showcase.toml";
+
+/// Every scene file in `scenes/` but the [`SHOWCASE`].
+pub fn scene_files_but_showcase() -> Vec<PathBuf> {
+    let showcase = repo_path(SHOWCASE);
+    scene_files()
+        .into_iter()
+        .filter(|p| *p != showcase)
+        .collect()
+}
+
 /// Every scene file in `scenes/`.
 pub fn scene_files() -> Vec<PathBuf> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(repo_path("scenes"))
