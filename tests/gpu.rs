@@ -642,7 +642,7 @@ material = "d"
 /// with both gives each material the set it reads. Named as Mitsuba writes them (`color_0`,
 /// `color_1`, `color_2`, and a face `weight_0`, its `face_weight`), the colours read the
 /// same, and a blend of a red and a blue material weighed by `face_weight` (0 and 1) shows
-/// each face's part untinted by the weights.
+/// each face's part untinted by the weights, where face_color shows that face.
 #[test]
 fn mesh_attributes_read_vertex_and_face_colours() {
     let dir = common::tmp_dir("mesh-attribute");
@@ -673,14 +673,14 @@ fn mesh_attributes_read_vertex_and_face_colours() {
          property float z\n{color}element face 2\nproperty list uchar int vertex_indices\n\
          {color}property float weight_0\nend_header\n"
     ) + &corners.map(|c| format!("{c} 1 1 0\n")).concat()
-        + "3 0 3 2 1 0 0 0\n3 0 2 1 0 0 1 1\n";
+        + "3 0 3 2 1 0 0 1\n3 0 2 1 0 0 1 0\n";
     std::fs::write(dir.join("named.ply"), named_ply).unwrap();
     std::fs::write(dir.join("vertex.ply"), vertex_ply).unwrap();
     std::fs::write(dir.join("face.ply"), face_ply).unwrap();
     std::fs::write(dir.join("both.ply"), both_ply).unwrap();
     let src = |mesh: &str, albedo: &str| {
         let material = if albedo == "blend" {
-            r#"{ type = "blend", first = "red", second = "blue", weight = "fw" }"#.to_string()
+            r#"{ type = "blend", first = "blue", second = "red", weight = "fw" }"#.to_string()
         } else {
             format!("{{ type = \"lambertian\", albedo = {albedo} }}")
         };
@@ -742,13 +742,31 @@ material = "m"
         ("named.ply", "\"fc\""),
         ("named.ply", "blend"),
     ];
-    for (name, img) in cases.into_iter().flat_map(|(mesh, albedo)| {
-        let s = load(src(mesh, albedo));
-        [
-            (format!("{mesh}, {albedo}, gpu"), render_gpu(&s)),
-            (format!("{mesh}, {albedo}, cpu"), render_cpu(&s)),
-        ]
-    }) {
+    let images: Vec<(String, wgtrace::Accumulation)> = cases
+        .into_iter()
+        .flat_map(|(mesh, albedo)| {
+            let s = load(src(mesh, albedo));
+            [
+                (format!("{mesh}, {albedo}, gpu"), render_gpu(&s)),
+                (format!("{mesh}, {albedo}, cpu"), render_cpu(&s)),
+            ]
+        })
+        .collect();
+    // the blend weighed by face_weight (1 on the red face, 0 on the blue) shows face_color's
+    // image pixel for pixel: the weight read from its own column, not a colour's
+    for backend in [0, 1] {
+        let (fc, blend) = (&images[4 + backend].1, &images[6 + backend].1);
+        let off = (0..fc.pixel_count())
+            .filter(|&i| (0..3).any(|k| (fc.mean(i)[k] - blend.mean(i)[k]).abs() > 1e-5))
+            .count();
+        assert_eq!(
+            off,
+            0,
+            "{}: {off} pixels off face_color's",
+            images[6 + backend].0
+        );
+    }
+    for (name, img) in images {
         let is = |i: usize, c: [f32; 3]| (0..3).all(|k| (img.mean(i)[k] - c[k]).abs() <= 1e-5);
         let red = (0..img.pixel_count())
             .filter(|&i| is(i, [1.0, 0.0, 0.0]))

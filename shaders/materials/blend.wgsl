@@ -9,7 +9,9 @@
 // The record of the material shading a hit on material `index`: itself, or for a blend,
 // one of its parts, the second with probability weight (a texture's luminance, clamped to
 // [0, 1], where it has one), the first with the rest, by u in [0, 1), reused rescaled for
-// a blend within a blend (to MAX_BLEND_DEPTH levels, which validation holds).
+// a blend within a blend (to MAX_BLEND_DEPTH levels, which validation holds). A blend that
+// reads the mesh's colours (MAT_FLAG_OWN_COLORS: its weight a mesh attribute) leaves the
+// part it picks untinted by them too.
 fn blend_choice(index: u32, hit: Hit, u: f32) -> Material {
     var m = material_record(index);
     var x = u;
@@ -21,6 +23,7 @@ fn blend_choice(index: u32, hit: Hit, u: f32) -> Material {
             w = clamp(luminance(texture_at(p.weight_texture, hit)), 0.0, 1.0);
         }
 #endif
+        let own = m.flags & MAT_FLAG_OWN_COLORS;
         if (x < w) {
             x = x / w;
             m = material_record(p.second);
@@ -28,6 +31,7 @@ fn blend_choice(index: u32, hit: Hit, u: f32) -> Material {
             x = (x - w) / (1.0 - w);
             m = material_record(p.first);
         }
+        m.flags |= own;
     }
     return m;
 }

@@ -575,7 +575,6 @@ pub fn flatten(
         });
     }
     // each blend's parts, by their places in the list
-    let mut blend_parts: Vec<(usize, [u32; 2])> = Vec::new();
     for (i, m) in material_list.iter().enumerate() {
         if let MaterialDesc::Blend(b) = m.1 {
             let index = |name: &str| {
@@ -585,19 +584,7 @@ pub fn flatten(
                     .expect("validated") as u32
             };
             blend::point_at_parts(&mut materials[i], index(&b.first), index(&b.second));
-            blend_parts.push((i, [index(&b.first), index(&b.second)]));
         }
-    }
-    // the mesh colours a blend reads (its weight a mesh attribute) are its parts' too: they
-    // are not tinted by them either (nested blends: until nothing changes)
-    while let Some(part) = blend_parts.iter().find_map(|&(i, parts)| {
-        let own = |k: usize| materials[k].flags & records::MAT_FLAG_OWN_COLORS != 0;
-        parts
-            .into_iter()
-            .map(|k| k as usize)
-            .find(|&k| own(i) && !own(k))
-    }) {
-        materials[part].flags |= records::MAT_FLAG_OWN_COLORS;
     }
     // the sheen's albedo table, after the background's distribution
     let is_pbr = |m: &Material| m.tag == MaterialKind::Pbr.tag();

@@ -870,8 +870,9 @@ impl<T: PropertyAccess> PropertyAccess for WithValues<T> {
     }
 }
 
-/// A scalar property's value as an attribute's: an integer over its type's largest value
-/// (Mitsuba's normalized integers), a float as it is; None for a list.
+/// A scalar property's value as an attribute's: an integer over its type's largest value,
+/// as wgtrace reads integer colours (Mitsuba 3.9.1 takes integer attributes as they are,
+/// warning that they should lie in [0, 1]), a float as it is; None for a list.
 fn ply_value(p: &Property) -> Option<f64> {
     Some(match *p {
         Property::Char(v) => f64::from(v) / f64::from(i8::MAX),
@@ -1015,7 +1016,7 @@ pub fn check(mesh: MeshData) -> Result<MeshData, String> {
         .chain(&mesh.face_colors)
         .all(|c| c.is_finite() && c.cmpge(Vec4::ZERO).all())
     {
-        return Err("has a negative or non-finite vertex colour".into());
+        return Err("has a negative or non-finite vertex colour or attribute".into());
     }
     Ok(mesh)
 }

@@ -7,7 +7,7 @@ use crate::cpu::textures::texture_at;
 use crate::cpu::types::Hit;
 use crate::scene::materials::blend::{Params, MAX_BLEND_DEPTH};
 use crate::scene::materials::MaterialKind;
-use crate::scene::records::{Material, NO_TEXTURE};
+use crate::scene::records::{Material, MAT_FLAG_OWN_COLORS, NO_TEXTURE};
 
 impl Shading for Params {}
 
@@ -24,6 +24,7 @@ pub fn choice(b: &Bindings, index: u32, hit: &Hit, u: f32) -> Material {
         if p.weight_texture != NO_TEXTURE {
             w = luminance(texture_at(b, p.weight_texture, hit)).clamp(0.0, 1.0);
         }
+        let own = m.flags & MAT_FLAG_OWN_COLORS;
         if x < w {
             x /= w;
             m = b.materials[p.second as usize];
@@ -31,6 +32,7 @@ pub fn choice(b: &Bindings, index: u32, hit: &Hit, u: f32) -> Material {
             x = (x - w) / (1.0 - w);
             m = b.materials[p.first as usize];
         }
+        m.flags |= own;
         k += 1;
     }
     m
