@@ -507,10 +507,9 @@ pub const MESH_ATTRIBUTES: [&str; 2] = ["vertex_color", "face_color"];
 /// Whether `name` may name a mesh attribute: one of [`MESH_ATTRIBUTES`], or a PLY file's
 /// named vertex or face attribute, `vertex_NAME` or `face_NAME`.
 pub fn is_mesh_attribute(name: &str) -> bool {
-    MESH_ATTRIBUTES.contains(&name)
-        || ["vertex_", "face_"]
-            .iter()
-            .any(|p| name.strip_prefix(p).is_some_and(|rest| !rest.is_empty()))
+    ["vertex_", "face_"]
+        .iter()
+        .any(|p| name.strip_prefix(p).is_some_and(|rest| !rest.is_empty()))
 }
 
 fn ten() -> f32 {

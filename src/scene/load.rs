@@ -611,12 +611,13 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
 /// `name` (or a part of it, for a blend) reads through `mesh_attribute` textures, each
 /// once, in the textures' order. The file is validated.
 fn attributes_read(file: &SceneFile, name: &str) -> Vec<String> {
+    let names: Vec<String> = file.textures.keys().cloned().collect();
+    let records: Vec<_> = materials_of(file, name).map(|d| d.record(&names)).collect();
     let mut read: Vec<String> = Vec::new();
-    for t in file.textures.values() {
+    for (k, t) in file.textures.values().enumerate() {
         if let TextureDesc::MeshAttribute { name: a } = t.get_ref() {
-            let this =
-                |u: &TextureDesc| matches!(u, TextureDesc::MeshAttribute { name: b } if b == a);
-            if !read.contains(a) && reads_any(file, name, this) {
+            let reads = |m: &_| reads_texture(m, |t| t == k as u32);
+            if !read.contains(a) && records.iter().any(reads) {
                 read.push(a.clone());
             }
         }

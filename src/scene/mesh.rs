@@ -5,7 +5,7 @@ use std::path::Path;
 
 use super::format::{ColorSpace, MESH_ATTRIBUTES};
 use super::texels::srgb_to_linear;
-use glam::{DVec2, DVec3, Vec2, Vec3, Vec4};
+use glam::{DVec2, DVec3, DVec4, Vec2, Vec3, Vec4};
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Property, PropertyAccess, PropertyAccessResult};
 
@@ -702,37 +702,47 @@ fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
     // a named attribute and its element: one not among the colours every reader knows,
     // or one of those where the file names its colours as Mitsuba writes them (`color_0`,
     // `color_1`, `color_2`), not `red`, `green`, `blue`
+    let colour_names = colors
+        .attribute
+        .is_some_and(|a| MESH_ATTRIBUTES.contains(&a));
     let named = colors
         .attribute
         .and_then(|a| a.split_once('_'))
-        .filter(|&(element, _)| {
-            !MESH_ATTRIBUTES.contains(&colors.attribute.unwrap_or_default()) || !rgb(element)
-        });
-    // the named attribute's columns among its element's scalar properties
-    // (a file without the colours a material reads is white, as any mesh without them)
-    let columns = match named {
+        .filter(|&(element, _)| !colour_names || !rgb(element));
+    // its element and columns among that element's scalar properties (a file without the
+    // colours a material reads is white, as any mesh without them)
+    let kept = match named {
         Some((element, attribute)) => {
             match attribute_columns(&header.elements[element], element, attribute) {
-                Ok(c) => Some(c),
-                Err(_) if MESH_ATTRIBUTES.contains(&colors.attribute.unwrap_or_default()) => None,
+                Ok(columns) => Some((element, columns)),
+                Err(_) if colour_names => None,
                 Err(e) => return Err(e),
             }
         }
         None => None,
     };
-    let keeps = |element: &str| columns.is_some() && named.is_some_and(|(e, _)| e == element);
+    let columns_of = |element: &str| {
+        kept.as_ref()
+            .filter(|(e, _)| *e == element)
+            .map(|(_, c)| c.as_slice())
+    };
     let mut vertices: Vec<PlyVertex> = Vec::new();
     let mut faces: Vec<PlyFace> = Vec::new();
     let mut values = Vec::new();
     for (name, def) in &header.elements {
         match name.as_str() {
+            // (one element at most has values kept)
             "vertex" => {
-                (vertices, values) =
-                    read_element(&mut reader, def, &header, keeps("vertex"), values).map_err(bad)?
+                let read = read_element(&mut reader, def, &header, columns_of("vertex"));
+                let kept_values;
+                (vertices, kept_values) = read.map_err(bad)?;
+                values.extend(kept_values);
             }
             "face" => {
-                (faces, values) =
-                    read_element(&mut reader, def, &header, keeps("face"), values).map_err(bad)?
+                let read = read_element(&mut reader, def, &header, columns_of("face"));
+                let kept_values;
+                (faces, kept_values) = read.map_err(bad)?;
+                values.extend(kept_values);
             }
             _ => {
                 Parser::<PlySkip>::new()
@@ -801,19 +811,16 @@ fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
     }
     // a named attribute as the mesh's colours: one channel as grey, three as rgb, each
     // as it is (integers over their type's largest value)
-    if let (Some((element, _)), Some((columns, stride))) = (named, columns) {
-        let colour = |v: &[f64]| {
-            let c = columns.iter().map(|&k| v[k] as f32).collect::<Vec<_>>();
-            match c[..] {
-                [w] => Vec4::new(w, w, w, 1.0),
-                [r, g, b] => Vec4::new(r, g, b, 1.0),
-                _ => unreachable!("attribute_columns gives one or three"),
-            }
+    if let Some((element, columns)) = &kept {
+        let colour = |v: &[f64]| match *v {
+            [w] => DVec4::new(w, w, w, 1.0).as_vec4(),
+            [r, g, b] => DVec4::new(r, g, b, 1.0).as_vec4(),
+            _ => unreachable!("attribute_columns gives one or three"),
         };
-        let per_element = values.chunks_exact(stride);
+        let per_element = values.chunks_exact(columns.len());
         mesh.colors.clear();
         mesh.face_colors.clear();
-        if element == "vertex" {
+        if *element == "vertex" {
             mesh.colors = per_element.map(colour).collect();
         } else {
             mesh.face_colors = fan(&mut per_element.map(colour));
@@ -822,26 +829,24 @@ fn load_ply(path: &Path, colors: ColorChoice) -> Result<MeshData, String> {
     Ok(mesh)
 }
 
-/// The PLY element `element`'s records as `T` reads them and, when `keep`, the values of
-/// every scalar property of each, in the header's order, appended to `values` (for a named
-/// attribute; see [`attribute_columns`]).
+/// A PLY element's records as `T` reads them and, where `columns` names some of its scalar
+/// properties (a named attribute's; see [`attribute_columns`]), their values, record after
+/// record.
 fn read_element<T: PropertyAccess>(
     reader: &mut Reader<std::io::BufReader<std::fs::File>>,
     def: &ply_rs_bw::ply::ElementDef,
     header: &ply_rs_bw::ply::Header,
-    keep: bool,
-    mut values: Vec<f64>,
+    columns: Option<&[usize]>,
 ) -> Result<(Vec<T>, Vec<f64>), ply_rs_bw::parser::ParseError> {
-    if !keep {
-        return Ok((
-            Parser::<T>::new().read_payload_for_element(reader, def, header)?,
-            values,
-        ));
-    }
+    let Some(columns) = columns else {
+        let records = Parser::<T>::new().read_payload_for_element(reader, def, header)?;
+        return Ok((records, Vec::new()));
+    };
     let records = Parser::<WithValues<T>>::new().read_payload_for_element(reader, def, header)?;
+    let mut values = Vec::with_capacity(records.len() * columns.len());
     let mut out = Vec::with_capacity(records.len());
     for r in records {
-        values.extend(r.values);
+        values.extend(columns.iter().map(|&k| r.values[k]));
         out.push(r.inner);
     }
     Ok((out, values))
@@ -886,12 +891,12 @@ fn ply_value(p: &Property) -> Option<f64> {
 /// PLY reader names attributes: consecutive properties `P_x`, `P_y`, `P_z` (or `_0 _1 _2`,
 /// `_1 _2 _3`; one to three of them) are the attribute `P`, and `P_r`, `P_g`, `P_b` the
 /// attribute `P_color`. One channel or three are read; anything else is an error listing
-/// the attributes the element has. Also gives the count of scalar properties (at least 1).
+/// the attributes the element has.
 fn attribute_columns(
     def: &ply_rs_bw::ply::ElementDef,
     element: &str,
     attribute: &str,
-) -> Result<(Vec<usize>, usize), String> {
+) -> Result<Vec<usize>, String> {
     const SERIES: [&str; 4] = ["xyzw", "rgba", "0123", "1234"];
     let scalars: Vec<&str> = def
         .properties
@@ -902,6 +907,12 @@ fn attribute_columns(
     // (name, columns) of each attribute, in order
     let mut found: Vec<(String, Vec<usize>)> = Vec::new();
     let mut open: Option<(&str, usize, Vec<usize>)> = None; // (prefix, series, columns)
+    let close = |open: &mut Option<(&str, usize, Vec<usize>)>, found: &mut Vec<_>| {
+        if let Some((prefix, series, columns)) = open.take() {
+            let suffix = if series == 1 { "_color" } else { "" };
+            found.push((format!("{prefix}{suffix}"), columns));
+        }
+    };
     for (k, name) in scalars.iter().enumerate() {
         let split = name
             .rsplit_once('_')
@@ -913,10 +924,7 @@ fn attribute_columns(
                 continue;
             }
         }
-        if let Some((prefix, series, columns)) = open.take() {
-            let suffix = if series == 1 { "_color" } else { "" };
-            found.push((format!("{prefix}{suffix}"), columns));
-        }
+        close(&mut open, &mut found);
         if let Some((prefix, s)) = split {
             let c = s.chars().next();
             if let Some(series) = SERIES.iter().position(|x| x.chars().next() == c) {
@@ -924,14 +932,9 @@ fn attribute_columns(
             }
         }
     }
-    if let Some((prefix, series, columns)) = open.take() {
-        let suffix = if series == 1 { "_color" } else { "" };
-        found.push((format!("{prefix}{suffix}"), columns));
-    }
+    close(&mut open, &mut found);
     match found.iter().find(|(name, _)| name == attribute) {
-        Some((_, columns)) if columns.len() == 1 || columns.len() == 3 => {
-            Ok((columns.clone(), scalars.len()))
-        }
+        Some((_, columns)) if columns.len() == 1 || columns.len() == 3 => Ok(columns.clone()),
         Some((_, columns)) => Err(format!(
             "has the {element} attribute \"{element}_{attribute}\" with {} channels; a \
              mesh_attribute reads one (as grey) or three",
