@@ -4,11 +4,14 @@
 // `textures_main`: one texture look-up per invocation.
 // `materials_main`: one material at one hit per invocation, asked what the integrator asks.
 // `lights_main`: lights sampled from one point per invocation, with their pdfs.
+// `paths_main`: one camera path per invocation, its state after each extend_path.
 // Group 0 is the scene, as in trace.wgsl; group 1 holds each kernel's inputs and results.
 #import shared/bindings
 #import shared/intersect
 #import shared/lights
 #import shared/materials
+#import shared/path
+#import shared/samplers
 #import shared/textures
 #import shared/types
 
@@ -207,4 +210,56 @@ fn lights_main(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
 #endif
     light_replies[i] = r;
+}
+
+struct PathQuery {
+    x: u32,
+    y: u32,
+    sample: u32,
+    pad0: u32,
+}
+
+struct PathStep {
+    // the ray's origin, the path's depth in .w
+    origin: vec4<f32>,
+    // the ray's direction, 1 in .w while the path goes on
+    dir: vec4<f32>,
+    // .w: the extend_path calls the state follows
+    throughput: vec4<f32>,
+    radiance: vec4<f32>,
+}
+
+@group(1) @binding(8) var<storage, read> path_queries: array<PathQuery>;
+@group(1) @binding(9) var<storage, read_write> path_steps: array<PathStep>;
+
+fn path_step(path: Path, going: bool, calls: u32) -> PathStep {
+    return PathStep(vec4<f32>(path.ray.origin, f32(path.depth)), vec4<f32>(path.ray.dir, select(0.0, 1.0, going)), vec4<f32>(path.throughput, f32(calls)), vec4<f32>(path.radiance, 0.0));
+}
+
+// Each query's camera path as the render's main traces it (the same camera ray, the same
+// extend_path), its state at the start and after each extend_path: PATH_STEPS slots, the
+// last one the final state however long the path was, the slots after a shorter path's
+// end zero.
+@compute @workgroup_size(64, 1, 1)
+fn paths_main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+    stack_lane = lane;
+    let i = gid.x;
+    if (i >= arrayLength(&path_queries)) {
+        return;
+    }
+    let q = path_queries[i];
+    let pixel = q.y * params.width + q.x;
+    var path = start_path(camera_ray(q.x, q.y, pixel_position(pixel, q.sample), sample_2d(pixel, q.sample, DIM_LENS)));
+    let at = i * PATH_STEPS;
+    for (var k = 0u; k < PATH_STEPS; k++) {
+        path_steps[at + k] = PathStep(vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0), vec4<f32>(0.0));
+    }
+    var going = params.max_depth != 0u;
+    path_steps[at] = path_step(path, going, 0u);
+    var calls = 0u;
+    while (going) {
+        going = extend_path(&path, pixel, q.sample);
+        calls++;
+        path_steps[at + min(calls, PATH_STEPS - 1u)] = path_step(path, going, calls);
+    }
 }

@@ -15,13 +15,15 @@ use rayon::prelude::*;
 
 use crate::cpu::bindings::Bindings;
 use crate::cpu::intersect::{intersect_scene, occluded, surface_at};
+use crate::cpu::path::{camera_ray, extend_path, start_path, Path};
+use crate::cpu::samplers::{pixel_position, sample_2d, DIM_LENS};
 use crate::cpu::types::{Ray, FAR, NO_HIT};
 use crate::gpu::context::GpuContext;
 use crate::gpu::kernel::intersect_rays;
 use crate::gpu::render::GpuRenderer;
 use crate::scene::error::SceneError;
 use crate::scene::flat::FlatScene;
-use crate::scene::records::{KernelHit, KernelRay};
+use crate::scene::records::{KernelHit, KernelRay, PathQuery, PathStep, PATH_STEPS};
 use crate::scene::Overrides;
 use crate::spot_check::{self, Verdict};
 use crate::tuning::Tuning;
@@ -141,6 +143,60 @@ pub fn agree(g: &KernelHit, c: &KernelHit) -> Result<(), String> {
         Some((what, _)) => Err(format!("{what} differs")),
         None => Ok(()),
     }
+}
+
+/// The CPU reference's answer for path query `q` in the kernel's records (`paths_main`):
+/// the same camera ray and `extend_path` calls, `PATH_STEPS` states.
+pub fn cpu_path_steps(scene: &FlatScene, q: &PathQuery) -> Vec<PathStep> {
+    let b = Bindings::new(scene, scene.params(0, scene.full_band()));
+    let pixel = q.y * b.params.width + q.x;
+    let jitter = pixel_position(&b, pixel, q.sample);
+    let lens = sample_2d(&b, pixel, q.sample, DIM_LENS);
+    let mut path = start_path(camera_ray(&b, q.x, q.y, jitter, lens));
+    let step = |path: &Path, going: bool, calls: u32| PathStep {
+        origin: path.ray.origin.extend(path.depth as f32).to_array(),
+        dir: path.ray.dir.extend(going as u32 as f32).to_array(),
+        throughput: path.throughput.extend(calls as f32).to_array(),
+        radiance: path.radiance.extend(0.0).to_array(),
+    };
+    let mut out = vec![PathStep::default(); PATH_STEPS as usize];
+    let mut going = b.params.max_depth != 0;
+    out[0] = step(&path, going, 0);
+    let mut calls = 0;
+    while going {
+        going = extend_path(&b, &mut path, pixel, q.sample);
+        calls += 1;
+        out[calls.min(PATH_STEPS - 1) as usize] = step(&path, going, calls);
+    }
+    out
+}
+
+/// Whether two paths' states agree step by step: the same depths, ends and number of
+/// bounces; origins, directions, throughputs and radiance within what the two math
+/// libraries' last bits grow to over a path's bounces (1e-3 of their size). The error
+/// names the first step that differs and what.
+pub fn path_agree(g: &[PathStep], c: &[PathStep]) -> Result<(), String> {
+    let close = |a: [f32; 4], b: [f32; 4]| {
+        let (a, b) = (Vec4::from(a).truncate(), Vec4::from(b).truncate());
+        (a - b).abs().max_element() <= 1e-3 * (1.0 + b.abs().max_element())
+    };
+    for (k, (g, c)) in g.iter().zip(c).enumerate() {
+        let checks = [
+            ("depth", g.origin[3] == c.origin[3]),
+            ("end", g.dir[3] == c.dir[3]),
+            ("bounces", g.throughput[3] == c.throughput[3]),
+            ("origin", close(g.origin, c.origin)),
+            ("direction", close(g.dir, c.dir)),
+            ("throughput", close(g.throughput, c.throughput)),
+            ("radiance", close(g.radiance, c.radiance)),
+        ];
+        if let Some((what, _)) = checks.iter().find(|(_, ok)| !ok) {
+            return Err(format!(
+                "step {k}: {what} differs\n  gpu {g:?}\n  cpu {c:?}"
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A ray in the kernel's record.

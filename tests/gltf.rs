@@ -233,8 +233,8 @@ fn cameras_are_chosen_by_name_and_orthographic_ones_are_parallel() {
     assert!((s.camera.forward - Vec3::NEG_Y).length() < 1e-6);
     // orthographic rays all go along the view direction, from the view rectangle
     let b = wgtrace::cpu::bindings::Bindings::new(&s, s.params(0, s.full_band()));
-    let r0 = wgtrace::cpu::trace::camera_ray(&b, 0, 0, [0.5; 2], [0.5; 2]);
-    let r1 = wgtrace::cpu::trace::camera_ray(&b, s.width - 1, s.height - 1, [0.5; 2], [0.5; 2]);
+    let r0 = wgtrace::cpu::path::camera_ray(&b, 0, 0, [0.5; 2], [0.5; 2]);
+    let r1 = wgtrace::cpu::path::camera_ray(&b, s.width - 1, s.height - 1, [0.5; 2], [0.5; 2]);
     assert_eq!(r0.dir, r1.dir);
     assert!((r0.origin - r1.origin).length() > 2.0);
     let nope = Overrides {

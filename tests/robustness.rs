@@ -768,7 +768,7 @@ fn f32_intersections_agree_with_f64() {
 #[test]
 fn rays_leaving_a_surface_never_hit_it_again() {
     use wgtrace::cpu::intersect::surface_at;
-    use wgtrace::cpu::trace::spawn_ray;
+    use wgtrace::cpu::path::spawn_ray;
     let mut state = 31u32;
     let mut cases = Vec::new();
     for r in [1e-4f32, 1e-2, 1.0, 1e2, 1e4] {

@@ -11,8 +11,8 @@ use super::fault;
 use super::plan::{Feature, GpuPlan};
 use crate::scene::flat::FlatScene;
 use crate::scene::records::{
-    KernelHit, KernelRay, LightQuery, LightReply, MaterialQuery, MaterialReply, TextureLookup,
-    BVH_STACK_LANES,
+    KernelHit, KernelRay, LightQuery, LightReply, MaterialQuery, MaterialReply, PathQuery,
+    PathStep, TextureLookup, BVH_STACK_LANES, PATH_STEPS,
 };
 use crate::tuning::Tuning;
 
@@ -23,7 +23,7 @@ const WORKGROUP: u32 = BVH_STACK_LANES;
 /// Group-1 bindings of `kernel.wgsl`: the inputs and outputs of `main`, `textures_main`,
 /// `materials_main` and `lights_main` (`tests/shaders.rs` holds them to naga's view of the
 /// shader).
-pub const KERNEL_IO: [(&str, u32); 8] = [
+pub const KERNEL_IO: [(&str, u32); 10] = [
     ("rays", 0),
     ("hits", 1),
     ("lookups", 2),
@@ -32,6 +32,8 @@ pub const KERNEL_IO: [(&str, u32); 8] = [
     ("material_replies", 5),
     ("light_queries", 6),
     ("light_replies", 7),
+    ("path_queries", 8),
+    ("path_steps", 9),
 ];
 
 /// The plan `tuning` gives `scene` on the device, refused when one ray's loops would pass
@@ -104,6 +106,22 @@ pub fn sample_lights(
     let (plan, device_scene) = plan(ctx, scene, tuning)?;
     let scene = device_scene.as_ref().unwrap_or(scene);
     run_kernel(ctx, scene, &plan, "lights_main", io(3), queries)
+}
+
+/// Traces each query's camera path on the GPU (`paths_main`) as a render's `main` traces
+/// it: `PATH_STEPS` states per query, in order (the start, then one after each
+/// `extend_path`, the last slot the final state).
+pub fn trace_paths(
+    ctx: &GpuContext,
+    scene: &FlatScene,
+    tuning: &Tuning,
+    queries: &[PathQuery],
+) -> Result<Vec<PathStep>, GpuError> {
+    let (plan, device_scene) = plan(ctx, scene, tuning)?;
+    let scene = device_scene.as_ref().unwrap_or(scene);
+    let steps: Vec<[PathStep; PATH_STEPS as usize]> =
+        run_kernel(ctx, scene, &plan, "paths_main", io(4), queries)?;
+    Ok(steps.into_iter().flatten().collect())
 }
 
 /// Dispatches one invocation per input of entry point `entry` of `kernel.wgsl`, with the

@@ -44,6 +44,10 @@ const BASE_FILES: &[(&str, &str)] = &[
         "shared/materials",
         include_str!("../../shaders/shared/materials.wgsl"),
     ),
+    (
+        "shared/path",
+        include_str!("../../shaders/shared/path.wgsl"),
+    ),
     ("shared/rng", include_str!("../../shaders/shared/rng.wgsl")),
     (
         "shared/samplers",

@@ -66,6 +66,10 @@ shared_constants! {
     /// Most surfaces a ray passes through where they are transparent (alpha) before it
     /// stops at the next one, whatever it is: a bound on the loop, never met in practice.
     MAX_ALPHA_SKIPS: u32 = 16;
+    /// States of one path the kernel's `paths_main` reports: the camera ray's, then one
+    /// after each `extend_path`, the last slot holding the path's final state however
+    /// long it was.
+    PATH_STEPS: u32 = 8;
     /// How deep `blend` materials may nest (a blend whose part is a blend ...).
     MAX_BLEND_DEPTH: u32 = 4;
     /// `vec4<f32>` entries per pixel of the accumulation: (sum rgb, count), (sum of squares
@@ -746,6 +750,32 @@ pub struct LightReply {
     pub punctual_le: [f32; 4],
 }
 
+/// One path of the kernel's `paths_main`: the pixel (x, y) and the sample index whose
+/// camera path it traces, as the render's `main` traces it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathQuery {
+    pub x: u32,
+    pub y: u32,
+    pub sample: u32,
+    pub pad0: u32,
+}
+
+/// One state of a path in `paths_main` (`PATH_STEPS` per query): the ray to follow next,
+/// its throughput and the radiance gathered so far.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct PathStep {
+    /// The ray's origin; `.w`: the path's depth (rays traced so far).
+    pub origin: [f32; 4],
+    /// The ray's direction; `.w`: 1 while the path goes on, 0 once it has ended (and in
+    /// the slots after a shorter path's end, which are all zero).
+    pub dir: [f32; 4],
+    /// `.w`: how many `extend_path` calls the state follows.
+    pub throughput: [f32; 4],
+    pub radiance: [f32; 4],
+}
+
 /// Size and field offsets of one record, for the layout test against naga.
 #[derive(Debug)]
 pub struct RecordLayout {
@@ -982,6 +1012,13 @@ shared_record!(LightReply {
     punctual_dir,
     punctual_le
 });
+shared_record!(PathQuery { x, y, sample, pad0 });
+shared_record!(PathStep {
+    origin,
+    dir,
+    throughput,
+    radiance
+});
 shared_record!(BvhNode {
     origin,
     scale,
@@ -1009,6 +1046,8 @@ pub fn record_layouts() -> Vec<RecordLayout> {
         MaterialReply::layout(),
         LightQuery::layout(),
         LightReply::layout(),
+        PathQuery::layout(),
+        PathStep::layout(),
         BvhNode::layout(),
     ]
 }
