@@ -152,7 +152,7 @@ pub fn cpu_path_steps(scene: &FlatScene, q: &PathQuery) -> Vec<PathStep> {
     let pixel = q.y * b.params.width + q.x;
     let jitter = pixel_position(&b, pixel, q.sample);
     let lens = sample_2d(&b, pixel, q.sample, DIM_LENS);
-    let mut path = start_path(camera_ray(&b, q.x, q.y, jitter, lens));
+    let mut path = start_path(&b, camera_ray(&b, q.x, q.y, jitter, lens));
     let step = |path: &Path, going: bool, calls: u32| PathStep {
         origin: path.ray.origin.extend(path.depth as f32).to_array(),
         dir: path.ray.dir.extend(going as u32 as f32).to_array(),

@@ -721,6 +721,8 @@ fn gpu_paths_match_cpu_bounce_by_bounce() {
         ("scenes/sky.toml", None),
         ("bench/mask.toml", None),
         ("bench/blend.toml", None),
+        ("scenes/fog.toml", None),
+        ("scenes/fog.toml", Some(LightSampling::Bsdf)),
     ];
     const SIDE: u32 = 16;
     for &(file, light_sampling) in cases {

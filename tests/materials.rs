@@ -327,6 +327,26 @@ fn eval_integral(m: &Material, ray: &Ray, hit: &Hit, theta_max: f64, nt: usize) 
 /// `bsdf_pdf` gives (chi-square; MIS weighs by it, `scatter_pdf`), and its mean weight is
 /// the integral of `bsdf_eval` over the hemisphere (5 standard errors): what the lobes
 /// send under the geometric surface comes back over it, and is counted once.
+/// The Henyey-Greenstein phase function's sampler against its pdf over the whole sphere
+/// (chi-square), about the direction of travel +z, from back-scattering to strongly
+/// forward: the sampler inverts the cumulative distribution of cos theta that `hg_eval`
+/// is the density of, with g > 0 forward.
+#[test]
+fn the_phase_function_samples_its_pdf() {
+    use wgtrace::cpu::media::{hg_eval, hg_sample};
+    for g in [-0.7f32, 0.0, 0.3, 0.8] {
+        chi_square(
+            &format!("Henyey-Greenstein g = {g}"),
+            true,
+            |u| Some(hg_sample(Vec3::Z, g, u)),
+            |w| hg_eval(w.z, g),
+        );
+        // forward means along the direction of travel
+        let forward = hg_eval(1.0, g) > hg_eval(-1.0, g);
+        assert_eq!(forward, g > 0.0, "g = {g}");
+    }
+}
+
 #[test]
 fn shading_normals_sample_and_weigh_what_eval_and_pdf_say() {
     let tilt = 35f32.to_radians();

@@ -9,6 +9,7 @@
 #import shared/intersect
 #import shared/lights
 #import shared/materials
+#import shared/media
 #import shared/rng
 #import shared/samplers
 #import shared/sampling
@@ -81,31 +82,68 @@ fn shadowed(ray: Ray, t_max: f32, u: f32) -> bool {
 }
 
 // A vertex of the path: a surface hit (its shading normal as the material bends it) and
-// the material there, a blend's part already chosen.
+// the material there, a blend's part already chosen; with media, or a point where the
+// path scatters in a medium (`scatter`: hit.p is the point, mat unused).
 struct Vertex {
     hit: Hit,
     mat: Material,
+#ifdef HAS_MEDIA
+    // the medium the path's ray arrived in, the media word of the surface's shape (0 at
+    // a medium point), whether it is a medium point, and its medium's phase asymmetry
+    medium: u32,
+    media: u32,
+    scatter: bool,
+    g: f32,
+#endif
 }
 
-// What the vertex scatters from the path's ray toward dir: BSDF x cos.
+// What the vertex scatters from the path's ray toward dir: BSDF x cos, or the phase
+// function.
 fn vertex_eval(v: Vertex, ray: Ray, dir: vec3<f32>) -> vec3<f32> {
+#ifdef HAS_MEDIA
+    if (v.scatter) {
+        return vec3<f32>(hg_eval(dot(ray.dir, dir), v.g));
+    }
+#endif
     return bsdf_eval(v.mat, ray, v.hit, dir);
 }
 
 // The density with which the vertex's own sampling picks dir (for MIS).
 fn vertex_pdf(v: Vertex, ray: Ray, dir: vec3<f32>) -> f32 {
+#ifdef HAS_MEDIA
+    if (v.scatter) {
+        return hg_eval(dot(ray.dir, dir), v.g);
+    }
+#endif
     return bsdf_pdf(v.mat, ray, v.hit, dir);
 }
 
-// A ray leaving the vertex along dir.
+// A ray leaving the vertex along dir (from a surface, just off it on dir's side).
 fn vertex_spawn(v: Vertex, dir: vec3<f32>) -> Ray {
+#ifdef HAS_MEDIA
+    if (v.scatter) {
+        return Ray(v.hit.p, dir);
+    }
+#endif
     return spawn_ray(v.hit, dir);
 }
 
-// Whether light sampling applies at the vertex (a lobe with a density).
+// Whether light sampling applies at the vertex (a lobe with a density; a medium point).
 fn vertex_nee(v: Vertex) -> bool {
+#ifdef HAS_MEDIA
+    if (v.scatter) {
+        return true;
+    }
+#endif
     return nee_applies(v.mat);
 }
+
+#ifdef HAS_MEDIA
+// The medium a ray leaving the vertex along dir travels in.
+fn vertex_medium(v: Vertex, dir: vec3<f32>) -> u32 {
+    return medium_after(v.media, v.hit.ng, dir, v.medium);
+}
+#endif
 
 // Next-event estimation at a vertex: a direction toward a light, a shadow ray from just off
 // the surface to just short of the sampled point, and the light's emission there (its own
@@ -149,11 +187,20 @@ fn direct_light(v: Vertex, ray: Ray, u_light: f32, u: vec2<f32>, u_alpha: f32) -
         shadow.dir = v / t_max;
     }
     let lit = ls.light != NO_LIGHT && any(f != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0)) && t_max > 0.0;
+#ifdef HAS_MEDIA
+    let tr = transmittance(shadow, t_max, u_alpha, vertex_medium(v, ls.dir));
+    if (!lit || all(tr == vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
+    let w = power_heuristic(ls.pdf, vertex_pdf(v, ray, pdf_dir));
+    return f * tr * le * (w / ls.pdf);
+#else
     if (!lit || shadowed(shadow, t_max, u_alpha)) {
         return vec3<f32>(0.0);
     }
     let w = power_heuristic(ls.pdf, vertex_pdf(v, ray, pdf_dir));
     return f * le * (w / ls.pdf);
+#endif
 }
 
 #ifdef HAS_PUNCTUAL
@@ -172,10 +219,18 @@ fn direct_punctual(v: Vertex, ray: Ray, u: f32, u_alpha: f32) -> vec3<f32> {
     }
     let f = vertex_eval(v, ray, s.dir);
     let lit = s.prob > 0.0 && s.d2 > 0.0 && t_max > 0.0 && any(f != vec3<f32>(0.0)) && any(s.le != vec3<f32>(0.0));
+#ifdef HAS_MEDIA
+    let tr = transmittance(shadow, t_max, u_alpha, vertex_medium(v, s.dir));
+    if (!lit || all(tr == vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
+    return f * tr * s.le / s.prob;
+#else
     if (!lit || shadowed(shadow, t_max, u_alpha)) {
         return vec3<f32>(0.0);
     }
     return f * s.le / s.prob;
+#endif
 }
 #endif
 
@@ -191,6 +246,10 @@ struct Path {
     prev_pdf: f32,
     prev_delta: bool,
     depth: u32,
+#ifdef HAS_MEDIA
+    // the medium the ray travels in (NO_MEDIUM: none)
+    medium: u32,
+#endif
 #ifdef HAS_AOVS
     // the sample's AOVs: albedo and normal of the first vertex whose bounce is not a
     // delta lobe's (found once it is known), distance and point of the first hit
@@ -203,11 +262,25 @@ struct Path {
 }
 
 fn start_path(camera: Ray) -> Path {
-#ifdef HAS_AOVS
-    return Path(camera, vec3<f32>(0.0), vec3<f32>(1.0), camera.origin, 0.0, true, 0u, vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), 0.0, false);
-#else
-    return Path(camera, vec3<f32>(0.0), vec3<f32>(1.0), camera.origin, 0.0, true, 0u);
+    var path: Path;
+    path.ray = camera;
+    path.radiance = vec3<f32>(0.0);
+    path.throughput = vec3<f32>(1.0);
+    path.prev_p = camera.origin;
+    path.prev_pdf = 0.0;
+    path.prev_delta = true;
+    path.depth = 0u;
+#ifdef HAS_MEDIA
+    path.medium = params.camera_medium;
 #endif
+#ifdef HAS_AOVS
+    path.albedo = vec3<f32>(0.0);
+    path.normal = vec3<f32>(0.0);
+    path.position = vec3<f32>(0.0);
+    path.distance = 0.0;
+    path.found = false;
+#endif
+    return path;
 }
 
 // Russian roulette from ray rr_depth on: a path goes on with probability
@@ -229,15 +302,23 @@ fn survives_roulette(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool
 // blended ones): the ray goes on from just beyond, its origin moved but its direction's
 // pdf and the vertex it left (prev_p) kept, and the bounce not counted; the last surface
 // is kept whatever.
-fn next_hit(path: ptr<function, Path>, u: f32) -> Candidate {
+fn next_hit(path: ptr<function, Path>, u: f32, pixel: u32, sample: u32) -> Candidate {
     var cand: Candidate;
 #ifdef HAS_ALPHA
     // one call of the closest-hit search (llvmpipe inlines each call site whole)
     for (var k = 0u; k < MAX_ALPHA_SKIPS; k++) {
         cand = intersect_scene((*path).ray, FAR);
+#ifdef HAS_MEDIA
+        if (flies(path, &cand, pixel, sample, k)) {
+            break;
+        }
+#endif
         if (cand.prim != NO_HIT && k + 1u < MAX_ALPHA_SKIPS) {
             let h = surface_at((*path).ray, cand);
             if (transparent_at(h, alpha_u(u, k))) {
+#ifdef HAS_MEDIA
+                (*path).medium = medium_after(media_at(h), h.ng, (*path).ray.dir, (*path).medium);
+#endif
                 (*path).ray = spawn_ray(h, (*path).ray.dir);
                 continue;
             }
@@ -246,9 +327,44 @@ fn next_hit(path: ptr<function, Path>, u: f32) -> Candidate {
     }
 #else
     cand = intersect_scene((*path).ray, FAR);
+#ifdef HAS_MEDIA
+    flies(path, &cand, pixel, sample, 0u);
+#endif
 #endif
     return cand;
 }
+
+#ifdef HAS_MEDIA
+// The free flight through the path's medium up to the surface cand found (the k-th
+// stretch of this bounce's ray): true when the path scatters before it, cand then
+// MEDIUM_HIT at the event's distance; the throughput takes the flight's weight.
+fn flies(path: ptr<function, Path>, cand: ptr<function, Candidate>, pixel: u32, sample: u32, k: u32) -> bool {
+    if ((*path).medium == NO_MEDIUM) {
+        return false;
+    }
+    let t_max = select(FAR, (*cand).t, (*cand).prim != NO_HIT);
+    let u = bounce_2d(pixel, sample, (*path).depth, DIM_MEDIUM + k);
+    let flight = free_flight(medium_record((*path).medium), t_max, u);
+    (*path).throughput *= flight.weight;
+    if (flight.t >= 0.0) {
+        (*cand).prim = MEDIUM_HIT;
+        (*cand).t = flight.t;
+        return true;
+    }
+    return false;
+}
+
+// The vertex where the path scatters in its medium, at distance t along its ray.
+fn medium_vertex(path: ptr<function, Path>, t: f32) -> Vertex {
+    var v: Vertex;
+    v.hit.p = (*path).ray.origin + t * (*path).ray.dir;
+    v.medium = (*path).medium;
+    v.media = 0u;
+    v.scatter = true;
+    v.g = medium_record((*path).medium).g;
+    return v;
+}
+#endif
 
 // Whether an emitter the path's ray finds is weighed against light sampling: under MIS,
 // after a bounce that light sampling could have made (not a delta lobe's).
@@ -298,7 +414,11 @@ fn surface_vertex(path: ptr<function, Path>, cand: Candidate, pixel: u32, sample
 #else
     let hit = mapped;
 #endif
+#ifdef HAS_MEDIA
+    return Vertex(hit, mat, (*path).medium, media_at(surface), false, 0.0);
+#else
     return Vertex(hit, mat);
+#endif
 }
 
 // What the vertex emits toward the path, weighed by MIS against light sampling when prim
@@ -371,6 +491,13 @@ fn no_bounce() -> Bounce {
 // the material's own.
 fn sample_bounce(path: ptr<function, Path>, v: Vertex, pixel: u32, sample: u32) -> Bounce {
     let u = bounce_2d(pixel, sample, (*path).depth, DIM_BSDF);
+#ifdef HAS_MEDIA
+    if (v.scatter) {
+        // the phase function's own sample: weight 1
+        let dir = hg_sample((*path).ray.dir, v.g, u);
+        return Bounce(true, dir, vec3<f32>(1.0), hg_eval(dot((*path).ray.dir, dir), v.g), false);
+    }
+#endif
 #ifdef HAS_MIXTURE
     if (params.light_sampling == LIGHT_SAMPLING_MIXTURE && params.num_emitters != 0u && mixture_applies(v.mat)) {
         let uc = bounce_2d(pixel, sample, (*path).depth, DIM_LIGHT_CHOICE);
@@ -421,6 +548,9 @@ fn continue_path(path: ptr<function, Path>, v: Vertex, b: Bounce) -> bool {
     (*path).prev_p = v.hit.p;
     (*path).prev_pdf = b.pdf;
     (*path).prev_delta = b.delta;
+#ifdef HAS_MEDIA
+    (*path).medium = vertex_medium(v, b.dir);
+#endif
     (*path).ray = vertex_spawn(v, b.dir);
     (*path).depth += 1u;
     return (*path).depth < params.max_depth;
@@ -440,13 +570,23 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
 #ifdef HAS_ALPHA
     u_alpha = bounce_2d(pixel, sample, (*path).depth, DIM_ALPHA);
 #endif
-    let cand = next_hit(path, u_alpha.x);
+    let cand = next_hit(path, u_alpha.x, pixel, sample);
     if (cand.prim == NO_HIT) {
         escape(path);
         return false;
     }
+#ifdef HAS_MEDIA
+    var v: Vertex;
+    if (cand.prim == MEDIUM_HIT) {
+        v = medium_vertex(path, cand.t);
+    } else {
+        v = surface_vertex(path, cand, pixel, sample);
+        add_emission(path, v, cand.prim);
+    }
+#else
     let v = surface_vertex(path, cand, pixel, sample);
     add_emission(path, v, cand.prim);
+#endif
     if ((*path).depth + 1u >= params.max_depth) {
         return false;
     }

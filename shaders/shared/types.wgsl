@@ -186,6 +186,13 @@ struct Params {
     // 1: samples lie uniformly in their pixels and the gather pass splats them over the
     // pixels the filter reaches; 0: drawn from the filter
     splat: u32,
+    // the first tables entry of the media (MEDIUM_ENTRIES each), and the medium camera
+    // rays start in (NO_MEDIUM: none)
+    media: u32,
+    camera_medium: u32,
+    // the first tables entry of the material records' media words (MEDIA_SIDE)
+    material_media: u32,
+    pad0: u32,
     // the filter's radius (pixels), a Gaussian's standard deviation, its value at the
     // radius (subtracted), and 1 when samples stay on the image
     filter_shape: vec4<f32>,

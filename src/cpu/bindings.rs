@@ -24,6 +24,8 @@ pub struct Bindings<'a> {
     /// A material has a bump map: hits carry their uv derivatives (the shader's HAS_BUMP,
     /// which computes them for every hit, so that a blend's bumped part has them too).
     pub has_bump: bool,
+    /// A path can enter a medium (the shader's HAS_MEDIA).
+    pub has_media: bool,
 }
 
 impl<'a> Bindings<'a> {
@@ -42,6 +44,7 @@ impl<'a> Bindings<'a> {
                 .materials
                 .iter()
                 .any(crate::scene::materials::reads_uv_derivatives),
+            has_media: scene.has_media(),
             has_alpha: scene.materials.iter().any(|m| {
                 m.flags
                     & (crate::scene::records::MAT_FLAG_ALPHA_MASK

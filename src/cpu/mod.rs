@@ -12,6 +12,7 @@ pub mod geometry;
 pub mod intersect;
 pub mod lights;
 pub mod materials;
+pub mod media;
 pub mod path;
 pub mod primitives;
 pub mod rng;

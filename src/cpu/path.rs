@@ -14,6 +14,9 @@ use super::materials::{
     alpha_u, bent_normal, bsdf_eval, bsdf_pdf, bsdf_scatter, emitted, material_at, mixture_applies,
     nee_applies, normal_mapped, scatter_pdf, transparent_at,
 };
+use super::media::{
+    free_flight, hg_eval, hg_sample, media_at, medium_after, medium_record, transmittance,
+};
 use super::rng::rand_2d;
 use super::samplers::{
     bounce_2d, DIM_ALPHA, DIM_BLEND, DIM_BSDF, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_PUNCTUAL, DIM_RR,
@@ -22,8 +25,8 @@ use super::sampling::{offset_ray, sample_disk};
 use super::types::{xyz, Candidate, Hit, Ray, FAR, NO_HIT};
 use crate::scene::materials::MaterialKind;
 use crate::scene::records::{
-    Material, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE, MAX_ALPHA_SKIPS,
-    NO_LIGHT, PRIM_LIGHT_SHIFT,
+    Material, DIM_MEDIUM, LIGHT_ENVIRONMENT, LIGHT_SAMPLING_MIS, LIGHT_SAMPLING_MIXTURE,
+    MAX_ALPHA_SKIPS, MEDIUM_HIT, NO_LIGHT, NO_MEDIUM, PRIM_LIGHT_SHIFT,
 };
 
 /// Camera ray through a point of pixel (x, y); pixel (0, 0) is the top-left. It starts
@@ -105,26 +108,51 @@ pub fn shadowed(b: &Bindings, ray: &Ray, t_max: f32, u: f32) -> bool {
 pub struct Vertex {
     pub hit: Hit,
     pub mat: Material,
+    /// The medium the path's ray arrived in, the media word of the surface's shape (0 at
+    /// a medium point), whether it is a point where the path scatters in a medium, and
+    /// that medium's phase asymmetry.
+    pub medium: u32,
+    pub media: u32,
+    pub scatter: bool,
+    pub g: f32,
 }
 
-/// What the vertex scatters from the path's ray toward dir: BSDF x cos.
+/// What the vertex scatters from the path's ray toward dir: BSDF x cos, or the phase
+/// function.
 pub fn vertex_eval(v: &Vertex, ray: &Ray, dir: Vec3) -> Vec3 {
+    if v.scatter {
+        return Vec3::splat(hg_eval(ray.dir.dot(dir), v.g));
+    }
     bsdf_eval(&v.mat, ray, &v.hit, dir)
 }
 
 /// The density with which the vertex's own sampling picks dir (for MIS).
 pub fn vertex_pdf(v: &Vertex, ray: &Ray, dir: Vec3) -> f32 {
+    if v.scatter {
+        return hg_eval(ray.dir.dot(dir), v.g);
+    }
     bsdf_pdf(&v.mat, ray, &v.hit, dir)
 }
 
-/// A ray leaving the vertex along dir.
+/// A ray leaving the vertex along dir (from a surface, just off it on dir's side).
 pub fn vertex_spawn(v: &Vertex, dir: Vec3) -> Ray {
+    if v.scatter {
+        return Ray {
+            origin: v.hit.p,
+            dir,
+        };
+    }
     spawn_ray(&v.hit, dir)
 }
 
-/// Whether light sampling applies at the vertex (a lobe with a density).
+/// Whether light sampling applies at the vertex (a lobe with a density; a medium point).
 pub fn vertex_nee(v: &Vertex) -> bool {
-    nee_applies(&v.mat)
+    v.scatter || nee_applies(&v.mat)
+}
+
+/// The medium a ray leaving the vertex along dir travels in.
+pub fn vertex_medium(v: &Vertex, dir: Vec3) -> u32 {
+    medium_after(v.media, v.hit.ng, dir, v.medium)
 }
 
 /// Next-event estimation at a vertex: shadow ray to just short of a sampled light point, the
@@ -193,6 +221,14 @@ pub fn direct_light(
         shadow.dir = v / t_max;
         le
     };
+    if b.has_media {
+        let tr = transmittance(b, &shadow, t_max, u_alpha, vertex_medium(v, ls.dir));
+        if tr == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let w = power_heuristic(ls.pdf, vertex_pdf(v, ray, pdf_dir));
+        return f * tr * le * (w / ls.pdf);
+    }
     if shadowed(b, &shadow, t_max, u_alpha) {
         return Vec3::ZERO;
     }
@@ -215,6 +251,13 @@ pub fn direct_punctual(b: &Bindings, v: &Vertex, ray: &Ray, u: f32, u_alpha: f32
     }
     let f = vertex_eval(v, ray, s.dir);
     let lit = s.prob > 0.0 && s.d2 > 0.0 && t_max > 0.0 && f != Vec3::ZERO && s.le != Vec3::ZERO;
+    if b.has_media {
+        let tr = transmittance(b, &shadow, t_max, u_alpha, vertex_medium(v, s.dir));
+        if !lit || tr == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        return f * tr * s.le / s.prob;
+    }
     if !lit || shadowed(b, &shadow, t_max, u_alpha) {
         return Vec3::ZERO;
     }
@@ -231,6 +274,8 @@ pub struct Path {
     pub prev_pdf: f32,
     pub prev_delta: bool,
     pub depth: u32,
+    /// The medium the ray travels in (`NO_MEDIUM`: none; the shader's with HAS_MEDIA).
+    pub medium: u32,
     /// The sample's AOVs (the shader's, with `HAS_AOVS`): albedo and normal of the first
     /// vertex whose bounce is not a delta lobe's (`found` once it is known), distance and
     /// point of the first hit.
@@ -241,7 +286,7 @@ pub struct Path {
     pub found: bool,
 }
 
-pub fn start_path(camera: Ray) -> Path {
+pub fn start_path(b: &Bindings, camera: Ray) -> Path {
     Path {
         ray: camera,
         radiance: Vec3::ZERO,
@@ -250,6 +295,11 @@ pub fn start_path(camera: Ray) -> Path {
         prev_pdf: 0.0,
         prev_delta: true,
         depth: 0,
+        medium: if b.has_media {
+            b.params.camera_medium
+        } else {
+            NO_MEDIUM
+        },
         albedo: Vec3::ZERO,
         normal: Vec3::ZERO,
         position: Vec3::ZERO,
@@ -275,22 +325,79 @@ pub fn survives_roulette(b: &Bindings, path: &mut Path, pixel: u32, sample: u32)
 /// The next vertex along the path's ray: the closest surface, passing through those
 /// transparent where the ray meets them as the shader does; the last surface is kept
 /// whatever.
-pub fn next_hit(b: &Bindings, path: &mut Path, u: f32) -> Candidate {
+pub fn next_hit(b: &Bindings, path: &mut Path, u: f32, pixel: u32, sample: u32) -> Candidate {
     let mut cand = intersect_scene(b, &path.ray, FAR);
-    if b.has_alpha {
-        for k in 0..MAX_ALPHA_SKIPS - 1 {
-            if cand.prim == NO_HIT {
-                break;
-            }
-            let h = surface_at(b, &path.ray, &cand);
-            if !transparent_at(b, &h, alpha_u(u, k)) {
-                break;
-            }
-            path.ray = spawn_ray(&h, path.ray.dir);
-            cand = intersect_scene(b, &path.ray, FAR);
+    let skips = if b.has_alpha { MAX_ALPHA_SKIPS } else { 1 };
+    for k in 0..skips {
+        if b.has_media && flies(b, path, &mut cand, pixel, sample, k) {
+            break;
         }
+        if k + 1 == skips || cand.prim == NO_HIT {
+            break;
+        }
+        let h = surface_at(b, &path.ray, &cand);
+        if !transparent_at(b, &h, alpha_u(u, k)) {
+            break;
+        }
+        if b.has_media {
+            path.medium = medium_after(media_at(b, &h), h.ng, path.ray.dir, path.medium);
+        }
+        path.ray = spawn_ray(&h, path.ray.dir);
+        cand = intersect_scene(b, &path.ray, FAR);
     }
     cand
+}
+
+/// The free flight through the path's medium up to the surface cand found (the k-th
+/// stretch of this bounce's ray): true when the path scatters before it, cand then
+/// `MEDIUM_HIT` at the event's distance; the throughput takes the flight's weight.
+pub fn flies(
+    b: &Bindings,
+    path: &mut Path,
+    cand: &mut Candidate,
+    pixel: u32,
+    sample: u32,
+    k: u32,
+) -> bool {
+    if path.medium == NO_MEDIUM {
+        return false;
+    }
+    let t_max = if cand.prim != NO_HIT { cand.t } else { FAR };
+    let u = bounce_2d(b, pixel, sample, path.depth, DIM_MEDIUM + k);
+    let flight = free_flight(&medium_record(b, path.medium), t_max, u);
+    path.throughput *= flight.weight;
+    if flight.t >= 0.0 {
+        cand.prim = MEDIUM_HIT;
+        cand.t = flight.t;
+        return true;
+    }
+    false
+}
+
+/// The vertex where the path scatters in its medium, at distance t along its ray.
+pub fn medium_vertex(b: &Bindings, path: &Path, t: f32) -> Vertex {
+    let zero = Vec3::ZERO;
+    Vertex {
+        hit: Hit {
+            p: path.ray.origin + t * path.ray.dir,
+            ng: zero,
+            ns: zero,
+            unmapped: zero,
+            uv: glam::Vec4::ZERO,
+            front_face: false,
+            material: 0,
+            err: 0.0,
+            tangent: glam::Vec4::ZERO,
+            color: glam::Vec4::ZERO,
+            dpdu: zero,
+            dpdv: zero,
+        },
+        mat: Material::default(),
+        medium: path.medium,
+        media: 0,
+        scatter: true,
+        g: medium_record(b, path.medium).g,
+    }
 }
 
 /// Whether an emitter the path's ray finds is weighed against light sampling: under MIS,
@@ -338,7 +445,18 @@ pub fn surface_vertex(
     }
     let mat = material_at(b, &record, &surface);
     let hit = bent_normal(&mat, &normal_mapped(b, &mat, &surface), &path.ray);
-    Vertex { hit, mat }
+    Vertex {
+        hit,
+        mat,
+        medium: path.medium,
+        media: if b.has_media {
+            media_at(b, &surface)
+        } else {
+            0
+        },
+        scatter: false,
+        g: 0.0,
+    }
 }
 
 /// What the vertex emits toward the path, weighed by MIS when prim is a light; the AOVs
@@ -419,6 +537,17 @@ pub fn no_bounce() -> Bounce {
 pub fn sample_bounce(b: &Bindings, path: &Path, v: &Vertex, pixel: u32, sample: u32) -> Bounce {
     let p = &b.params;
     let u = bounce_2d(b, pixel, sample, path.depth, DIM_BSDF);
+    if v.scatter {
+        // the phase function's own sample: weight 1
+        let dir = hg_sample(path.ray.dir, v.g, u);
+        return Bounce {
+            ok: true,
+            dir,
+            weight: Vec3::ONE,
+            pdf: hg_eval(path.ray.dir.dot(dir), v.g),
+            delta: false,
+        };
+    }
     if p.light_sampling == LIGHT_SAMPLING_MIXTURE && p.num_emitters != 0 && mixture_applies(&v.mat)
     {
         let uc = bounce_2d(b, pixel, sample, path.depth, DIM_LIGHT_CHOICE);
@@ -479,6 +608,9 @@ pub fn continue_path(b: &Bindings, path: &mut Path, v: &Vertex, bounce: &Bounce)
     path.prev_p = v.hit.p;
     path.prev_pdf = bounce.pdf;
     path.prev_delta = bounce.delta;
+    if b.has_media {
+        path.medium = vertex_medium(v, bounce.dir);
+    }
     path.ray = vertex_spawn(v, bounce.dir);
     path.depth += 1;
     path.depth < b.params.max_depth
@@ -495,13 +627,18 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
     } else {
         [0.0; 2]
     };
-    let cand = next_hit(b, path, u_alpha[0]);
+    let cand = next_hit(b, path, u_alpha[0], pixel, sample);
     if cand.prim == NO_HIT {
         escape(b, path);
         return false;
     }
-    let v = surface_vertex(b, path, &cand, pixel, sample);
-    add_emission(b, path, &v, cand.prim);
+    let v = if cand.prim == MEDIUM_HIT {
+        medium_vertex(b, path, cand.t)
+    } else {
+        let v = surface_vertex(b, path, &cand, pixel, sample);
+        add_emission(b, path, &v, cand.prim);
+        v
+    };
     if path.depth + 1 >= b.params.max_depth {
         return false;
     }

@@ -16,7 +16,7 @@ pub use super::samplers::{DIM_BSDF, DIM_LENS, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_P
 /// Radiance along one camera path: extend_path until it ends, as the shader's `main`
 /// does for each sample of its group.
 pub fn trace_path(b: &Bindings, pixel: u32, sample: u32, camera: Ray) -> Path {
-    let mut path = start_path(camera);
+    let mut path = start_path(b, camera);
     if b.params.max_depth > 0 {
         while extend_path(b, &mut path, pixel, sample) {}
     }

@@ -113,6 +113,9 @@ pub enum Feature {
     MeshAttribute,
     /// Energy compensation of microfacet lobes (`MAT_FLAG_ENERGY`): the albedo tables.
     EnergyCompensation,
+    /// Participating media (`[media]`): free flights, medium vertices and their phase
+    /// function, transmittance along shadow rays.
+    Media,
 }
 
 /// The features after the primitives' and before the materials' in define order.
@@ -124,7 +127,7 @@ const GEOMETRY: [Feature; 4] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 33] = [
+const SHADING: [Feature; 34] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -158,6 +161,7 @@ const SHADING: [Feature; 33] = [
     Feature::Bump,
     Feature::MeshAttribute,
     Feature::EnergyCompensation,
+    Feature::Media,
 ];
 
 impl Feature {
@@ -192,6 +196,7 @@ impl Feature {
             Feature::Sheen => "HAS_SHEEN",
             Feature::PbrLayers => "HAS_PBR_LAYERS",
             Feature::Alpha => "HAS_ALPHA",
+            Feature::Media => "HAS_MEDIA",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
             Feature::SrgbTexture => "HAS_SRGB_TEXTURE",
             Feature::NoiseTexture => "HAS_NOISE_TEXTURE",
@@ -303,7 +308,9 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     let bounded = scene.primitives.len() > scene.num_unbounded as usize;
     // lights are sampled only toward surfaces with a lobe that has a density (the
     // materials' own answer, `nee_applies`), and only when there are lights
-    let nee = scene.materials.iter().any(|m| m.nee());
+    // next-event estimation applies at a material with a density, and at every point
+    // where a path scatters in a medium
+    let nee = scene.has_media() || scene.materials.iter().any(|m| m.nee());
     let is_pbr = |m: &r::Material| m.tag == MaterialKind::Pbr.tag();
     let clearcoat = scene
         .materials
@@ -453,6 +460,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .iter()
                 .any(|m| m.flags & r::MAT_FLAG_OPACITY_TEXTURE != 0),
         )
+        .with(Feature::Media, scene.has_media())
 }
 
 /// What a shader is assembled from: its features, where its record arrays live, and the
@@ -495,9 +503,9 @@ impl ShaderSpec {
     /// pbr's layers two lobes to every pbr hit (and with them all in, llvmpipe's cold
     /// compile of the full shader took minutes longer). The materials added after pbr
     /// (conductor, thin_dielectric, plastic, blend, principled), the pixel filters, splatting, projectors, opacity
-    /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps, mesh attributes and energy compensation too: the full shader of every other
+    /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps, mesh attributes, energy compensation, null and media too: the full shader of every other
     /// scene stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 26] = [
+    pub const OPTIONAL_IN_FULL: [Feature; 28] = [
         Feature::Instances,
         Feature::Aovs,
         Feature::Alpha,
@@ -524,6 +532,8 @@ impl ShaderSpec {
         Feature::Bump,
         Feature::MeshAttribute,
         Feature::EnergyCompensation,
+        Feature::Material(MaterialKind::Null),
+        Feature::Media,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):
@@ -658,10 +668,11 @@ impl ShaderSpec {
                 // the tables by noise look-ups, by the background's distribution when
                 // lights are sampled, by pbr's sheen (its albedo table), by plastics
                 // (a rough coating's transmittance) and by the materials that energy
-                // compensation applies to (the microfacet albedo tables)
+                // compensation applies to (the microfacet albedo tables), and by media
                 Slot::Tables => {
                     let env = f(Feature::EnvMap);
-                    (f(Feature::Textures) || env) && f(Feature::NoiseTexture)
+                    f(Feature::Media)
+                        || (f(Feature::Textures) || env) && f(Feature::NoiseTexture)
                         || env && (f(Feature::Mis) || f(Feature::Mixture))
                         || f(Feature::Sheen) && f(Feature::Material(MaterialKind::Pbr))
                         || f(Feature::Material(MaterialKind::Plastic))

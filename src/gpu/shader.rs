@@ -45,6 +45,10 @@ const BASE_FILES: &[(&str, &str)] = &[
         include_str!("../../shaders/shared/materials.wgsl"),
     ),
     (
+        "shared/media",
+        include_str!("../../shaders/shared/media.wgsl"),
+    ),
+    (
         "shared/path",
         include_str!("../../shaders/shared/path.wgsl"),
     ),

@@ -89,6 +89,16 @@ pub struct FlatScene {
     pub tables: Vec<[f32; 4]>,
     /// The first `tables` entry of the microfacet albedo tables (0 without any).
     pub ms_tables: u32,
+    /// The first `tables` entry of the media (`MEDIUM_ENTRIES` each, in `[media]` name
+    /// order; 0 without any), and how many there are.
+    pub media: u32,
+    pub num_media: u32,
+    /// The medium camera rays start in, else `NO_MEDIUM`.
+    pub camera_medium: u32,
+    /// The first `tables` entry of the material records' media words (`MEDIA_SIDE`;
+    /// four to an entry), and whether any word is not 0.
+    pub material_media: u32,
+    pub shapes_hold_media: bool,
     /// Whether renders accumulate the AOVs (albedo, normal, depth, position; `crate::aov`)
     /// beside the colour. Not part of the scene file: a render asks for them.
     pub aovs: bool,
@@ -119,6 +129,11 @@ pub struct Band {
 }
 
 impl FlatScene {
+    /// Whether any path can enter a medium: the camera sits in one, or a shape bounds one.
+    pub fn has_media(&self) -> bool {
+        self.camera_medium != records::NO_MEDIUM || self.shapes_hold_media
+    }
+
     /// The nodes of the BVH.
     pub fn bvh_node_count(&self) -> usize {
         self.bvh.len()
@@ -183,6 +198,9 @@ impl FlatScene {
             filter_shape: self.filter.shape(),
             filter_steps: self.filter.steps,
             splat: self.filter.splat as u32,
+            media: self.media,
+            camera_medium: self.camera_medium,
+            material_media: self.material_media,
             ..Default::default()
         }
     }

@@ -561,7 +561,7 @@ pub fn flatten(
         .map(|(name, m)| (name, m.get_ref()))
         .chain(gltfs().flat_map(|g| g.materials.iter().map(|(n, m)| (n, m))))
         .collect();
-    let material_names: Vec<String> = material_list.iter().map(|m| m.0.clone()).collect();
+    let mut material_names: Vec<String> = material_list.iter().map(|m| m.0.clone()).collect();
     let mut materials: Vec<Material> = material_list
         .iter()
         .map(|m| m.1.record(&texture_names))
@@ -640,8 +640,48 @@ pub fn flatten(
         tables.extend(table.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
         plastic::point_at_table(m, offset);
     }
-    let mut builder =
-        build_primitives(file, files, &material_names).map_err(FlattenError::Degenerate)?;
+    // the media, after the other tables: (sigma_t, g), (albedo, 0) each
+    let media = if file.media.is_empty() {
+        0
+    } else {
+        tables.len() as u32
+    };
+    for m in file.media.values() {
+        let (t, a, g) = m.get_ref().coefficients();
+        tables.push([t[0], t[1], t[2], g]);
+        tables.push([a[0], a[1], a[2], 0.0]);
+    }
+    let medium_index = |name: &str| {
+        file.media
+            .keys()
+            .position(|n| n == name)
+            .expect("validated") as u32
+    };
+    let camera_medium = file
+        .camera
+        .medium
+        .as_deref()
+        .map_or(records::NO_MEDIUM, medium_index);
+    let (mut builder, media_words) =
+        build_primitives(file, files, &mut materials, &mut material_names)
+            .map_err(FlattenError::Degenerate)?;
+    // each material record's media word, four to an entry, after the media
+    // (whenever the file has media: a path in a medium reads them at every surface)
+    let shapes_hold_media = media_words.iter().any(|&w| w != 0);
+    let material_media = if file.media.is_empty() {
+        0
+    } else {
+        tables.len() as u32
+    };
+    if !file.media.is_empty() {
+        let mut words = media_words.clone();
+        words.resize(materials.len().next_multiple_of(4), 0);
+        tables.extend(
+            words
+                .chunks(4)
+                .map(|c| [c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32]),
+        );
+    }
     let groups = build_groups(&mut builder);
     let Builder {
         unbounded,
@@ -753,6 +793,11 @@ pub fn flatten(
         texels,
         tables,
         ms_tables,
+        media,
+        num_media: file.media.len() as u32,
+        camera_medium,
+        material_media,
+        shapes_hold_media,
     })
 }
 
@@ -775,9 +820,34 @@ fn bounding_sphere(boxes: &[Aabb]) -> (Vec3, f32) {
 fn build_primitives(
     file: &SceneFile,
     files: &SceneFiles,
-    material_names: &[String],
-) -> Result<Builder, Vec<usize>> {
-    let material_index = |name: &str| material_names.iter().position(|n| n == name).unwrap() as u32;
+    materials: &mut Vec<Material>,
+    material_names: &mut Vec<String>,
+) -> Result<(Builder, Vec<u32>), Vec<usize>> {
+    // the materials of the file, by name (the list grows by the copies below)
+    let named = material_names.clone();
+    let material_index = |name: &str| named.iter().position(|n| n == name).unwrap() as u32;
+    // a shape with media gets a copy of its material's record holding them, one per
+    // material and pair of media
+    let medium = |name: Option<&str>| {
+        name.map_or(0, |n| {
+            1 + file.media.keys().position(|m| m == n).expect("validated") as u32
+        })
+    };
+    let mut copies: std::collections::HashMap<(u32, u32), u32> = Default::default();
+    let mut words = vec![0; materials.len()];
+    let mut with_media = |index: u32, o: &ObjectDesc| -> u32 {
+        let (interior, exterior) = o.media();
+        if interior.is_none() && exterior.is_none() {
+            return index;
+        }
+        let word = medium(interior) + records::MEDIA_SIDE * medium(exterior);
+        *copies.entry((index, word)).or_insert_with(|| {
+            materials.push(materials[index as usize]);
+            material_names.push(material_names[index as usize].clone());
+            words.push(word);
+            materials.len() as u32 - 1
+        })
+    };
     let mut builder = Builder {
         groups: vec![Vec::new(); file.members.len()],
         ..Default::default()
@@ -805,7 +875,8 @@ fn build_primitives(
                 next_gltf_material += g.materials.len() as u32;
             }
             (None, Some(m), _) => {
-                builder.push_object(o, files.meshes[i].as_ref(), material_index(m))
+                let index = with_media(material_index(m), o);
+                builder.push_object(o, files.meshes[i].as_ref(), index)
             }
             (None, None, _) => unreachable!("an object without a material is a glTF file"),
         }
@@ -819,7 +890,7 @@ fn build_primitives(
         }
     }
     if degenerate.is_empty() {
-        Ok(builder)
+        Ok((builder, words))
     } else {
         Err(degenerate)
     }

@@ -31,6 +31,10 @@ pub struct SceneFile {
     /// them (each instance walks the group's own BVH, in the group's space).
     #[serde(default)]
     pub groups: BTreeMap<String, Spanned<GroupDesc>>,
+    /// `[media.NAME]`: participating media, which objects hold inside (`interior`) or
+    /// outside (`exterior`) and the camera may sit in (`[camera] medium`).
+    #[serde(default)]
+    pub media: BTreeMap<String, Spanned<MediumDesc>>,
     /// Set by [`SceneFile::gather_groups`]: the groups' objects follow the scene's own in
     /// `objects`, each group's at its range, so that every object is validated, read and
     /// flattened by the same code.
@@ -406,6 +410,9 @@ pub struct CameraDesc {
     /// its view direction: nearer surfaces are not seen (Mitsuba's `near_clip`). 0: none.
     #[serde(default)]
     pub near_clip: f32,
+    /// The medium the camera sits in (a `[media.NAME]`); none: vacuum.
+    #[serde(default)]
+    pub medium: Option<String>,
 }
 
 /// `[camera] projection`.
@@ -843,6 +850,8 @@ pub enum ObjectDesc {
         center: [f32; 3],
         radius: f32,
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// Front side: right-hand-rule normal of the vertex order. `uvs` default to (0, 0),
@@ -851,18 +860,24 @@ pub enum ObjectDesc {
         vertices: [[f32; 3]; 3],
         uvs: Option<[[f32; 2]; 3]>,
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// Planar and convex; split into a triangle fan. Front side as for triangles.
     Polygon {
         vertices: Vec<[f32; 3]>,
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// Four vertices; four triangles facing outward.
     Tetrahedron {
         vertices: [[f32; 3]; 4],
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// Infinite plane through `point`; front side along `normal`. uv = `uv_scale` x the
@@ -873,6 +888,8 @@ pub enum ObjectDesc {
         #[serde(default = "crate::scene::materials::common::one")]
         uv_scale: f32,
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// Axis-aligned box from `min` to `max` (before its transform).
@@ -880,6 +897,8 @@ pub enum ObjectDesc {
         min: [f32; 3],
         max: [f32; 3],
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// Finite cylinder between the centers of its end disks.
@@ -890,6 +909,8 @@ pub enum ObjectDesc {
         #[serde(default = "yes")]
         caps: bool,
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// Disk; front side along `normal`.
@@ -898,6 +919,8 @@ pub enum ObjectDesc {
         normal: [f32; 3],
         radius: f32,
         material: String,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
     },
     /// A Wavefront OBJ, PLY or Mitsuba `.serialized` file, `path` relative to the scene
@@ -905,6 +928,8 @@ pub enum ObjectDesc {
     Mesh {
         path: String,
         material: Option<String>,
+        interior: Option<String>,
+        exterior: Option<String>,
         transform: Option<TransformDesc>,
         /// Flat shading: the file's vertex normals left out.
         #[serde(default)]
@@ -987,6 +1012,41 @@ impl ObjectDesc {
         })
     }
 
+    /// The media it holds inside and outside (`interior`, `exterior`), by name; (None,
+    /// None): crossing it leaves the medium as it is.
+    pub fn media(&self) -> (Option<&str>, Option<&str>) {
+        match self {
+            ObjectDesc::Sphere {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Triangle {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Polygon {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Tetrahedron {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Plane {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Box {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Cylinder {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Disk {
+                interior, exterior, ..
+            }
+            | ObjectDesc::Mesh {
+                interior, exterior, ..
+            } => (interior.as_deref(), exterior.as_deref()),
+            ObjectDesc::Gltf { .. } | ObjectDesc::Instance { .. } => (None, None),
+        }
+    }
+
     pub fn transform(&self) -> Option<TransformDesc> {
         match self {
             ObjectDesc::Sphere { transform, .. }
@@ -1000,6 +1060,75 @@ impl ObjectDesc {
             | ObjectDesc::Mesh { transform, .. }
             | ObjectDesc::Gltf { transform, .. }
             | ObjectDesc::Instance { transform, .. } => *transform,
+        }
+    }
+}
+
+/// `[media.NAME]`: a participating medium, selected by `type`.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(tag = "type", rename_all = "lowercase", deny_unknown_fields)]
+pub enum MediumDesc {
+    /// The same everywhere: extinction `sigma_t` (per scene unit, an RGB or one number)
+    /// and single-scattering `albedo` (Mitsuba's defaults, 1 and 0.75), or absorption
+    /// `sigma_a` and scattering `sigma_s` instead; all times `scale`. Scattered by the
+    /// Henyey-Greenstein phase function of asymmetry `g` (0: isotropic, > 0 forward).
+    Homogeneous {
+        sigma_t: Option<Spectrum>,
+        albedo: Option<Spectrum>,
+        sigma_a: Option<Spectrum>,
+        sigma_s: Option<Spectrum>,
+        #[serde(default = "crate::scene::materials::common::one")]
+        scale: f32,
+        #[serde(default)]
+        g: f32,
+    },
+}
+
+/// An RGB triple, or one number for all three.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(untagged)]
+pub enum Spectrum {
+    Rgb([f32; 3]),
+    Value(f32),
+}
+
+impl Spectrum {
+    pub fn rgb(self) -> [f32; 3] {
+        match self {
+            Spectrum::Rgb(c) => c,
+            Spectrum::Value(v) => [v; 3],
+        }
+    }
+}
+
+impl MediumDesc {
+    /// Its extinction, albedo (each per channel, scale applied) and phase asymmetry.
+    pub fn coefficients(&self) -> ([f32; 3], [f32; 3], f32) {
+        match self {
+            MediumDesc::Homogeneous {
+                sigma_t,
+                albedo,
+                sigma_a,
+                sigma_s,
+                scale,
+                g,
+            } => {
+                let (t, a) = match (sigma_a, sigma_s) {
+                    (None, None) => (
+                        sigma_t.map_or([1.0; 3], Spectrum::rgb),
+                        albedo.map_or([0.75; 3], Spectrum::rgb),
+                    ),
+                    (sa, ss) => {
+                        let sa = sa.map_or([0.0; 3], Spectrum::rgb);
+                        let ss = ss.map_or([0.0; 3], Spectrum::rgb);
+                        let t: [f32; 3] = std::array::from_fn(|k| sa[k] + ss[k]);
+                        let a =
+                            std::array::from_fn(|k| if t[k] > 0.0 { ss[k] / t[k] } else { 0.0 });
+                        (t, a)
+                    }
+                };
+                (t.map(|x| x * scale), a, *g)
+            }
         }
     }
 }

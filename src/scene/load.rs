@@ -298,6 +298,7 @@ fn load_gltf_scene(
             },
         )],
         lights: Vec::new(),
+        media: Default::default(),
         groups: Default::default(),
         members: Vec::new(),
     };
@@ -409,6 +410,7 @@ fn framing_camera(lo: Vec3, hi: Vec3, aspect: f32) -> CameraDesc {
         height: None,
         mirror: false,
         near_clip: 0.0,
+        medium: None,
     }
 }
 

@@ -255,6 +255,23 @@ shared_constants! {
     DIM_ALPHA: u32 = 7;
     /// `.x` chooses among the parts of a `blend` material.
     DIM_BLEND: u32 = 8;
+    /// The free flight through a medium along the k-th segment of a bounce's ray (k
+    /// counts the surfaces passed through): dimension `DIM_MEDIUM + k`, `.x` choosing the
+    /// colour channel whose extinction draws the distance, `.y` the distance.
+    DIM_MEDIUM: u32 = 16;
+
+    /// The path's medium when it is in none (vacuum).
+    NO_MEDIUM: u32 = 0xffff_ffff;
+    /// A candidate's `prim` when the ray scatters in a medium before any surface (at the
+    /// candidate's `t`).
+    MEDIUM_HIT: u32 = 0xffff_fffe;
+    /// `vec4<f32>` entries of `tables` per medium (`Medium`): (sigma_t rgb, g), (albedo
+    /// rgb, 0).
+    MEDIUM_ENTRIES: u32 = 2;
+    /// A shape's media word (`Params::material_media`): interior + 1 plus `MEDIA_SIDE` x
+    /// (exterior + 1), 0 for vacuum on a side; a word of 0 leaves the medium as it is.
+    /// At most `MEDIA_SIDE - 1` media, so a word is an exact f32.
+    MEDIA_SIDE: u32 = 4096;
 
     /// The f32 nearest to pi.
     PI: f32 = std::f32::consts::PI;
@@ -585,6 +602,16 @@ pub struct Params {
     /// filter reaches, by the gather pass (`[render] reconstruction = "splat"`); 0: each
     /// pixel's samples are drawn from the filter.
     pub splat: u32,
+    /// The first `tables` entry of the media (`MEDIUM_ENTRIES` each, in `[media]`
+    /// order); 0 without any.
+    pub media: u32,
+    /// The medium camera rays start in (`[camera] medium`), else `NO_MEDIUM`.
+    pub camera_medium: u32,
+    /// The first `tables` entry of the materials' media words (four to an entry, as
+    /// f32 values; `MEDIA_SIDE`): the media the shapes of each material record hold
+    /// (the flattener gives a shape with media a record of its own); 0 without media.
+    pub material_media: u32,
+    pub pad0: u32,
     /// The filter's radius in pixels, a Gaussian's standard deviation, its value at the
     /// radius (subtracted, so it falls to 0 there), and 1 when samples stay on the image
     /// (`[render] sample_border = false`: a border pixel's filter restricted to the
@@ -957,6 +984,10 @@ shared_record!(Params {
     near_clip,
     filter_steps,
     splat,
+    media,
+    camera_medium,
+    material_media,
+    pad0,
     filter_shape
 });
 shared_record!(KernelRay { origin, dir });

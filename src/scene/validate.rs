@@ -5,6 +5,7 @@ use glam::Vec3;
 use super::error::Problem;
 use toml::Spanned;
 
+use super::format::MediumDesc;
 use super::format::{
     is_mesh_attribute, CameraDesc, CheckerMapping, FilterKind, LightDesc, ObjectDesc, Projection,
     RenderDesc, SceneFile, TextureDesc, TransformDesc, UvTransformDesc, MESH_ATTRIBUTES,
@@ -69,6 +70,19 @@ pub fn validate(file: &SceneFile, src: &str, overridden: &[&str]) -> Vec<Problem
         v.object(i, obj, file);
     }
     v.groups(file);
+    for (name, m) in &file.media {
+        v.medium(name, m);
+    }
+    if file.media.len() >= crate::scene::records::MEDIA_SIDE as usize {
+        v.push(
+            0,
+            "media",
+            format!("at most {} media", crate::scene::records::MEDIA_SIDE - 1),
+        );
+    }
+    if let Some(name) = file.camera.medium.as_deref() {
+        v.medium_name("camera.medium", name, 0, file);
+    }
     for (i, light) in file.lights.iter().enumerate() {
         v.light(i, light);
     }
@@ -470,7 +484,77 @@ impl Validator<'_> {
         if let Some(t) = o.transform() {
             self.transform(&format!("{key}.transform"), &t, at);
         }
+        let (interior, exterior) = o.media();
+        for (field, name) in [("interior", interior), ("exterior", exterior)] {
+            if let Some(name) = name {
+                self.medium_name(&format!("{key}.{field}"), name, at, file);
+            }
+        }
         self.shape(&key, o, at);
+    }
+
+    /// A medium named at `key`: one of `[media]`.
+    fn medium_name(&mut self, key: &str, name: &str, at: usize, file: &SceneFile) {
+        if !file.media.contains_key(name) {
+            let known = names(file.media.keys().map(String::as_str));
+            self.push(
+                at,
+                key,
+                format!("unknown medium \"{name}\" (defined: {known})"),
+            );
+        }
+    }
+
+    /// One `[media.NAME]`: coefficients >= 0, an albedo in [0, 1], either sigma_t and
+    /// albedo or sigma_a and sigma_s, a scale >= 0 and |g| < 1.
+    fn medium(&mut self, name: &str, m: &Spanned<MediumDesc>) {
+        let at = m.span().start;
+        let key = |field: &str| format!("media.{name}.{field}");
+        match m.get_ref() {
+            MediumDesc::Homogeneous {
+                sigma_t,
+                albedo,
+                sigma_a,
+                sigma_s,
+                scale,
+                g,
+            } => {
+                for (field, value) in [
+                    ("sigma_t", sigma_t),
+                    ("sigma_a", sigma_a),
+                    ("sigma_s", sigma_s),
+                ] {
+                    if let Some(v) = value {
+                        self.nonnegative3(&key(field), v.rgb(), at);
+                    }
+                }
+                if let Some(a) = albedo {
+                    let a = a.rgb();
+                    if self.finite3(&key("albedo"), a, at)
+                        && a.iter().any(|x| !(0.0..=1.0).contains(x))
+                    {
+                        self.push(at, &key("albedo"), format!("must be in [0, 1], got {a:?}"));
+                    }
+                }
+                let split = sigma_a.is_some() || sigma_s.is_some();
+                for (field, given) in [("sigma_t", sigma_t.is_some()), ("albedo", albedo.is_some())]
+                {
+                    if split && given {
+                        self.push(
+                            at,
+                            &key(field),
+                            "give sigma_t and albedo, or sigma_a and sigma_s, not both".into(),
+                        );
+                    }
+                }
+                if !(*scale >= 0.0 && scale.is_finite()) {
+                    self.push(at, &key("scale"), format!("must be >= 0, got {scale}"));
+                }
+                if g.is_nan() || g.abs() >= 1.0 {
+                    self.push(at, &key("g"), format!("must be in (-1, 1), got {g}"));
+                }
+            }
+        }
     }
 
     /// One `[[lights]]` entry: finite placement, a non-zero axis, non-negative power,

@@ -561,6 +561,8 @@ pub const MATERIALS: &[TestMaterial] = &[
         true,
     ),
     row("thin dielectric 1.5", "type = \"thin_dielectric\"", true, false),
+    // a boundary with no surface: straight on, weight 1
+    row("null", "type = \"null\"", true, false),
     row(
         "thin dielectric 1.33 tinted",
         "type = \"thin_dielectric\"\nior = 1.33\ntint = [0.9, 0.7, 0.5]\nspecular = [0.8, 0.8, 1]",

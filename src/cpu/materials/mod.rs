@@ -11,6 +11,7 @@ pub mod emissive;
 pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
+pub mod null;
 pub mod pbr;
 pub mod plastic;
 pub mod principled;

@@ -140,6 +140,7 @@ impl<'a> Loader<'a> {
             mirror: false,
             // glTF's znear is left out: wgtrace's glTF cameras start at the camera
             near_clip: 0.0,
+            medium: None,
         };
         match camera.projection() {
             gltf::camera::Projection::Perspective(p) => {

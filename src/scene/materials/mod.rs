@@ -19,6 +19,7 @@ pub mod emissive;
 pub mod lambertian;
 pub mod metal;
 pub mod microfacet;
+pub mod null;
 pub mod pbr;
 pub mod plastic;
 pub mod principled;
@@ -63,6 +64,8 @@ macro_rules! for_each_material {
             Blend = 9, blend, "HAS_BLEND";
             /// The Disney principled BSDF, as Mitsuba 3 defines it.
             Principled = 10, principled, "HAS_PRINCIPLED";
+            /// No surface: a medium's boundary that rays pass straight through.
+            Null = 11, null, "HAS_NULL";
         }
     };
 }

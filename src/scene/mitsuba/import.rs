@@ -71,6 +71,8 @@ pub fn import(tree: &SceneTree, base: &Path) -> Result<Imported, XmlError> {
         names: HashSet::new(),
         texture_names: HashMap::new(),
         material_names: HashMap::new(),
+        media: Vec::new(),
+        medium_names: HashMap::new(),
         notes: Vec::new(),
         world: DMat4::IDENTITY,
     };
@@ -123,6 +125,9 @@ struct Importer<'a> {
     texture_names: HashMap<(usize, bool), String>,
     /// (BSDF object or none, emitter object or none) -> material name.
     material_names: HashMap<(Option<usize>, Option<usize>), String>,
+    /// `[media.NAME]` tables, and the name of each medium object read.
+    media: Vec<Entry>,
+    medium_names: HashMap<usize, String>,
     notes: Vec<String>,
 }
 
@@ -175,7 +180,7 @@ fn children<'t>(
     })
 }
 
-const MEDIA: &str = "participating media are not rendered yet (issue 43)";
+const MEDIA: &str = "heterogeneous media (grid volumes) are not rendered yet (issue 43); wgtrace reads homogeneous media";
 
 impl<'a> Importer<'a> {
     fn obj(&self, i: usize) -> &'a Object {
@@ -258,13 +263,15 @@ impl<'a> Importer<'a> {
     /// Properties the mapping does not read: refused unless `ignorable`.
     fn check_known(&self, o: &Object, known: &[&str], ignorable: &[&str]) -> Result<()> {
         for p in &o.props {
-            // a nested object without a name; a shape's BSDF or emitter under any name (Mitsuba
-            // reads them by their kind)
+            // a nested object without a name; a shape's BSDF, emitter or media, a sensor's
+            // medium, under any name (Mitsuba reads them by their kind; a shape's media by
+            // `interior` and `exterior`)
             let nested_ok = match p.value {
                 Value::Object(i) => {
                     p.name.starts_with("_arg_")
                         || o.tag == "shape"
-                            && matches!(self.obj(i).tag.as_str(), "bsdf" | "emitter")
+                            && matches!(self.obj(i).tag.as_str(), "bsdf" | "emitter" | "medium")
+                        || o.tag == "sensor" && self.obj(i).tag == "medium"
                 }
                 _ => false,
             };
@@ -513,10 +520,8 @@ impl<'a> Importer<'a> {
                 }
                 "integrator" => integrator = Some(i),
                 // named for reference only: used where they are referred to
-                "bsdf" | "texture" => {}
-                "medium" | "phase" | "volume" => {
-                    return err(&o.pos, format!("{}: {MEDIA}", what(o)))
-                }
+                "bsdf" | "texture" | "medium" | "phase" => {}
+                "volume" => return err(&o.pos, format!("{}: {MEDIA}", what(o))),
                 _ => return err(&o.pos, format!("<{}> at the top level is not read", o.tag)),
             }
         }
@@ -586,8 +591,8 @@ impl<'a> Importer<'a> {
                 return err(
                     &o.pos,
                     format!(
-                        "integrator {other}: not rendered by wgtrace (it renders path, direct, volpath and \
-                         volpathmis without media, ptracer and moment as a path tracer)"
+                        "integrator {other}: not rendered by wgtrace (it renders path, direct, volpath, \
+                         volpathmis, and ptracer and moment as a path tracer)"
                     ),
                 )
             }
@@ -653,9 +658,10 @@ impl<'a> Importer<'a> {
                 self.render.insert("sampler".into(), text("random"));
             }
         }
-        if let Some(m) = children(self.tree, o, "medium").next() {
-            return err(&self.obj(m).pos, format!("medium: {MEDIA}"));
-        }
+        let camera_medium = match children(self.tree, o, "medium").next() {
+            Some(m) => Some(self.medium(m)?),
+            None => None,
+        };
         let aspect = width as f64 / height as f64;
         let m = self.world * self.transform(o, "to_world")?;
         let origin = m.transform_point3(DVec3::ZERO);
@@ -673,6 +679,9 @@ impl<'a> Importer<'a> {
         // a to_world with a negative determinant mirrors the image
         if up.cross(dir).dot(left) < 0.0 {
             cam.insert("mirror".into(), T::Boolean(true));
+        }
+        if let Some(m) = camera_medium {
+            cam.insert("medium".into(), T::String(m));
         }
         // Mitsuba's projective cameras all read focus_distance; only thinlens uses it
         let known_projective = ["to_world", "near_clip", "far_clip", "focus_distance"];
@@ -1148,6 +1157,70 @@ impl<'a> Importer<'a> {
         self.name(&o, stem)
     }
 
+    /// A `<medium>`'s `[media.NAME]` table (once per object), by its name.
+    fn medium(&mut self, i: usize) -> Result<String> {
+        if let Some(n) = self.medium_names.get(&i) {
+            return Ok(n.clone());
+        }
+        let o = self.obj(i);
+        if o.plugin != "homogeneous" {
+            return err(&o.pos, format!("{}: {MEDIA}", what(o)));
+        }
+        self.check_known(o, &["albedo", "sigma_t", "scale", "sample_emitters"], &[])?;
+        let albedo = self.color_const(o, "albedo", 0.75, Use::Reflectance)?;
+        let sigma_t = self.color_const(o, "sigma_t", 1.0, Use::Unbounded)?;
+        let scale = self.float(o, "scale", 1.0)?;
+        let mut g = 0.0;
+        let phases: Vec<usize> = children(self.tree, o, "phase").collect();
+        if phases.len() > 1 {
+            return err(
+                &o.pos,
+                format!(
+                    "{}: has {} phase functions; a medium takes one",
+                    what(o),
+                    phases.len()
+                ),
+            );
+        }
+        if let Some(&ph) = phases.first() {
+            let po = self.obj(ph);
+            match po.plugin.as_str() {
+                "isotropic" => self.check_known(po, &[], &[])?,
+                "hg" => {
+                    self.check_known(po, &["g"], &[])?;
+                    // Mitsuba's default asymmetry
+                    g = self.float(po, "g", 0.8)?;
+                }
+                other => {
+                    return err(
+                        &po.pos,
+                        format!("phase {other}: not read (wgtrace reads isotropic and hg)"),
+                    )
+                }
+            }
+        }
+        let mut t = table([
+            ("type", text("homogeneous")),
+            ("sigma_t", sigma_t),
+            ("albedo", albedo),
+        ]);
+        if scale != 1.0 {
+            t.insert("scale".into(), float(scale));
+        }
+        if g != 0.0 {
+            t.insert("g".into(), float(g));
+        }
+        let name = self.name(o, "medium");
+        self.medium_names.insert(i, name.clone());
+        self.media.push(Entry {
+            name: name.clone(),
+            table: t,
+            pos: o.pos.clone(),
+            what: what(o),
+        });
+        Ok(name)
+    }
+
     fn push_material(
         &mut self,
         name: String,
@@ -1411,7 +1484,10 @@ impl<'a> Importer<'a> {
                 }
                 t
             }
-            "null" => return err(&o.pos, format!("bsdf null: index-matched boundaries come with media; {MEDIA}")),
+            "null" => {
+                self.check_known(o, &[], &[])?;
+                table([("type", text("null"))])
+            }
             other => {
                 return err(
                     &o.pos,
@@ -1461,21 +1537,30 @@ impl<'a> Importer<'a> {
                 return err(&eo.pos, "emitter area: a shape takes one");
             }
         }
-        if let Some(m) = children(self.tree, o, "medium").next() {
-            return err(&self.obj(m).pos, format!("medium: {MEDIA}"));
-        }
-        if let Some(p) = o
-            .props
-            .iter()
-            .find(|p| p.name == "interior" || p.name == "exterior")
-        {
-            return err(&p.pos, format!("{}: `{}`: {MEDIA}", what(o), p.name));
+        // its media: `interior` and `exterior`, nested or referred to
+        let mut media = Vec::new();
+        for p in &o.props {
+            if let Value::Object(m) = p.value {
+                if self.obj(m).tag != "medium" {
+                    continue;
+                }
+                if p.name != "interior" && p.name != "exterior" {
+                    return err(
+                        &p.pos,
+                        format!("{}: a medium must be named interior or exterior", what(o)),
+                    );
+                }
+                media.push((p.name.clone(), self.medium(m)?));
+            }
         }
         let to_world = outer * self.transform(o, "to_world")?;
         let flip = self.boolean(o, "flip_normals", false)?;
         let material = |s: &mut Self| s.material(bsdfs.first().copied(), emitter, &o.pos);
         let ignorable = ["id"];
-        let push = |s: &mut Self, t: Table| {
+        let push = |s: &mut Self, mut t: Table| {
+            for (side, name) in &media {
+                t.insert(side.clone(), T::String(name.clone()));
+            }
             let entry = |name: String| Entry {
                 name,
                 table: t,
@@ -1908,7 +1993,11 @@ impl<'a> Importer<'a> {
                 &table([("color", rgb([0.0; 3]))]),
             ),
         }
-        for (kind, list) in [("textures", &self.textures), ("materials", &self.materials)] {
+        for (kind, list) in [
+            ("textures", &self.textures),
+            ("materials", &self.materials),
+            ("media", &self.media),
+        ] {
             for e in list {
                 w.section(&format!("[{kind}.{}]", e.name), &e.pos, &e.what, &e.table);
             }
