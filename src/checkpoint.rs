@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 
 use crate::accumulation::Accumulation;
 use crate::scene::flat::FlatScene;
+use crate::scene::records::Params;
 
 const MAGIC: &str = "wgtrace checkpoint";
 
@@ -120,8 +121,13 @@ pub fn scene_hash(scene: &FlatScene) -> u64 {
         params.spp = 0;
         params.strata_log2 = 0;
     }
+    // the parameters but the media's four words, which follow (a scene without media
+    // hashes as it did before media had them)
+    let bytes = bytemuck::bytes_of(&params);
+    let media_at = std::mem::offset_of!(Params, media);
+    let before_media = [&bytes[..media_at], &bytes[media_at + 16..]].concat();
     let parts: [&[u8]; 8] = [
-        bytemuck::bytes_of(&params),
+        &before_media,
         bytemuck::cast_slice(&scene.primitives),
         bytemuck::cast_slice(&scene.materials),
         bytemuck::cast_slice(&scene.emitters),
@@ -142,9 +148,12 @@ pub fn scene_hash(scene: &FlatScene) -> u64 {
         .then(|| bytemuck::cast_slice(&banks))
         .into_iter()
         .chain(scene.texels.banks.iter().map(|b| &b.data[..]));
+    let media = [params.media, params.camera_medium, params.material_media];
+    let media = (scene.num_media > 0).then(|| bytemuck::cast_slice(&media));
     parts
         .into_iter()
         .chain(texels)
+        .chain(media)
         .fold(FNV1A64_BASIS, |h, part| {
             let h = fnv1a64(h, &(part.len() as u64).to_le_bytes());
             fnv1a64(h, part)
