@@ -321,12 +321,6 @@ fn eval_integral(m: &Material, ray: &Ray, hit: &Hit, theta_max: f64, nt: usize) 
     integral * theta_max / nt as f64 * std::f64::consts::TAU / np as f64
 }
 
-/// A shading normal tilted 35 degrees from the geometric one (+Z), seen from views that
-/// leave the viewer over and under its horizon: after `bent_normal`, every material of the
-/// chi-square rows samples directions over the geometric surface with the density
-/// `bsdf_pdf` gives (chi-square; MIS weighs by it, `scatter_pdf`), and its mean weight is
-/// the integral of `bsdf_eval` over the hemisphere (5 standard errors): what the lobes
-/// send under the geometric surface comes back over it, and is counted once.
 /// The Henyey-Greenstein phase function's sampler against its pdf over the whole sphere
 /// (chi-square), about the direction of travel +z, from back-scattering to strongly
 /// forward: the sampler inverts the cumulative distribution of cos theta that `hg_eval`
@@ -347,6 +341,12 @@ fn the_phase_function_samples_its_pdf() {
     }
 }
 
+/// A shading normal tilted 35 degrees from the geometric one (+Z), seen from views that
+/// leave the viewer over and under its horizon: after `bent_normal`, every material of the
+/// chi-square rows samples directions over the geometric surface with the density
+/// `bsdf_pdf` gives (chi-square; MIS weighs by it, `scatter_pdf`), and its mean weight is
+/// the integral of `bsdf_eval` over the hemisphere (5 standard errors): what the lobes
+/// send under the geometric surface comes back over it, and is counted once.
 #[test]
 fn shading_normals_sample_and_weigh_what_eval_and_pdf_say() {
     let tilt = 35f32.to_radians();

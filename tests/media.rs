@@ -252,7 +252,8 @@ interior = "cloud"
 
 /// Bad media are refused with the key and line: an unknown medium (of an object, of the
 /// camera), both ways of giving the coefficients at once, an albedo over 1, a phase
-/// asymmetry of 1.
+/// asymmetry of 1, an extinction that overflows, media on a mesh that takes its OBJ
+/// file's own materials.
 #[test]
 fn bad_media_are_refused_with_their_keys() {
     let base = |camera: &str, media: &str, object: &str| {
@@ -295,6 +296,21 @@ fn bad_media_are_refused_with_their_keys() {
                 "interior = \"fog\"",
             ),
             "media.fog.g: must be in (-1, 1), got 1",
+        ),
+        (
+            base(
+                "",
+                "[media.fog]\ntype = \"homogeneous\"\nsigma_t = 1e30\nscale = 1e30\n",
+                "interior = \"fog\"",
+            ),
+            "media.fog.scale: times the coefficients gives an infinite extinction",
+        ),
+        (
+            format!(
+                "{}[[objects]]\ntype = \"mesh\"\npath = \"m.obj\"\ninterior = \"fog\"\n",
+                base("", fog, "")
+            ),
+            "objects[1].interior: a mesh with media needs its `material`",
         ),
     ];
     for (src, says) in cases {

@@ -138,6 +138,11 @@ pub const ENTRIES: &[Entry] = &[
         "Energy compensation off and on: gold, a white glTF material, rough glass, a plastic; roughness 0.25 to 1",
     ),
     entry(
+        "fog",
+        "scenes/fog.toml",
+        "Participating media: fog that scatters forward in a null box, a glass sphere holding a green medium nested in it",
+    ),
+    entry(
         "materials",
         "scenes/materials.toml",
         "Every material side by side",

@@ -488,6 +488,17 @@ impl Validator<'_> {
         for (field, name) in [("interior", interior), ("exterior", exterior)] {
             if let Some(name) = name {
                 self.medium_name(&format!("{key}.{field}"), name, at, file);
+                // a mesh without `material` takes its OBJ file's own materials, which
+                // hold no media
+                if matches!(o, ObjectDesc::Mesh { material: None, .. }) {
+                    self.push(
+                        at,
+                        &format!("{key}.{field}"),
+                        "a mesh with media needs its `material` (an OBJ file's own \
+                         materials take none)"
+                            .into(),
+                    );
+                }
             }
         }
         self.shape(&key, o, at);
@@ -549,6 +560,12 @@ impl Validator<'_> {
                 }
                 if !(*scale >= 0.0 && scale.is_finite()) {
                     self.push(at, &key("scale"), format!("must be >= 0, got {scale}"));
+                } else if !m.get_ref().coefficients().0.iter().all(|x| x.is_finite()) {
+                    self.push(
+                        at,
+                        &key("scale"),
+                        format!("times the coefficients gives an infinite extinction ({scale})"),
+                    );
                 }
                 if g.is_nan() || g.abs() >= 1.0 {
                     self.push(at, &key("g"), format!("must be in (-1, 1), got {g}"));
