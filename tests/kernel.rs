@@ -698,7 +698,9 @@ fn gpu_lights_match_cpu_query_by_query() {
 /// CPU's `extend_path` gives the same states (`check::cpu_path_steps`). Scenes that
 /// take each stage's branches: next-event estimation under MIS, the mixture and the
 /// material's own sampling, lights without a surface, alpha pass-through, blends,
-/// delta lobes, textures and normal maps, an environment light, Russian roulette. A
+/// delta lobes, textures and normal maps, an environment light, Russian roulette, and
+/// media (the fog box of scenes/fog.toml: free flights, scattering points, shadow rays'
+/// transmittance through null boundaries, a glass sphere holding a medium). A
 /// random number within rounding of a choice (a lobe, a roulette coin, a grazing edge)
 /// may send a path another way on the two backends: at most 1 in 100 paths may differ
 /// (the ray kernel's 1 in 1000 per decision, over a path's handful of bounces).

@@ -323,8 +323,9 @@ pub fn survives_roulette(b: &Bindings, path: &mut Path, pixel: u32, sample: u32)
 }
 
 /// The next vertex along the path's ray: the closest surface, passing through those
-/// transparent where the ray meets them as the shader does; the last surface is kept
-/// whatever.
+/// transparent where the ray meets them as the shader does (the last surface kept
+/// whatever); with media, a free flight along each stretch (`flies`), and `MEDIUM_HIT`
+/// where the path scatters first.
 pub fn next_hit(b: &Bindings, path: &mut Path, u: f32, pixel: u32, sample: u32) -> Candidate {
     let mut cand = intersect_scene(b, &path.ray, FAR);
     let skips = if b.has_alpha { MAX_ALPHA_SKIPS } else { 1 };
