@@ -1,9 +1,11 @@
 """The generated assets of tests/mitsuba's scenes, written with the values
 tests/mitsuba_import.rs writes: generated/sky.exr, generated/pyramid.serialized,
-generated/octahedron.obj and generated/waves.exr. Used by
+generated/octahedron.obj, generated/waves.exr and generated/plume.vol (a copy of
+scenes/volumes/plume.vol, which bench/plume_grid.py writes). Used by
 bench/mitsuba_refs.py and bench/mitsuba_import_report.py."""
 import math
 import os
+import shutil
 import struct
 import zlib
 
@@ -140,6 +142,8 @@ def write_assets(folder, write_exr):
         f.write(QUAD_PLY)
     with open(os.path.join(folder, "generated", "attributes.ply"), "w") as f:
         f.write(ATTRIBUTES_PLY)
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    shutil.copy(os.path.join(root, "scenes", "volumes", "plume.vol"), os.path.join(folder, "generated", "plume.vol"))
     with open(os.path.join(folder, "generated", "octahedron.obj"), "w") as f:
         f.write("v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n")
         f.write("vn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\n")

@@ -17,12 +17,14 @@ where Mitsuba looks first (the scene's latest `<path>` folder, else the scene's 
   a placed sphere (positions; each shape placed by the name and its index);
 - PNG/JPG/BMP: a 64 x 64 pattern of colour gradients and checks (names with "normalmap": a
   wave normal map; with "mask": a soft-edged disk pattern in grey);
-- EXR/HDR/PFM: a 64 x 32 equirectangular sky, a gradient with a small bright sun.
+- EXR/HDR/PFM: a 64 x 32 equirectangular sky, a gradient with a small bright sun;
+- VOL (Mitsuba's grid): 16^3 voxels of a soft ball of density with ripples in it, one
+  float32 channel (names with "albedo": three channels of colours in [0.2, 0.9]).
 
 Both renderers then read the same stand-ins, so the comparison still judges how each
 reads the scene file; the stand-ins written are listed, and a report made from these
-scenes says the assets are stand-ins. Volumes and other kinds are left missing (the scene is refused by the renderer that needs
-them, with its message).
+scenes says the assets are stand-ins. Other kinds are left missing (the scene is refused by
+the renderer that needs them, with its message).
 
 usage: python bench/mitsuba_standins.py FOLDER   (Mitsuba 3's Python package writes the
 images: `pip install mitsuba==3.9.1 numpy`)
@@ -201,6 +203,21 @@ def sphere_ply(radius, centre):
     return head + "\n".join(rows + faces) + "\n"
 
 
+def vol_grid(albedo, n=16):
+    """A Mitsuba .vol grid of n^3 voxels: a soft ball with ripples (one channel), or
+    colours in [0.2, 0.9] (three channels)."""
+    c = (np.arange(n) + 0.5) / n
+    z, y, x = np.meshgrid(c, c, c, indexing="ij")
+    r = np.sqrt((x - 0.5) ** 2 + (y - 0.5) ** 2 + (z - 0.5) ** 2)
+    ball = np.clip(1.0 - 2.0 * r, 0.0, 1.0) * (0.75 + 0.25 * np.sin(9 * x) * np.cos(7 * y + 2 * z))
+    if albedo:
+        data = np.stack([0.2 + 0.7 * x, 0.2 + 0.7 * y, 0.9 - 0.7 * z], axis=-1)
+    else:
+        data = ball[..., None]
+    head = b"VOL" + bytes([3]) + struct.pack("<5i", 1, n, n, n, data.shape[-1]) + struct.pack("<6f", 0, 0, 0, 1, 1, 1)
+    return head + data.astype("<f4").tobytes()
+
+
 def write(path):
     name = os.path.basename(path).lower()
     ext = os.path.splitext(name)[1]
@@ -236,6 +253,8 @@ def write(path):
             bmp.write(path)
     elif ext in (".exr", ".hdr", ".pfm"):
         mi.Bitmap(sky()).write(path)
+    elif ext == ".vol":
+        open(path, "wb").write(vol_grid("albedo" in name))
     else:
         return False
     return True

@@ -275,6 +275,10 @@ fn main() {
         comparison(&mut md, &dir);
         save(&md);
     }
+    if part("media") {
+        media(&mut md, &dir);
+        save(&md);
+    }
     if part("lanes") {
         lanes(&mut md);
         save(&md);
@@ -680,47 +684,10 @@ fn comparison(md: &mut String, dir: &Path) {
          is better. *Process* is the whole command (start-up, loading, shader or kernel \
          compilation from warm caches).\n"
     );
-    let mut rows = Vec::new();
-    for case in &SUITE {
-        generate(case);
-        eprintln!("suite: {}", case.name);
-        match measure(case, dir) {
-            Ok(m) => rows.push((case, m)),
-            Err(e) => {
-                let _ = writeln!(
-                    md,
-                    "Not run: Mitsuba 3 could not render {} ({e}).\n",
-                    case.xml
-                );
-                return;
-            }
-        }
-    }
-    let _ = writeln!(
-        md,
-        "| scene | what | size, spp | wgtrace Msamples/s | Mitsuba Msamples/s | ratio | equal error, wgtrace / Mitsuba | disagree | wgtrace process s | Mitsuba process s |\n|---|---|---|---|---|---|---|---|---|---|"
-    );
-    let (mut ratios, mut errors) = (Vec::new(), Vec::new());
-    for (case, m) in &rows {
-        let ratio = median(&m.w_rate) / median(&m.m_rate);
-        let equal = median(&m.w_cost) / median(&m.m_cost);
-        ratios.push((ratio, case.name));
-        errors.push((equal, case.name));
-        let _ = writeln!(
-            md,
-            "| `{}` | {} | {} x {}, {} | {} | {} | **{ratio:.2}** | {equal:.2} | {:.1e} | {} | {} |",
-            case.name,
-            case.what,
-            case.width,
-            case.height,
-            case.spp,
-            spread(&m.w_rate, 3),
-            spread(&m.m_rate, 3),
-            m.floor,
-            spread(&m.w_wall, 2),
-            spread(&m.m_wall, 2)
-        );
-    }
+    let Some(rows) = measure_all(md, dir, &SUITE.iter().collect::<Vec<_>>()) else {
+        return;
+    };
+    let (ratios, errors) = suite_table(md, &rows);
     let worst = |v: &[(f64, &str)], high_is_good: bool| {
         let w = v
             .iter()
@@ -743,6 +710,110 @@ fn comparison(md: &mut String, dir: &Path) {
          to equal error, wgtrace / Mitsuba: geometric mean {ge:.2}, worst {}.**\n",
         worst(&ratios, true),
         worst(&errors, false)
+    );
+}
+
+/// Figures by scene.
+type Ratios<'a> = Vec<(f64, &'a str)>;
+
+/// Each case measured, in order (its generated files written first); None, with a line in
+/// the report saying why, when Mitsuba cannot render one.
+fn measure_all<'a>(
+    md: &mut String,
+    dir: &Path,
+    cases: &[&'a Case],
+) -> Option<Vec<(&'a Case, Measured)>> {
+    let mut rows = Vec::new();
+    for &case in cases {
+        generate(case);
+        eprintln!("measuring: {}", case.name);
+        match measure(case, dir) {
+            Ok(m) => rows.push((case, m)),
+            Err(e) => {
+                let _ = writeln!(
+                    md,
+                    "Not run: Mitsuba 3 could not render {} ({e}).\n",
+                    case.xml
+                );
+                return None;
+            }
+        }
+    }
+    Some(rows)
+}
+
+/// The table of measured scenes (each renderer's rate, their ratio, the ratio of times to
+/// equal error, the processes' times); returns the ratios and the equal-error ratios by
+/// scene.
+fn suite_table<'a>(md: &mut String, rows: &[(&'a Case, Measured)]) -> (Ratios<'a>, Ratios<'a>) {
+    let _ = writeln!(
+        md,
+        "| scene | what | size, spp | wgtrace Msamples/s | Mitsuba Msamples/s | ratio | equal error, wgtrace / Mitsuba | disagree | wgtrace process s | Mitsuba process s |\n|---|---|---|---|---|---|---|---|---|---|"
+    );
+    let (mut ratios, mut errors) = (Vec::new(), Vec::new());
+    for (case, m) in rows {
+        let ratio = median(&m.w_rate) / median(&m.m_rate);
+        let equal = median(&m.w_cost) / median(&m.m_cost);
+        ratios.push((ratio, case.name));
+        errors.push((equal, case.name));
+        let _ = writeln!(
+            md,
+            "| `{}` | {} | {} x {}, {} | {} | {} | **{ratio:.2}** | {equal:.2} | {:.1e} | {} | {} |",
+            case.name,
+            case.what,
+            case.width,
+            case.height,
+            case.spp,
+            spread(&m.w_rate, 3),
+            spread(&m.m_rate, 3),
+            m.floor,
+            spread(&m.w_wall, 2),
+            spread(&m.m_wall, 2)
+        );
+    }
+    (ratios, errors)
+}
+
+/// The cost of participating media: the Cornell box of the suite and the same box in a
+/// fog that fills the world (`bench/fog-cornell.toml`, its twin rendered by Mitsuba's
+/// volpath), measured as the suite is in one run.
+fn media(md: &mut String, dir: &Path) {
+    const FOG: Case = Case {
+        name: "fog-cornell",
+        toml: "bench/fog-cornell.toml",
+        xml: "bench/fog-cornell.xml",
+        width: 256,
+        height: 256,
+        spp: 64,
+        ref_spp: 512,
+        what:
+            "`cornell` in a homogeneous fog (sigma_t 0.25, albedo 0.9, g 0.3) that fills the world",
+    };
+    let _ = writeln!(md, "## Participating media\n");
+    let _ = writeln!(
+        md,
+        "`bench/cornell.toml` and `bench/fog-cornell.toml` (the same box in a fog that the \
+         camera sits in; its Mitsuba 3 twin rendered by `volpath`), measured as the suite \
+         is, in one run: what media cost each renderer, and wgtrace against Mitsuba 3 on \
+         a scene with media.\n"
+    );
+    let Some(rows) = measure_all(md, dir, &[&SUITE[0], &FOG]) else {
+        return;
+    };
+    let (ratios, _) = suite_table(md, &rows);
+    let rate = |i: usize, w: bool| {
+        let m = &rows[i].1;
+        median(if w { &m.w_rate } else { &m.m_rate })
+    };
+    let _ = writeln!(
+        md,
+        "\n**The fog costs wgtrace {:.2}x its samples per second without it, Mitsuba 3 \
+         {:.2}x; in the fog wgtrace renders {:.2}x Mitsuba's samples per second (without \
+         it {:.2}x).**\n",
+        rate(0, true) / rate(1, true),
+        rate(0, false) / rate(1, false),
+        ratios[1].0,
+        ratios[0].0
     );
 }
 

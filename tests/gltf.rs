@@ -342,13 +342,20 @@ fn material_extensions_map_onto_pbr_and_dielectric() {
     // rough transmission: rough glass, GGX alpha = roughnessFactor^2
     let frosted = dielectric::Params::read(&s.materials[2]);
     assert_eq!((frosted.ior, frosted.alpha), (1.5, 0.25));
-    // sigma_a = -ln(colour) / distance
+    // sigma_a = -ln(colour) / distance, a medium of albedo 0 inside the glass: the
+    // record's absorption moved into it, the record's media word its interior
     let want = Vec3::new(0.5f32.ln() / -2.0, 0.0, 0.25f32.ln() / -2.0);
+    assert_eq!(glass.absorption, Vec3::ZERO);
+    assert_eq!(s.num_media, 1);
+    let (t, a) = (s.tables[s.media as usize], s.tables[s.media as usize + 1]);
     assert!(
-        (glass.absorption - want).abs().max_element() < 1e-6,
-        "{}",
-        glass.absorption
+        (Vec3::new(t[0], t[1], t[2]) - want).abs().max_element() < 1e-6,
+        "{t:?}"
     );
+    assert_eq!(a, [0.0; 4]);
+    let word = (s.material_media * 4 + 1) as usize;
+    assert_eq!(s.tables[word >> 2][word & 3], 1.0);
+    assert!(s.has_media());
     // it emits: no background is added
     assert_eq!(s.background, [0.0; 3]);
 }

@@ -725,6 +725,8 @@ fn gpu_paths_match_cpu_bounce_by_bounce() {
         ("bench/blend.toml", None),
         ("scenes/fog.toml", None),
         ("scenes/fog.toml", Some(LightSampling::Bsdf)),
+        ("scenes/smoke.toml", None),
+        ("scenes/smoke.toml", Some(LightSampling::Bsdf)),
     ];
     const SIDE: u32 = 16;
     for &(file, light_sampling) in cases {

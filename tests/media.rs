@@ -70,19 +70,7 @@ vertices = [[-5, -5, -3], [5, -5, -3], [5, 5, -3], [-5, 5, -3]]
 material = "light"
 "#;
     let scene = common::scene_from_str(src);
-    let z = common::sidak_z(1e-3, 6);
-    for (name, render) in BACKENDS {
-        let img = render(&scene);
-        for (c, sigma) in [0.5f64, 1.0, 2.0].into_iter().enumerate() {
-            let (m, se) = image_mean(&img, c);
-            let expected = (-sigma).exp();
-            assert!(
-                (m - expected).abs() <= z * se + 1e-6,
-                "{name} channel {c}: {m} against exp(-{sigma}) = {expected} (se {se})"
-            );
-            eprintln!("{name} channel {c}: {m:.5} against {expected:.5}, se {se:.5}");
-        }
-    }
+    assert_image_means(&scene, [0.5f64, 1.0, 2.0].map(|s| (-s).exp()));
 }
 
 /// A sphere of radius 1 holding a medium of albedo 0 (sigma_t = (1, 2, 3)) inside a null
@@ -91,10 +79,26 @@ material = "light"
 /// background times exp(-sigma_t chord), the chord 2 sqrt(1 - r^2) at distance r from the
 /// axis. A pixel's expectation lies between the function's least and greatest value over
 /// its square (monotonic in r): each pixel is held to that range widened by z standard
-/// errors.
+/// errors. The same with the sphere glass of ior 1 (invisible) whose `absorption` is
+/// (1, 2, 3): the flattener makes it the same medium inside the glass.
 #[test]
 fn a_medium_of_albedo_zero_is_pure_absorption() {
-    let src = r#"
+    for boundary in [
+        "boundary = { type = \"null\" }",
+        "boundary = { type = \"dielectric\", ior = 1, absorption = [1, 2, 3] }",
+    ] {
+        pure_absorption(boundary);
+    }
+}
+
+fn pure_absorption(boundary: &str) {
+    let interior = if boundary.contains("absorption") {
+        ""
+    } else {
+        "interior = \"ink\""
+    };
+    let src = format!(
+        r#"
 [render]
 width = 24
 height = 24
@@ -116,16 +120,18 @@ sigma_t = [1, 2, 3]
 albedo = 0
 
 [materials]
-boundary = { type = "null" }
+{boundary}
 
 [[objects]]
 type = "sphere"
 center = [0, 0, 0]
 radius = 1
 material = "boundary"
-interior = "ink"
-"#;
-    let scene = common::scene_from_str(src);
+{interior}
+"#
+    );
+    let scene = common::scene_from_str(&src);
+    assert!(scene.has_media(), "{boundary}");
     let (w, h) = (24usize, 24usize);
     let side = 2.4 / h as f64;
     let z = common::sidak_z(1e-3, 2 * 3 * w * h);
@@ -163,7 +169,7 @@ interior = "ink"
                     let se = (img.variance(i)[c] as f64 / img.samples(i) as f64).sqrt();
                     assert!(
                         m >= lo - z * se - 1e-6 && m <= hi + z * se + 1e-6,
-                        "{name} pixel ({px}, {py}) channel {c}: {m} outside [{lo}, {hi}] (se {se})"
+                        "{boundary}, {name} pixel ({px}, {py}) channel {c}: {m} outside [{lo}, {hi}] (se {se})"
                     );
                 }
                 if (x0 + side / 2.0).hypot(y0 + side / 2.0) < 0.9 {
@@ -312,6 +318,21 @@ fn bad_media_are_refused_with_their_keys() {
             ),
             "objects[1].interior: a mesh with media needs its `material`",
         ),
+        (
+            base("", fog, "interior = \"fog\"").replace(
+                "b = { type = \"null\" }",
+                "b = { type = \"dielectric\", ior = 1.5, absorption = [1, 1, 1] }",
+            ),
+            "objects[0].interior: its glass has an `absorption`, which is a medium inside it",
+        ),
+        (
+            base(
+                "",
+                "[media.fog]\ntype = \"heterogeneous\"\ngrid = \"missing.vol\"\n",
+                "interior = \"fog\"",
+            ),
+            "media.fog.grid: missing.vol",
+        ),
     ];
     for (src, says) in cases {
         let err = wgtrace::load_scene_str(
@@ -323,5 +344,238 @@ fn bad_media_are_refused_with_their_keys() {
         .to_string();
         assert!(err.contains(says), "{err}\n  should say: {says}");
         assert!(err.contains("media.toml:"), "{err}: no file and line");
+    }
+}
+
+/// A density grid of nz voxels along z whose values rise linearly, (k + 0.5) / nz at the
+/// centre of voxel k, and 3 x 5 across (so its majorant cells are partial): its trilinear
+/// density (clamped at the faces) integrates to 0.5 over the unit cube's depth. Written
+/// as a `.vol` file in a fresh folder; returns the file.
+fn ramp_grid(name: &str, nz: u32) -> std::path::PathBuf {
+    ramp_grid_of(name, nz, &[1.0])
+}
+
+/// [`ramp_grid`] with a channel per factor, each the ramp times its factor.
+fn ramp_grid_of(name: &str, nz: u32, factors: &[f32]) -> std::path::PathBuf {
+    let res = [3, 5, nz];
+    let mut values = Vec::new();
+    for k in 0..nz {
+        let v = (k as f32 + 0.5) / nz as f32;
+        for _ in 0..15 {
+            values.extend(factors.iter().map(|f| f * v));
+        }
+    }
+    let path = common::tmp_dir(name).join("ramp.vol");
+    let bytes = wgtrace::scene::volume::write_vol(res, &values, ([0.0; 3], [1.0; 3]));
+    std::fs::write(&path, bytes).unwrap();
+    path
+}
+
+/// A slab 1 thick whose density grid rises linearly with depth, sigma_t = (1, 2, 4) times
+/// it and albedo 0.5, between a tilted orthographic camera and an emitter of radiance 1:
+/// one ray per path, so what reaches the camera is what crosses unscattered, by delta
+/// tracking through the grid's majorant cells: exp(-sigma_t 0.5 / cos theta), theta the
+/// rays' angle to the slab's normal.
+#[test]
+fn delta_tracking_through_a_density_grid_transmits_exp_of_minus_its_integral() {
+    delta_tracking(&ramp_grid("delta", 20), "[1, 2, 4]");
+}
+
+/// The same slab whose grid holds a density per colour channel (the ramp times 1, 2 and
+/// 4, Mitsuba's RGB extinction grids), of extinction 1: the same transmittance.
+#[test]
+fn an_rgb_density_grid_extinguishes_each_channel_by_its_own_density() {
+    delta_tracking(&ramp_grid_of("rgb", 20, &[1.0, 2.0, 4.0]), "1");
+}
+
+fn delta_tracking(grid: &std::path::Path, sigma_t: &str) {
+    let scene = grid_slab(
+        &format!(
+            "grid = \"{}\"\nsigma_t = {sigma_t}\nalbedo = 0.5\n{SLAB}",
+            grid.display()
+        ),
+        "{ type = \"emissive\", radiance = [1, 1, 1] }",
+        1,
+        "",
+    );
+    let cos = slab_cos();
+    assert_image_means(&scene, [1.0f64, 2.0, 4.0].map(|s| (-s * 0.5 / cos).exp()));
+}
+
+/// The placement of a grid's unit cube on [`grid_slab`]'s slab.
+const SLAB: &str = "transform = { scale = [10, 10, 1], translate = [-5, -5, -1] }";
+
+/// A heterogeneous medium without a grid (Mitsuba's constant extinction in a
+/// heterogeneous medium) has density 1 in the unit cube its transform places, none
+/// elsewhere: here the slab's back half, 0.5 thick, transmitting exp(-sigma_t 0.5 / cos).
+#[test]
+fn a_heterogeneous_medium_without_a_grid_fills_its_placed_cube() {
+    let scene = grid_slab(
+        "sigma_t = [1, 2, 4]\nalbedo = 0.5\n\
+         transform = { scale = [10, 10, 0.5], translate = [-5, -5, -1] }",
+        "{ type = \"emissive\", radiance = [1, 1, 1] }",
+        1,
+        "",
+    );
+    let cos = slab_cos();
+    assert_image_means(&scene, [1.0f64, 2.0, 4.0].map(|s| (-s * 0.5 / cos).exp()));
+}
+
+/// The cosine of the angle between [`grid_slab`]'s camera rays and the slab's normal.
+fn slab_cos() -> f64 {
+    5.0 / (1.0f64 + 0.25 + 25.0).sqrt()
+}
+
+/// A slab 1 thick (z from -1 to 0, 10 wide) of a heterogeneous medium in its null box
+/// (the medium's keys after `type`: `medium`; its grid's unit cube placed on the slab),
+/// seen by an orthographic camera tilted by [`slab_cos`], above a floor of material
+/// `floor` at z = -3; paths of `max_depth` rays; `extra` appended to the file.
+fn grid_slab(medium: &str, floor: &str, max_depth: u32, extra: &str) -> wgtrace::FlatScene {
+    common::scene_from_str(&format!(
+        r#"
+[render]
+width = 16
+height = 16
+spp = 256
+max_depth = {max_depth}
+
+[camera]
+look_from = [1, 0.5, 5]
+look_at = [0, 0, 0]
+projection = "orthographic"
+height = 1
+
+[media.smoke]
+type = "heterogeneous"
+{medium}
+
+[materials]
+floor = {floor}
+boundary = {{ type = "null" }}
+
+[[objects]]
+type = "box"
+min = [-5, -5, -1]
+max = [5, 5, 0]
+material = "boundary"
+interior = "smoke"
+
+[[objects]]
+type = "polygon"
+vertices = [[-9, -9, -3], [9, -9, -3], [9, 9, -3], [-9, 9, -3]]
+material = "floor"
+{extra}
+"#
+    ))
+}
+
+/// Each channel's mean over the image against `expected`, on both backends, within the
+/// render's standard error (Sidak over the six comparisons).
+fn assert_image_means(scene: &FlatScene, expected: [f64; 3]) {
+    let z = common::sidak_z(1e-3, 6);
+    for (name, render) in BACKENDS {
+        let img = render(scene);
+        for (c, want) in expected.into_iter().enumerate() {
+            let (m, se) = image_mean(&img, c);
+            eprintln!("{name} channel {c}: {m:.5} against {want:.5}, se {se:.5}");
+            assert!(
+                (m - want).abs() <= z * se + 2e-6,
+                "{name} channel {c}: {m} against {want} (se {se})"
+            );
+        }
+    }
+}
+
+/// The same grid of albedo 0 above a white Lambertian floor, lit straight down by a
+/// directional light of irradiance pi: the camera ray and the shadow ray each cross the
+/// slab, both by ratio tracking (no collision scatters), so a pixel is exp(-tau_camera)
+/// exp(-tau_light), tau = sigma_t 0.5 / cos. Ratio tracking is unbiased: the mean over
+/// the image matches the closed form within its standard error.
+#[test]
+fn ratio_tracking_through_a_density_grid_is_unbiased() {
+    let scene = grid_slab(
+        &format!(
+            "grid = \"{}\"\nsigma_t = [0.5, 1, 2]\nalbedo = 0\n{SLAB}",
+            ramp_grid("ratio", 12).display()
+        ),
+        "{ type = \"lambertian\", albedo = [1, 1, 1] }",
+        2,
+        "[[lights]]\ntype = \"directional\"\ndirection = [0, 0, -1]\n\
+         irradiance = [3.14159265, 3.14159265, 3.14159265]",
+    );
+    let cos = slab_cos();
+    assert_image_means(
+        &scene,
+        [0.5f64, 1.0, 2.0].map(|s| (-s * 0.5 / cos).exp() * (-s * 0.5).exp()),
+    );
+}
+
+/// An albedo grid varies a heterogeneous medium's albedo: one of three channels holding
+/// (0.2, 0.5, 0.8) in every voxel renders as `albedo = [0.2, 0.5, 0.8]` does, and one of
+/// one channel holding 0.6 as `albedo = 0.6` (a box of the ramp grid under a uniform
+/// background, scattering many times; image means within their standard errors).
+#[test]
+fn an_albedo_grid_renders_as_the_albedo_it_holds() {
+    let density = ramp_grid("albedo", 10);
+    let dir = density.parent().unwrap().to_path_buf();
+    let voxels = 4 * 4 * 4;
+    let colour: Vec<f32> = (0..voxels).flat_map(|_| [0.2, 0.5, 0.8]).collect();
+    let grey = vec![0.6f32; voxels];
+    for (name, values) in [("colour.vol", &colour), ("grey.vol", &grey)] {
+        let bytes = wgtrace::scene::volume::write_vol([4, 4, 4], values, ([0.0; 3], [1.0; 3]));
+        std::fs::write(dir.join(name), bytes).unwrap();
+    }
+    let scene = |albedo: &str| {
+        common::scene_from_str(&format!(
+            r#"
+[render]
+width = 12
+height = 12
+spp = 256
+max_depth = 32
+
+[camera]
+look_from = [0, 0, 4]
+look_at = [0, 0, 0]
+vfov = 40
+
+[background]
+color = [1, 1, 1]
+
+[media.smoke]
+type = "heterogeneous"
+grid = "{}"
+sigma_t = 6
+{albedo}
+transform = {{ translate = [-0.5, -0.5, -0.5] }}
+
+[materials]
+boundary = {{ type = "null" }}
+
+[[objects]]
+type = "box"
+min = [-0.5, -0.5, -0.5]
+max = [0.5, 0.5, 0.5]
+material = "boundary"
+interior = "smoke"
+"#,
+            density.display()
+        ))
+    };
+    let z = common::sidak_z(1e-3, 2 * 2 * 3);
+    for (grid, albedo) in [("colour.vol", "[0.2, 0.5, 0.8]"), ("grey.vol", "0.6")] {
+        let with_grid = scene(&format!("albedo_grid = \"{}\"", dir.join(grid).display()));
+        let constant = scene(&format!("albedo = {albedo}"));
+        for (name, render) in BACKENDS {
+            let (a, b) = (render(&with_grid), render(&constant));
+            for c in 0..3 {
+                let ((ma, sa), (mb, sb)) = (image_mean(&a, c), image_mean(&b, c));
+                eprintln!("{grid} {name} channel {c}: {ma:.5} against {mb:.5}");
+                assert!(
+                    (ma - mb).abs() <= z * (sa * sa + sb * sb).sqrt() + 1e-6,
+                    "{grid} {name} channel {c}: {ma} with the grid, {mb} without (se {sa}, {sb})"
+                );
+            }
+        }
     }
 }

@@ -194,6 +194,11 @@ fn scenes(name: &str) -> PathBuf {
     std::fs::write(generated.join("quads.serialized"), quads()).unwrap();
     std::fs::write(generated.join("quad.ply"), QUAD_PLY).unwrap();
     std::fs::write(generated.join("attributes.ply"), ATTRIBUTES_PLY).unwrap();
+    std::fs::copy(
+        common::repo_path("scenes/volumes/plume.vol"),
+        generated.join("plume.vol"),
+    )
+    .unwrap();
     dir
 }
 
@@ -382,6 +387,11 @@ fn media_agree_with_mitsuba() {
 }
 
 #[test]
+fn smoke_agrees_with_mitsuba() {
+    agrees_with_mitsuba("smoke", 2048);
+}
+
+#[test]
 fn film_crop_windows_agree_with_mitsuba() {
     agrees_with_mitsuba("crop", 256);
 }
@@ -513,6 +523,11 @@ fn convert_writes_toml_that_loads_and_names_its_origins() {
 #[test]
 fn bad_files_are_one_error_with_the_position() {
     let dir = common::tmp_dir("mitsuba-bad");
+    std::fs::copy(
+        common::repo_path("scenes/volumes/plume.vol"),
+        dir.join("g.vol"),
+    )
+    .unwrap();
     let scene = |body: &str| {
         format!(
             "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"><float name=\"fov\" \
@@ -556,10 +571,22 @@ fn bad_files_are_one_error_with_the_position() {
         (
             "medium",
             scene(
-                "<shape type=\"sphere\"><medium type=\"heterogeneous\" name=\"interior\"/></shape>",
+                "<shape type=\"sphere\"><medium type=\"heterogeneous\" name=\"interior\">\
+                 <phase type=\"rayleigh\"/></medium></shape>",
             ),
-            "3:22",
-            "medium heterogeneous: heterogeneous media (grid volumes) are not rendered yet",
+            "3:67",
+            "phase rayleigh: not read (wgtrace reads isotropic and hg)",
+        ),
+        (
+            "albedo-grid",
+            scene(
+                "<shape type=\"sphere\"><medium type=\"heterogeneous\" name=\"interior\">\
+                 <volume type=\"gridvolume\" name=\"sigma_t\"><string name=\"filename\" value=\"g.vol\"/></volume>\
+                 <volume type=\"gridvolume\" name=\"albedo\"><string name=\"filename\" value=\"g.vol\"/>\
+                 <transform name=\"to_world\"><scale value=\"2\"/></transform></volume></medium></shape>",
+            ),
+            "3:156",
+            "an albedo grid is read with a density grid (`sigma_t`) placed the same way",
         ),
         (
             "crop",
@@ -914,4 +941,38 @@ fn mitsuba_films_splat_their_samples() {
         assert_eq!(scene.filter.splat, splat, "{name}: {toml}");
         assert_eq!(scene.params(0, scene.full_band()).splat, splat as u32);
     }
+}
+
+/// A heterogeneous medium's constant extinction fills the unit cube its constvolume's
+/// to_world places (Mitsuba's medium ends at the volume's box): the conversion keeps the
+/// medium heterogeneous, without a grid, placed by that transform.
+#[test]
+fn a_constant_heterogeneous_extinction_keeps_its_box() {
+    let dir = common::tmp_dir("mitsuba-constvolume");
+    let xml = dir.join("c.xml");
+    std::fs::write(
+        &xml,
+        "<scene version=\"3.0.0\">\n<sensor type=\"perspective\"/>\n\
+         <shape type=\"cube\"><bsdf type=\"null\"/><medium type=\"heterogeneous\" name=\"interior\">\
+         <volume type=\"constvolume\" name=\"sigma_t\"><rgb name=\"value\" value=\"0.5, 0.4, 0.3\"/>\
+         <transform name=\"to_world\"><translate x=\"-0.5\" y=\"-0.5\" z=\"-0.5\"/></transform>\
+         </volume></medium></shape>\n</scene>\n",
+    )
+    .unwrap();
+    let toml = dir.join("c.toml");
+    let o = common::wgtrace(&[
+        "convert",
+        xml.to_str().unwrap(),
+        "-o",
+        toml.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&toml).unwrap();
+    let medium = &text[text.find("[media.").expect("a medium")..];
+    assert!(medium.contains("type = \"heterogeneous\""), "{medium}");
+    assert!(!medium.contains("grid ="), "{medium}");
+    assert!(
+        medium.contains("[1.0, 0.0, 0.0, -0.5], [0.0, 1.0, 0.0, -0.5], [0.0, 0.0, 1.0, -0.5]"),
+        "{medium}"
+    );
 }

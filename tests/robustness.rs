@@ -383,11 +383,12 @@ fn degenerate_directions_give_finite_answers() {
     );
 }
 
-/// The camera at the centre of a glass sphere (ior 1.5, absorption sigma) under a uniform
-/// background L: every ray meets the surface at normal incidence, leaves with probability
-/// 1 - R (R = 0.04) after running r, else runs 2r more: the pixel shows
-/// L (1 - R) e^(-sigma r) / (1 - R e^(-2 sigma r)), on both backends. And a glass ball of
-/// ior 1 is invisible: the scene renders the same with and without it.
+/// The camera at the centre of a glass sphere (ior 1.5) holding a medium of albedo 0 and
+/// extinction sigma, the camera in it, under a uniform background L: every ray meets the
+/// surface at normal incidence, leaves with probability 1 - R (R = 0.04) after running
+/// r, else runs 2r more: the pixel shows L (1 - R) e^(-sigma r) / (1 - R e^(-2 sigma r)),
+/// on both backends. And a glass ball of ior 1 is invisible: the scene renders the same
+/// with and without it.
 #[test]
 fn glass_matches_its_series_and_ior_one_is_invisible() {
     let (sigma, r) = (0.3f64, 1.0f64);
@@ -402,15 +403,21 @@ max_depth = 64
 look_from = [0, 0, 0]
 look_at = [0, 0, -1]
 vfov = 60
+medium = "amber"
 [background]
 color = [1, 1, 1]
+[media.amber]
+type = "homogeneous"
+sigma_t = {sigma}
+albedo = 0
 [materials]
-glass = {{ type = "dielectric", ior = 1.5, absorption = [{sigma}, {sigma}, {sigma}] }}
+glass = {{ type = "dielectric", ior = 1.5 }}
 [[objects]]
 type = "sphere"
 center = [0, 0, 0]
 radius = {r}
 material = "glass"
+interior = "amber"
 "#
     );
     let scene = common::scene_from_str(&src);

@@ -140,7 +140,12 @@ pub const ENTRIES: &[Entry] = &[
     entry(
         "fog",
         "scenes/fog.toml",
-        "Participating media: fog that scatters forward in a null box, a glass sphere holding a green medium nested in it",
+        "Participating media: fog that scatters forward in a null box, a low sun's shaft across it, a glass sphere holding a green medium nested in it",
+    ),
+    entry(
+        "smoke",
+        "scenes/smoke.toml",
+        "A heterogeneous medium: a smoke plume from a density grid, lit by a low sun under a blue sky, beside a glass ball of cloudy coloured liquid",
     ),
     entry(
         "materials",

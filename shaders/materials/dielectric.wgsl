@@ -8,33 +8,28 @@
 // incoming ray). Snell's law in vector form, t = eta d + (eta cos_i - cos_t) n; total
 // internal reflection when eta^2 sin^2(theta_i) >= 1; otherwise reflection with the exact
 // Fresnel probability (fresnel_dielectric; ior 1 is invisible). Weight = specular for a
-// reflection, tint for a refraction, times the Beer-Lambert transmittance
-// exp(-absorption x distance) for a segment that ran inside.
+// reflection, tint for a refraction (absorption inside is a medium: media.wgsl).
 // Deltas when smooth; a rough one (an alpha at least ALPHA_SMOOTH) scatters by
 // dielectric_rough_scatter.
 fn dielectric_scatter(p: DielectricParams, ray: Ray, hit: Hit, u: vec2<f32>) -> Scatter {
     let entering = hit.front_face;
     let n = select(-hit.ns, hit.ns, entering);
     let eta = select(p.ior, 1.0 / p.ior, entering);
-    var inside = vec3<f32>(1.0);
-    if (!entering) {
-        inside = exp(-p.absorption * length(hit.p - ray.origin));
-    }
 #ifdef HAS_ROUGH_DIELECTRIC
     if (max(p.alpha, p.alpha_v) >= ALPHA_SMOOTH) {
-        return dielectric_rough_scatter(p, ray, hit, n, eta, inside, u);
+        return dielectric_rough_scatter(p, ray, hit, n, eta, u);
     }
 #endif
     let cos_i = clamp(-dot(ray.dir, n), 0.0, 1.0);
     let sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
     if (sin2_t >= 1.0) {
-        return Scatter(true, reflect_dir(ray.dir, n), inside * p.specular, 0.0, true);
+        return Scatter(true, reflect_dir(ray.dir, n), p.specular, 0.0, true);
     }
     let cos_t = sqrt(1.0 - sin2_t);
     if (u.x < fresnel_dielectric(cos_i, cos_t, eta)) {
-        return Scatter(true, reflect_dir(ray.dir, n), inside * p.specular, 0.0, true);
+        return Scatter(true, reflect_dir(ray.dir, n), p.specular, 0.0, true);
     }
-    return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), inside * p.tint, 0.0, true);
+    return Scatter(true, normalize(eta * ray.dir + (eta * cos_i - cos_t) * n), p.tint, 0.0, true);
 }
 
 #ifdef HAS_ROUGH_DIELECTRIC
@@ -192,12 +187,11 @@ fn dielectric_ms_lobes(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec
 // about it (with probability dielectric_reflect_prob, u.x reused) or the refraction
 // through it (the mirror direction where h reflects totally); with energy compensation,
 // first its lobe with dielectric_ms_probs (a cosine direction, mirrored through the
-// surface where it transmits). Weight = BSDF x cos / pdf (dielectric_lobes) times the
-// transmittance `inside` and specular (reflected) or tint (transmitted). A direction on the wrong side of the geometric
-// surface is absorbed. Without absorption it has a density, which next-event estimation
-// weighs (dielectric_eval, dielectric_pdf); absorbing rough glass is sampled as a delta
-// (scene::materials::dielectric::has_density says why).
-fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, inside: vec3<f32>, u0: vec2<f32>) -> Scatter {
+// surface where it transmits). Weight = BSDF x cos / pdf (dielectric_lobes) times
+// specular (reflected) or tint (transmitted). A direction on the wrong side of the
+// geometric surface is absorbed. It has a density, which next-event estimation weighs
+// (dielectric_eval, dielectric_pdf).
+fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32>, eta: f32, u0: vec2<f32>) -> Scatter {
     let wo = -ray.dir;
     let cos_o = dot(n, wo);
     if (cos_o <= 0.0) {
@@ -250,14 +244,14 @@ fn dielectric_rough_scatter(p: DielectricParams, ray: Ray, hit: Hit, n: vec3<f32
         return absorbed();
     }
     let delta = !dielectric_has_density(p);
-    let weight = inside * select(p.tint, p.specular, is_reflection);
+    let weight = select(p.tint, p.specular, is_reflection);
     return Scatter(true, wi, weight * (lobes.x / lobes.y), select(lobes.y, 0.0, delta), delta);
 }
 
-// Whether the glass has a density that light sampling weighs: rough and not absorbing
-// (scene::materials::dielectric::has_density says why).
+// Whether the glass has a density that light sampling weighs: rough
+// (scene::materials::dielectric::has_density).
 fn dielectric_has_density(p: DielectricParams) -> bool {
-    return max(p.alpha, p.alpha_v) >= ALPHA_SMOOTH && all(p.absorption == vec3<f32>(0.0));
+    return max(p.alpha, p.alpha_v) >= ALPHA_SMOOTH;
 }
 
 // eta = eta_o / eta_i at a hit: 1 / ior from outside (the front face), ior from inside.
@@ -266,9 +260,9 @@ fn dielectric_eta(p: DielectricParams) -> f32 {
 }
 #endif
 
-// Rough glass without absorption: specular (reflected) or tint (transmitted) x BSDF x
-// |cos(theta_i)| toward wi (dielectric_lobes), n on wo's side; 0 for the deltas (smooth
-// glass, absorbing rough glass).
+// Rough glass: specular (reflected) or tint (transmitted) x BSDF x
+// |cos(theta_i)| toward wi (dielectric_lobes), n on wo's side; 0 for smooth glass's
+// deltas.
 fn dielectric_eval(p: DielectricParams, n: vec3<f32>, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 #ifdef HAS_ROUGH_DIELECTRIC
     if (dielectric_has_density(p)) {

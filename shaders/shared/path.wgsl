@@ -344,7 +344,7 @@ fn flies(path: ptr<function, Path>, cand: ptr<function, Candidate>, pixel: u32, 
     }
     let t_max = select(FAR, (*cand).t, (*cand).prim != NO_HIT);
     let u = bounce_2d(pixel, sample, (*path).depth, DIM_MEDIUM + k);
-    let flight = free_flight(medium_record((*path).medium), t_max, u);
+    let flight = medium_flight(medium_record((*path).medium), (*path).ray, t_max, u, k);
     (*path).throughput *= flight.weight;
     if (flight.t >= 0.0) {
         (*cand).prim = MEDIUM_HIT;
@@ -353,6 +353,22 @@ fn flies(path: ptr<function, Path>, cand: ptr<function, Candidate>, pixel: u32, 
     }
     return false;
 }
+
+#ifdef HAS_AOVS
+// The AOVs of a medium vertex that comes first: its distance and point, the normal facing
+// the ray (a medium has none), the medium's single-scattering albedo.
+fn medium_aovs(path: ptr<function, Path>, v: Vertex) {
+    if ((*path).depth == 0u) {
+        (*path).distance = distance(v.hit.p, (*path).prev_p);
+        (*path).position = v.hit.p;
+    }
+    if (!(*path).found) {
+        (*path).normal = -(*path).ray.dir;
+        (*path).albedo = medium_albedo(medium_record(v.medium), v.hit.p);
+        (*path).found = true;
+    }
+}
+#endif
 
 // The vertex where the path scatters in its medium, at distance t along its ray.
 fn medium_vertex(path: ptr<function, Path>, t: f32) -> Vertex {
@@ -579,6 +595,9 @@ fn extend_path(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool {
     var v: Vertex;
     if (cand.prim == MEDIUM_HIT) {
         v = medium_vertex(path, cand.t);
+#ifdef HAS_AOVS
+        medium_aovs(path, v);
+#endif
     } else {
         v = surface_vertex(path, cand, pixel, sample);
         add_emission(path, v, cand.prim);

@@ -15,7 +15,8 @@ use super::materials::{
     nee_applies, normal_mapped, scatter_pdf, transparent_at,
 };
 use super::media::{
-    free_flight, hg_eval, hg_sample, media_at, medium_after, medium_record, transmittance,
+    hg_eval, hg_sample, media_at, medium_after, medium_albedo, medium_flight, medium_record,
+    transmittance,
 };
 use super::rng::rand_2d;
 use super::samplers::{
@@ -365,7 +366,7 @@ pub fn flies(
     }
     let t_max = if cand.prim != NO_HIT { cand.t } else { FAR };
     let u = bounce_2d(b, pixel, sample, path.depth, DIM_MEDIUM + k);
-    let flight = free_flight(&medium_record(b, path.medium), t_max, u);
+    let flight = medium_flight(b, &medium_record(b, path.medium), &path.ray, t_max, u, k);
     path.throughput *= flight.weight;
     if flight.t >= 0.0 {
         cand.prim = MEDIUM_HIT;
@@ -373,6 +374,20 @@ pub fn flies(
         return true;
     }
     false
+}
+
+/// The AOVs of a medium vertex that comes first: its distance and point, the normal
+/// facing the ray, the medium's single-scattering albedo.
+pub fn medium_aovs(b: &Bindings, path: &mut Path, v: &Vertex) {
+    if path.depth == 0 {
+        path.distance = v.hit.p.distance(path.prev_p);
+        path.position = v.hit.p;
+    }
+    if !path.found {
+        path.normal = -path.ray.dir;
+        path.albedo = medium_albedo(b, &medium_record(b, v.medium), v.hit.p);
+        path.found = true;
+    }
 }
 
 /// The vertex where the path scatters in its medium, at distance t along its ray.
@@ -634,7 +649,9 @@ pub fn extend_path(b: &Bindings, path: &mut Path, pixel: u32, sample: u32) -> bo
         return false;
     }
     let v = if cand.prim == MEDIUM_HIT {
-        medium_vertex(b, path, cand.t)
+        let v = medium_vertex(b, path, cand.t);
+        medium_aovs(b, path, &v);
+        v
     } else {
         let v = surface_vertex(b, path, &cand, pixel, sample);
         add_emission(b, path, &v, cand.prim);

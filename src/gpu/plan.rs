@@ -116,6 +116,9 @@ pub enum Feature {
     /// Participating media (`[media]`): free flights, medium vertices and their phase
     /// function, transmittance along shadow rays.
     Media,
+    /// Heterogeneous media (`type = "heterogeneous"`): density grids, delta and ratio
+    /// tracking through their majorant cells.
+    GridMedia,
 }
 
 /// The features after the primitives' and before the materials' in define order.
@@ -127,7 +130,7 @@ const GEOMETRY: [Feature; 4] = [
 ];
 
 /// The features after the materials'.
-const SHADING: [Feature; 34] = [
+const SHADING: [Feature; 35] = [
     Feature::Textures,
     Feature::NormalMap,
     Feature::ShadingNormals,
@@ -162,6 +165,7 @@ const SHADING: [Feature; 34] = [
     Feature::MeshAttribute,
     Feature::EnergyCompensation,
     Feature::Media,
+    Feature::GridMedia,
 ];
 
 impl Feature {
@@ -197,6 +201,7 @@ impl Feature {
             Feature::PbrLayers => "HAS_PBR_LAYERS",
             Feature::Alpha => "HAS_ALPHA",
             Feature::Media => "HAS_MEDIA",
+            Feature::GridMedia => "HAS_GRID_MEDIA",
             Feature::ImageTexture => "HAS_IMAGE_TEXTURE",
             Feature::SrgbTexture => "HAS_SRGB_TEXTURE",
             Feature::NoiseTexture => "HAS_NOISE_TEXTURE",
@@ -246,7 +251,7 @@ impl Feature {
 
 /// The first bit of the primitives in a [`FeatureSet`], after every other feature's but
 /// the materials'.
-const PRIMITIVE_BITS: u32 = 38;
+const PRIMITIVE_BITS: u32 = 39;
 
 /// The first bit of the materials in a [`FeatureSet`], after every other feature's.
 const MATERIAL_BITS: u32 = 48;
@@ -461,6 +466,7 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
                 .any(|m| m.flags & r::MAT_FLAG_OPACITY_TEXTURE != 0),
         )
         .with(Feature::Media, scene.has_media())
+        .with(Feature::GridMedia, scene.has_media() && scene.grid_media)
 }
 
 /// What a shader is assembled from: its features, where its record arrays live, and the
@@ -505,7 +511,7 @@ impl ShaderSpec {
     /// (conductor, thin_dielectric, plastic, blend, principled), the pixel filters, splatting, projectors, opacity
     /// textures, Beckmann or anisotropic glass, one-sided materials, bump maps, mesh attributes, energy compensation, null and media too: the full shader of every other
     /// scene stays as it was.
-    pub const OPTIONAL_IN_FULL: [Feature; 28] = [
+    pub const OPTIONAL_IN_FULL: [Feature; 29] = [
         Feature::Instances,
         Feature::Aovs,
         Feature::Alpha,
@@ -534,6 +540,7 @@ impl ShaderSpec {
         Feature::EnergyCompensation,
         Feature::Material(MaterialKind::Null),
         Feature::Media,
+        Feature::GridMedia,
     ];
 
     /// The full shader for a scene with `scene` features (`--tune no-specialize`):

@@ -99,6 +99,8 @@ pub struct FlatScene {
     /// four to an entry), and whether any word is not 0.
     pub material_media: u32,
     pub shapes_hold_media: bool,
+    /// A medium is heterogeneous (`Medium::grid`): the shader's HAS_GRID_MEDIA.
+    pub grid_media: bool,
     /// Whether renders accumulate the AOVs (albedo, normal, depth, position; `crate::aov`)
     /// beside the colour. Not part of the scene file: a render asks for them.
     pub aovs: bool,

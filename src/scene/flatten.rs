@@ -8,8 +8,8 @@ use glam::{Affine3A, Mat3, Vec2, Vec3, Vec4};
 use super::bvh::{self, Aabb};
 use super::flat::{CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};
 use super::format::{
-    LightDesc, ObjectDesc, PixelFilter, Projection, SceneFile, ShadingNormals, TextureDesc,
-    TransformDesc,
+    LightDesc, MediumDesc, ObjectDesc, PixelFilter, Projection, SceneFile, ShadingNormals,
+    TextureDesc, TransformDesc,
 };
 use super::imported::ImportedScene;
 use super::lights::{env_distribution, light_list, punctual_lights};
@@ -22,6 +22,7 @@ use super::primitives::{sort_for_loops, PrimitiveKind};
 use super::records::{self, BvhNode, Material, Primitive, NO_DATA};
 use super::shapes::{polygon_normal, record_ok, world_bounds};
 use super::textures::{texture_records, ImageData, TextureData};
+use super::volume::DensityGrid;
 
 /// Object-to-world matrix of a transform: translate * Rz * Ry * Rx * scale.
 pub fn transform_matrix(t: &TransformDesc) -> Affine3A {
@@ -502,6 +503,10 @@ pub struct SceneFiles {
     pub imported: Vec<Option<ImportedScene>>,
     /// Texture i's image (in the file's order of names) when it is an image.
     pub images: Vec<Option<ImageData>>,
+    /// Medium i's density grid (in the file's order of names) when it is heterogeneous.
+    pub grids: Vec<Option<crate::scene::volume::DensityGrid>>,
+    /// Medium i's albedo grid (three channels) when it has one.
+    pub albedo_grids: Vec<Option<crate::scene::volume::DensityGrid>>,
 }
 
 /// Flattens a validated scene into records, with the meshes, glTF scenes and images its
@@ -640,17 +645,6 @@ pub fn flatten(
         tables.extend(table.chunks(4).map(|c| [c[0], c[1], c[2], c[3]]));
         plastic::point_at_table(m, offset);
     }
-    // the media, after the other tables: (sigma_t, g), (albedo, 0) each
-    let media = if file.media.is_empty() {
-        0
-    } else {
-        tables.len() as u32
-    };
-    for m in file.media.values() {
-        let (t, a, g) = m.get_ref().coefficients();
-        tables.push([t[0], t[1], t[2], g]);
-        tables.push([a[0], a[1], a[2], 0.0]);
-    }
     let medium_index = |name: &str| {
         file.media
             .keys()
@@ -662,18 +656,123 @@ pub fn flatten(
         .medium
         .as_deref()
         .map_or(records::NO_MEDIUM, medium_index);
-    let (mut builder, media_words) =
+    let (mut builder, mut media_words) =
         build_primitives(file, files, &mut materials, &mut material_names)
             .map_err(FlattenError::Degenerate)?;
-    // each material record's media word, four to an entry, after the media
-    // (whenever the file has media: a path in a medium reads them at every surface)
-    let shapes_hold_media = media_words.iter().any(|&w| w != 0);
-    let material_media = if file.media.is_empty() {
+    // absorbing glass: its absorption is a medium of albedo 0 inside it (the interior of
+    // each record of it, one medium per coefficient), so that paths and shadow rays
+    // meet it as they do any medium
+    let absorbing = absorbing_glass(&mut materials, &mut media_words, file.media.len());
+    let num_media = (file.media.len() + absorbing.len()) as u32;
+    // the media, after the other tables: (sigma_t, g), (albedo, 0) each
+    let media = if num_media == 0 {
         0
     } else {
         tables.len() as u32
     };
-    if !file.media.is_empty() {
+    for m in file.media.values() {
+        let (t, a, g) = m.get_ref().coefficients();
+        tables.push([t[0], t[1], t[2], g]);
+        tables.push([a[0], a[1], a[2], 0.0]);
+    }
+    for a in &absorbing {
+        tables.push([a[0], a[1], a[2], 0.0]);
+        tables.push([0.0; 4]);
+    }
+    // each density grid: its header (GRID_ENTRIES), its values, its cells' majorants; an
+    // albedo grid's header and values after it
+    let mut grid_media = false;
+    let unit = DensityGrid {
+        res: [1; 3],
+        channels: 1,
+        values: vec![1.0],
+        bbox: ([0.0; 3], [1.0; 3]),
+    };
+    for (i, m) in file.media.values().enumerate() {
+        let MediumDesc::Heterogeneous {
+            transform,
+            use_grid_bbox,
+            ..
+        } = m.get_ref()
+        else {
+            continue;
+        };
+        // without a grid, density 1 in the placed unit cube
+        let grid = files.grids.get(i).and_then(Option::as_ref).unwrap_or(&unit);
+        let albedo = files.albedo_grids.get(i).and_then(Option::as_ref);
+        grid_media = true;
+        let header = tables.len() as u32;
+        tables[(media + i as u32 * records::MEDIUM_ENTRIES + 1) as usize][3] =
+            f32::from_bits(header);
+        // the scene to the unit cube: the inverse of transform x (the file's box)
+        let mut to_world = transform
+            .as_ref()
+            .map_or(Affine3A::IDENTITY, transform_matrix);
+        if *use_grid_bbox {
+            let (lo, hi) = grid.bbox;
+            let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+            to_world *= Affine3A::from_scale_rotation_translation(hi - lo, Default::default(), lo);
+        }
+        let to_unit = to_world.inverse();
+        let rows = glam::Mat4::from(to_unit).transpose();
+        let entries = |v: &[f32]| (v.len() as u32).div_ceil(4);
+        let bits = |v: [u32; 3], at: u32| [v[0], v[1], v[2], at].map(f32::from_bits);
+        let data = header + records::GRID_ENTRIES;
+        let majorants = data + entries(&grid.values);
+        let albedo_header = albedo
+            .as_ref()
+            .map_or(0, |_| majorants + entries(&grid.majorants()));
+        let push_grid = |tables: &mut Vec<[f32; 4]>,
+                         g: &DensityGrid,
+                         data: u32,
+                         cells: [u32; 3],
+                         majorants: u32,
+                         albedo: u32| {
+            for r in 0..3 {
+                tables.push(rows.col(r).to_array());
+            }
+            tables.push(bits(g.res, data * 4));
+            tables.push(bits(cells, majorants * 4));
+            tables.push(bits([g.channels, 0, 0], albedo));
+        };
+        push_grid(
+            &mut tables,
+            grid,
+            data,
+            grid.cells(),
+            majorants,
+            albedo_header,
+        );
+        let pad = |tables: &mut Vec<[f32; 4]>, values: &[f32]| {
+            tables.extend(values.chunks(4).map(|c| {
+                let mut e = [0.0; 4];
+                e[..c.len()].copy_from_slice(c);
+                e
+            }));
+        };
+        pad(&mut tables, &grid.values);
+        pad(&mut tables, &grid.majorants());
+        if let Some(a) = albedo {
+            push_grid(
+                &mut tables,
+                a,
+                albedo_header + records::GRID_ENTRIES,
+                [0; 3],
+                0,
+                0,
+            );
+            pad(&mut tables, &a.values);
+        }
+    }
+    // each material record's media word, four to an entry, after the media
+    // (whenever the file has media: a path in a medium reads them at every surface)
+    let shapes_hold_media = media_words.iter().any(|&w| w != 0);
+    let material_media = if num_media == 0 {
+        0
+    } else {
+        tables.len() as u32
+    };
+    if num_media != 0 {
         let mut words = media_words.clone();
         words.resize(materials.len().next_multiple_of(4), 0);
         tables.extend(
@@ -794,11 +893,40 @@ pub fn flatten(
         tables,
         ms_tables,
         media,
-        num_media: file.media.len() as u32,
+        num_media,
         camera_medium,
         material_media,
         shapes_hold_media,
+        grid_media,
     })
+}
+
+/// Moves each absorbing dielectric record's absorption into a homogeneous medium of
+/// albedo 0 (sigma_t the absorption), the interior of its media word unless the object
+/// names its own (validation refuses both on one object); returns the new media's
+/// extinctions, numbered from `first`, one per distinct coefficient.
+fn absorbing_glass(materials: &mut [Material], words: &mut [u32], first: usize) -> Vec<[f32; 3]> {
+    let mut media: Vec<[f32; 3]> = Vec::new();
+    for (m, word) in materials.iter_mut().zip(words.iter_mut()) {
+        if m.tag != MaterialKind::Dielectric.tag() {
+            continue;
+        }
+        let mut p = dielectric::Params::read(m);
+        let a: [f32; 3] = p.absorption.into();
+        if a == [0.0; 3] {
+            continue;
+        }
+        let i = media.iter().position(|x| *x == a).unwrap_or_else(|| {
+            media.push(a);
+            media.len() - 1
+        });
+        if *word % records::MEDIA_SIDE == 0 {
+            *word += (first + i) as u32 + 1;
+        }
+        p.absorption = glam::Vec3::ZERO;
+        p.write(m);
+    }
+    media
 }
 
 /// The centre and half the diagonal of the bounded primitives' box (the origin and 1

@@ -1082,6 +1082,42 @@ pub enum MediumDesc {
         #[serde(default)]
         g: f32,
     },
+    /// Densities in a grid: the extinction at a point is the grid's density there
+    /// (trilinear between voxel centres) times `sigma_t` (or `sigma_a` + `sigma_s`) times
+    /// `scale`; the albedo and `g` as for `homogeneous`. `grid` is a Mitsuba `.vol` file
+    /// of one float32 channel (or three: a density per colour channel), its voxels
+    /// filling the unit cube that `transform` places
+    /// (or the file's own box, with `use_grid_bbox`); no density outside it. Without
+    /// `grid`, density 1 in that cube (Mitsuba's constant extinction, its `constvolume`).
+    /// `albedo_grid`, a `.vol` file of one or three channels placed the same way, varies
+    /// the albedo instead of `albedo`.
+    Heterogeneous {
+        grid: Option<String>,
+        albedo_grid: Option<String>,
+        sigma_t: Option<Spectrum>,
+        albedo: Option<Spectrum>,
+        sigma_a: Option<Spectrum>,
+        sigma_s: Option<Spectrum>,
+        #[serde(default = "crate::scene::materials::common::one")]
+        scale: f32,
+        #[serde(default)]
+        g: f32,
+        #[serde(default)]
+        transform: Option<TransformDesc>,
+        #[serde(default)]
+        use_grid_bbox: bool,
+    },
+}
+
+/// The coefficients of a `[media.NAME]` table, whatever its type.
+#[derive(Debug, Clone, Copy)]
+pub struct MediumCoefficients {
+    pub sigma_t: Option<Spectrum>,
+    pub albedo: Option<Spectrum>,
+    pub sigma_a: Option<Spectrum>,
+    pub sigma_s: Option<Spectrum>,
+    pub scale: f32,
+    pub g: f32,
 }
 
 /// An RGB triple, or one number for all three.
@@ -1102,9 +1138,9 @@ impl Spectrum {
 }
 
 impl MediumDesc {
-    /// Its extinction, albedo (each per channel, scale applied) and phase asymmetry.
-    pub fn coefficients(&self) -> ([f32; 3], [f32; 3], f32) {
-        match self {
+    /// Its coefficients as written.
+    pub fn written(&self) -> MediumCoefficients {
+        match *self {
             MediumDesc::Homogeneous {
                 sigma_t,
                 albedo,
@@ -1112,23 +1148,50 @@ impl MediumDesc {
                 sigma_s,
                 scale,
                 g,
-            } => {
-                let (t, a) = match (sigma_a, sigma_s) {
-                    (None, None) => (
-                        sigma_t.map_or([1.0; 3], Spectrum::rgb),
-                        albedo.map_or([0.75; 3], Spectrum::rgb),
-                    ),
-                    (sa, ss) => {
-                        let sa = sa.map_or([0.0; 3], Spectrum::rgb);
-                        let ss = ss.map_or([0.0; 3], Spectrum::rgb);
-                        let t: [f32; 3] = std::array::from_fn(|k| sa[k] + ss[k]);
-                        let a =
-                            std::array::from_fn(|k| if t[k] > 0.0 { ss[k] / t[k] } else { 0.0 });
-                        (t, a)
-                    }
-                };
-                (t.map(|x| x * scale), a, *g)
             }
+            | MediumDesc::Heterogeneous {
+                sigma_t,
+                albedo,
+                sigma_a,
+                sigma_s,
+                scale,
+                g,
+                ..
+            } => MediumCoefficients {
+                sigma_t,
+                albedo,
+                sigma_a,
+                sigma_s,
+                scale,
+                g,
+            },
         }
+    }
+
+    /// Its extinction (a grid's: per unit density), albedo (each per channel, scale
+    /// applied) and phase asymmetry.
+    pub fn coefficients(&self) -> ([f32; 3], [f32; 3], f32) {
+        let MediumCoefficients {
+            sigma_t,
+            albedo,
+            sigma_a,
+            sigma_s,
+            scale,
+            g,
+        } = self.written();
+        let (t, a) = match (sigma_a, sigma_s) {
+            (None, None) => (
+                sigma_t.map_or([1.0; 3], Spectrum::rgb),
+                albedo.map_or([0.75; 3], Spectrum::rgb),
+            ),
+            (sa, ss) => {
+                let sa = sa.map_or([0.0; 3], Spectrum::rgb);
+                let ss = ss.map_or([0.0; 3], Spectrum::rgb);
+                let t: [f32; 3] = std::array::from_fn(|k| sa[k] + ss[k]);
+                let a = std::array::from_fn(|k| if t[k] > 0.0 { ss[k] / t[k] } else { 0.0 });
+                (t, a)
+            }
+        };
+        (t.map(|x| x * scale), a, g)
     }
 }

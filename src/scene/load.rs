@@ -13,13 +13,13 @@ use super::error::{self, Problem, SceneError};
 use super::flat::FlatScene;
 use super::flatten::{self, Build, FlattenError, SceneFiles};
 use super::format::{
-    BackgroundDesc, CameraDesc, ColorSpace, FilterKind, LightSampling, ObjectDesc, Projection,
-    RenderDesc, SamplerKind, SceneFile, TextureDesc, MESH_ATTRIBUTES,
+    BackgroundDesc, CameraDesc, ColorSpace, FilterKind, LightSampling, MediumDesc, ObjectDesc,
+    Projection, RenderDesc, SamplerKind, SceneFile, TextureDesc, MESH_ATTRIBUTES,
 };
 use super::gltf::{self, GltfError};
 use super::imported::ImportedScene;
 use super::materials::{reads_texture, reads_uv_derivatives, MaterialDesc};
-use super::{mesh, mitsuba, mtl, textures, validate};
+use super::{mesh, mitsuba, mtl, textures, validate, volume};
 
 /// Largest scene file read (64 MiB).
 pub const MAX_SCENE_FILE_BYTES: u64 = 1 << 26;
@@ -369,6 +369,8 @@ fn load_gltf_scene(
         meshes: vec![None],
         imported: vec![Some(g)],
         images,
+        grids: Vec::new(),
+        albedo_grids: Vec::new(),
     };
     let mut scene = flatten::flatten(&file, &files, build).map_err(|e| {
         let why = match e {
@@ -598,11 +600,46 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
             _ => None,
         })
         .collect();
+    let grids = file
+        .media
+        .iter()
+        .map(|(name, m)| match m.get_ref() {
+            MediumDesc::Heterogeneous {
+                grid: Some(grid), ..
+            } => read_relative(
+                (src, dir, grid),
+                m.span().start,
+                format!("media.{name}.grid"),
+                volume::read_vol,
+                &mut problems,
+            ),
+            _ => None,
+        })
+        .collect();
+    let albedo_grids = file
+        .media
+        .iter()
+        .map(|(name, m)| match m.get_ref() {
+            MediumDesc::Heterogeneous {
+                albedo_grid: Some(grid),
+                ..
+            } => read_relative(
+                (src, dir, grid),
+                m.span().start,
+                format!("media.{name}.albedo_grid"),
+                volume::read_albedo_vol,
+                &mut problems,
+            ),
+            _ => None,
+        })
+        .collect();
     if problems.is_empty() {
         Ok(SceneFiles {
             meshes,
             imported,
             images,
+            grids,
+            albedo_grids,
         })
     } else {
         Err(problems)

@@ -26,6 +26,7 @@ pub mod shapes;
 pub mod texels;
 pub mod textures;
 pub mod validate;
+pub mod volume;
 
 pub use error::{Problem, SceneError};
 pub use flat::{Band, CameraFrame, EnvironmentMap, FlatScene, RR_DEPTH};

@@ -266,8 +266,21 @@ shared_constants! {
     /// candidate's `t`).
     MEDIUM_HIT: u32 = 0xffff_fffe;
     /// `vec4<f32>` entries of `tables` per medium (`Medium`): (sigma_t rgb, g), (albedo
-    /// rgb, 0).
+    /// rgb, the entry of its density grid's header as u32 bits, 0 for a homogeneous one).
     MEDIUM_ENTRIES: u32 = 2;
+    /// `vec4<f32>` entries of a density grid's header (`Grid`): the map from the scene
+    /// into its unit cube (three rows), (voxels x, y, z, first value), (majorant cells
+    /// x, y, z, first majorant) and (channels: 1, or 3 for a density per colour channel,
+    /// 0, 0, the entry of its albedo grid's header, 0 without one), the counts and
+    /// indices as u32 bits; a voxel's channels together. An albedo grid's header is the
+    /// same, of three channels, without majorants.
+    GRID_ENTRIES: u32 = 6;
+    /// The voxels a side of a majorant cell: tracking steps through cells of this size,
+    /// taking collisions at the rate of each one's highest density.
+    MAJORANT_CELL: u32 = 8;
+    /// The most cells and collisions one tracking takes (llvmpipe stops a loop after
+    /// 65535 iterations); a flight that would take more ends there.
+    MAX_TRACKING_STEPS: u32 = 16384;
     /// A shape's media word (`Params::material_media`): interior + 1 plus `MEDIA_SIDE` x
     /// (exterior + 1), 0 for vacuum on a side; a word of 0 leaves the medium as it is.
     /// At most `MEDIA_SIDE - 1` media, so a word is an exact f32.

@@ -5,11 +5,11 @@ use glam::Vec3;
 use super::error::Problem;
 use toml::Spanned;
 
-use super::format::MediumDesc;
 use super::format::{
     is_mesh_attribute, CameraDesc, CheckerMapping, FilterKind, LightDesc, ObjectDesc, Projection,
     RenderDesc, SceneFile, TextureDesc, TransformDesc, UvTransformDesc, MESH_ATTRIBUTES,
 };
+use super::format::{MediumCoefficients, MediumDesc};
 use super::materials::common::ColorDesc;
 use super::materials::{blend, MaterialDesc};
 use super::records::MAX_BLEND_DEPTH;
@@ -485,6 +485,21 @@ impl Validator<'_> {
             self.transform(&format!("{key}.transform"), &t, at);
         }
         let (interior, exterior) = o.media();
+        let absorbing = o
+            .material()
+            .and_then(|m| file.materials.get(m))
+            .is_some_and(
+                |m| matches!(m.get_ref(), MaterialDesc::Dielectric(d) if d.absorption != [0.0; 3]),
+            );
+        if interior.is_some() && absorbing {
+            self.push(
+                at,
+                &format!("{key}.interior"),
+                "its glass has an `absorption`, which is a medium inside it: give one or \
+                 the other (the absorption as the medium's sigma_a)"
+                    .into(),
+            );
+        }
         for (field, name) in [("interior", interior), ("exterior", exterior)] {
             if let Some(name) = name {
                 self.medium_name(&format!("{key}.{field}"), name, at, file);
@@ -521,15 +536,49 @@ impl Validator<'_> {
     fn medium(&mut self, name: &str, m: &Spanned<MediumDesc>) {
         let at = m.span().start;
         let key = |field: &str| format!("media.{name}.{field}");
-        match m.get_ref() {
-            MediumDesc::Homogeneous {
+        if let MediumDesc::Heterogeneous {
+            grid: None,
+            use_grid_bbox: true,
+            ..
+        } = m.get_ref()
+        {
+            self.push(
+                at,
+                &key("use_grid_bbox"),
+                "needs a `grid`, whose file gives the box".into(),
+            );
+        }
+        if let MediumDesc::Heterogeneous {
+            transform,
+            albedo_grid,
+            albedo,
+            sigma_a,
+            sigma_s,
+            ..
+        } = m.get_ref()
+        {
+            if let Some(t) = transform {
+                self.transform(&key("transform"), t, at);
+            }
+            if albedo_grid.is_some() && (albedo.is_some() || sigma_a.is_some() || sigma_s.is_some())
+            {
+                self.push(
+                    at,
+                    &key("albedo_grid"),
+                    "gives the albedo: not with `albedo`, `sigma_a` or `sigma_s`".into(),
+                );
+            }
+        }
+        {
+            let MediumCoefficients {
                 sigma_t,
                 albedo,
                 sigma_a,
                 sigma_s,
                 scale,
                 g,
-            } => {
+            } = &m.get_ref().written();
+            {
                 for (field, value) in [
                     ("sigma_t", sigma_t),
                     ("sigma_a", sigma_a),

@@ -15,7 +15,7 @@ use crate::scene::records::{
 };
 
 impl Shading for Params {
-    /// Rough glass without absorption: specular (reflected) or tint (transmitted) x BSDF x
+    /// Rough glass: specular (reflected) or tint (transmitted) x BSDF x
     /// |cos| (`rough_lobes`); 0 for the deltas.
     fn eval(&self, n: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
         if !has_density(self) {
@@ -38,27 +38,21 @@ impl Shading for Params {
 
     /// Snell refraction (eta = 1 / ior entering, ior leaving, the normal turned toward
     /// the incoming ray), total internal reflection, reflection with the exact Fresnel
-    /// probability; weight = specular (reflected) or tint (refracted), times the
-    /// Beer-Lambert transmittance exp(-absorption x distance) for a segment that ran
-    /// inside. Deltas when smooth; rough glass by
-    /// `rough_scatter`.
+    /// probability; weight = specular (reflected) or tint (refracted). Deltas when
+    /// smooth; rough glass by `rough_scatter`. (Absorption inside is a medium.)
     fn scatter(&self, ray: &Ray, hit: &Hit, u: [f32; 2]) -> Scatter {
         let entering = hit.front_face;
         let n = if entering { hit.ns } else { -hit.ns };
         let eta = if entering { 1.0 / self.ior } else { self.ior };
-        let mut inside = Vec3::ONE;
-        if !entering {
-            inside = (-self.absorption * (hit.p - ray.origin).length()).exp();
-        }
         if self.alpha.max(self.alpha_v) >= ALPHA_SMOOTH {
-            return rough_scatter(self, ray, hit, n, eta, inside, u);
+            return rough_scatter(self, ray, hit, n, eta, u);
         }
         let cos_i = (-ray.dir.dot(n)).clamp(0.0, 1.0);
         let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
         let reflected = Scatter {
             ok: true,
             dir: reflect_dir(ray.dir, n),
-            weight: inside * self.specular,
+            weight: self.specular,
             pdf: 0.0,
             delta: true,
         };
@@ -72,7 +66,7 @@ impl Shading for Params {
         Scatter {
             ok: true,
             dir: (eta * ray.dir + (eta * cos_i - cos_t) * n).normalize(),
-            weight: inside * self.tint,
+            weight: self.tint,
             pdf: 0.0,
             delta: true,
         }
@@ -242,18 +236,9 @@ pub fn ms_lobes(p: &Params, n: Vec3, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32)
 /// Rough glass: a visible normal, then the mirror direction about it or the refraction
 /// through it (the mirror direction where it reflects totally); with energy
 /// compensation, first its lobe (`ms_probs`: a cosine direction, mirrored through the
-/// surface where it transmits). Weight = BSDF x cos / pdf (`lobes`) times the
-/// transmittance `inside` and specular (reflected) or tint (transmitted); with
-/// its pdf where it has a density (no absorption), else as a delta.
-pub fn rough_scatter(
-    p: &Params,
-    ray: &Ray,
-    hit: &Hit,
-    n: Vec3,
-    eta: f32,
-    inside: Vec3,
-    u0: [f32; 2],
-) -> Scatter {
+/// surface where it transmits). Weight = BSDF x cos / pdf (`lobes`) times specular
+/// (reflected) or tint (transmitted); with its pdf.
+pub fn rough_scatter(p: &Params, ray: &Ray, hit: &Hit, n: Vec3, eta: f32, u0: [f32; 2]) -> Scatter {
     let wo = -ray.dir;
     let cos_o = n.dot(wo);
     if cos_o <= 0.0 {
@@ -289,7 +274,7 @@ pub fn rough_scatter(
         return ABSORBED;
     }
     let delta = !has_density(p);
-    let weight = inside * if reflect { p.specular } else { p.tint };
+    let weight = if reflect { p.specular } else { p.tint };
     Scatter {
         ok: true,
         dir: wi,
@@ -353,5 +338,5 @@ pub fn eta(p: &Params) -> f32 {
 /// Whether the glass has a density (dielectric.wgsl's `dielectric_has_density`): the
 /// scene's own rule.
 pub fn has_density(p: &Params) -> bool {
-    dielectric::has_density((p.alpha, p.alpha_v), p.absorption.into())
+    dielectric::has_density((p.alpha, p.alpha_v))
 }

@@ -76,7 +76,8 @@ material_view! {
         specular_texture: u32 = tex_color2,
         /// Index of refraction inside (outside is 1).
         ior: f32 = scalars.x,
-        /// Beer-Lambert coefficient per unit length inside.
+        /// Absorption per unit length inside: the flattener moves it into a medium of
+        /// albedo 0 inside the glass (`flatten::absorbing_glass`) and leaves 0 here.
         absorption: rgb = color3,
         /// Alpha = roughness^2 (along the tangent where it is anisotropic); below
         /// ALPHA_SMOOTH on both axes smooth glass.
@@ -103,12 +104,10 @@ pub const LOBES: Lobes = Lobes {
     transmission: true,
 };
 
-/// Whether rough glass has a density that light sampling may weigh: without absorption.
-/// Next-event estimation at a hit inside absorbing glass would need the transmittance of
-/// the segment the ray ran, which the BSDF's questions do not carry: absorbing rough
-/// glass is found by its own sampling, as a delta.
-pub fn has_density(alpha: (f32, f32), absorption: [f32; 3]) -> bool {
-    alpha.0.max(alpha.1) >= ALPHA_SMOOTH && absorption == [0.0; 3]
+/// Whether glass has a density that light sampling may weigh: rough. (Absorbing rough
+/// glass too: its absorption is a medium inside it, which shadow rays cross.)
+pub fn has_density(alpha: (f32, f32)) -> bool {
+    alpha.0.max(alpha.1) >= ALPHA_SMOOTH
 }
 
 /// Whether a dielectric's record is rough glass (`HAS_ROUGH_DIELECTRIC`).
@@ -204,7 +203,7 @@ impl Model for Desc {
     }
 
     fn lobes(&self) -> Lobes {
-        let density = has_density(self.alpha(), self.absorption);
+        let density = has_density(self.alpha());
         Lobes {
             density,
             delta: !density,

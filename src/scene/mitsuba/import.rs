@@ -180,8 +180,6 @@ fn children<'t>(
     })
 }
 
-const MEDIA: &str = "heterogeneous media (grid volumes) are not rendered yet (issue 43); wgtrace reads homogeneous media";
-
 impl<'a> Importer<'a> {
     fn obj(&self, i: usize) -> &'a Object {
         &self.tree.objects[i]
@@ -521,7 +519,7 @@ impl<'a> Importer<'a> {
                 "integrator" => integrator = Some(i),
                 // named for reference only: used where they are referred to
                 "bsdf" | "texture" | "medium" | "phase" => {}
-                "volume" => return err(&o.pos, format!("{}: {MEDIA}", what(o))),
+                "volume" => {}
                 _ => return err(&o.pos, format!("<{}> at the top level is not read", o.tag)),
             }
         }
@@ -1163,12 +1161,89 @@ impl<'a> Importer<'a> {
             return Ok(n.clone());
         }
         let o = self.obj(i);
-        if o.plugin != "homogeneous" {
-            return err(&o.pos, format!("{}: {MEDIA}", what(o)));
-        }
-        self.check_known(o, &["albedo", "sigma_t", "scale", "sample_emitters"], &[])?;
-        let albedo = self.color_const(o, "albedo", 0.75, Use::Reflectance)?;
-        let sigma_t = self.color_const(o, "sigma_t", 1.0, Use::Unbounded)?;
+        let mut grid = None;
+        let (albedo, sigma_t) = match o.plugin.as_str() {
+            "homogeneous" => {
+                // (medium_sampling_mode chooses how Mitsuba samples, not what it renders)
+                self.check_known(
+                    o,
+                    &["albedo", "sigma_t", "scale", "sample_emitters"],
+                    &["medium_sampling_mode"],
+                )?;
+                (
+                    Some(self.color_const(o, "albedo", 0.75, Use::Reflectance)?),
+                    self.color_const(o, "sigma_t", 1.0, Use::Unbounded)?,
+                )
+            }
+            "heterogeneous" => {
+                self.check_known(
+                    o,
+                    &["albedo", "sigma_t", "scale", "sample_emitters"],
+                    &[
+                        "has_spectral_extinction",
+                        "majorant_resolution_factor",
+                        "majorant_factor",
+                        "medium_sampling_mode",
+                    ],
+                )?;
+                let grid_of = |s: &Self, name: &str| match o.get(name).map(|p| &p.value) {
+                    Some(Value::Object(v)) if s.obj(*v).plugin == "gridvolume" => Some(*v),
+                    _ => None,
+                };
+                let sigma_t = match grid_of(self, "sigma_t") {
+                    Some(v) => {
+                        grid = Some(self.grid_volume(v)?);
+                        float(1.0)
+                    }
+                    None => {
+                        // a constant: density 1 in the unit cube its to_world places (the
+                        // medium's extent in Mitsuba, the volume's box)
+                        let mut placed = Table::new();
+                        if let Some(Value::Object(v)) = o.get("sigma_t").map(|p| &p.value) {
+                            let m = self.transform(self.obj(*v), "to_world")?;
+                            if m != DMat4::IDENTITY {
+                                placed.insert("transform".into(), matrix(m));
+                            }
+                        }
+                        grid = Some(placed);
+                        self.volume_const(o, "sigma_t", 1.0, Use::Unbounded)?
+                    }
+                };
+                let albedo = match grid_of(self, "albedo") {
+                    Some(v) => {
+                        // an albedo grid, placed as the density grid is
+                        let a = self.grid_volume(v)?;
+                        let placed = |t: &Table| {
+                            (t.get("transform").cloned(), t.get("use_grid_bbox").cloned())
+                        };
+                        match &mut grid {
+                            Some(g) if g.contains_key("grid") && placed(g) == placed(&a) => {
+                                g.insert("albedo_grid".into(), a["grid"].clone());
+                            }
+                            _ => {
+                                return err(
+                                    &self.obj(v).pos,
+                                    "volume gridvolume: an albedo grid is read with a density \
+                                         grid (`sigma_t`) placed the same way (the same to_world \
+                                         and use_grid_bbox)",
+                                )
+                            }
+                        }
+                        None
+                    }
+                    None => Some(self.volume_const(o, "albedo", 0.75, Use::Reflectance)?),
+                };
+                (albedo, sigma_t)
+            }
+            other => {
+                return err(
+                    &o.pos,
+                    format!(
+                        "medium {other}: not read (wgtrace reads homogeneous and heterogeneous)"
+                    ),
+                )
+            }
+        };
         let scale = self.float(o, "scale", 1.0)?;
         let mut g = 0.0;
         let phases: Vec<usize> = children(self.tree, o, "phase").collect();
@@ -1199,11 +1274,13 @@ impl<'a> Importer<'a> {
                 }
             }
         }
-        let mut t = table([
-            ("type", text("homogeneous")),
-            ("sigma_t", sigma_t),
-            ("albedo", albedo),
-        ]);
+        let mut t = table([("type", text(&o.plugin)), ("sigma_t", sigma_t)]);
+        if let Some(a) = albedo {
+            t.insert("albedo".into(), a);
+        }
+        if let Some(g) = grid {
+            t.extend(g);
+        }
         if scale != 1.0 {
             t.insert("scale".into(), float(scale));
         }
@@ -1219,6 +1296,65 @@ impl<'a> Importer<'a> {
             what: what(o),
         });
         Ok(name)
+    }
+
+    /// A heterogeneous medium's `name`: a colour, or a `constvolume`'s value.
+    fn volume_const(&mut self, o: &Object, name: &str, default: f64, use_: Use) -> Result<T> {
+        if let Some(Value::Object(v)) = o.get(name).map(|p| &p.value) {
+            let vo = self.obj(*v);
+            if vo.tag == "volume" {
+                if vo.plugin != "constvolume" {
+                    return err(
+                        &vo.pos,
+                        format!(
+                            "volume {}: `{name}` of a medium is read as a constant \
+                             (constvolume) or a gridvolume",
+                            vo.plugin
+                        ),
+                    );
+                }
+                // (a heterogeneous medium's extinction reads its to_world)
+                self.check_known(vo, &["value", "to_world"], &[])?;
+                return self.color_const(vo, "value", default, use_);
+            }
+        }
+        self.color_const(o, name, default, use_)
+    }
+
+    /// A `gridvolume`'s keys of a `[media.NAME]` table: its `.vol` file, placement and
+    /// whether the file's box places it.
+    fn grid_volume(&mut self, i: usize) -> Result<Table> {
+        let o = self.obj(i);
+        self.check_known(
+            o,
+            &["filename", "to_world", "use_grid_bbox", "filter_type"],
+            &["raw", "wrap_mode"],
+        )?;
+        if let Some(f) = self.string(o, "filter_type")? {
+            if f != "trilinear" {
+                return err(
+                    &o.get("filter_type").unwrap().pos,
+                    format!("volume gridvolume: filter_type {f} is not read (wgtrace interpolates trilinearly, Mitsuba's default)"),
+                );
+            }
+        }
+        if let Some(w) = self.string(o, "wrap_mode")? {
+            if w != "clamp" {
+                return err(
+                    &o.get("wrap_mode").unwrap().pos,
+                    format!("volume gridvolume: wrap_mode {w} is not read (wgtrace clamps, Mitsuba's default)"),
+                );
+            }
+        }
+        let mut t = table([("grid", text(&self.file(o, "filename")?))]);
+        let m = self.transform(o, "to_world")?;
+        if m != DMat4::IDENTITY {
+            t.insert("transform".into(), matrix(m));
+        }
+        if self.boolean(o, "use_grid_bbox", false)? {
+            t.insert("use_grid_bbox".into(), T::Boolean(true));
+        }
+        Ok(t)
     }
 
     fn push_material(
