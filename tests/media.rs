@@ -326,6 +326,15 @@ fn bad_media_are_refused_with_their_keys() {
             "objects[0].interior: its glass has an `absorption`, which is a medium inside it",
         ),
         (
+            base("", fog, "interior = \"fog\"").replace(
+                "b = { type = \"null\" }",
+                "b = { type = \"null\" }\namber = { type = \"dielectric\", ior = 1.5, \
+                 absorption = [1, 1, 1] }\nwhite = { type = \"lambertian\", albedo = [1, 1, 1] }\n\
+                 mix = { type = \"blend\", first = \"white\", second = \"amber\", weight = 0.5 }",
+            ),
+            "materials.mix.second: \"amber\" absorbs",
+        ),
+        (
             base(
                 "",
                 "[media.fog]\ntype = \"heterogeneous\"\ngrid = \"missing.vol\"\n",
@@ -578,4 +587,80 @@ interior = "smoke"
             }
         }
     }
+}
+
+/// A `.vol` file whose header lies is one error, never a panic: voxel counts whose
+/// product overflows, a box that is not finite, a length that does not match, a grid of
+/// two channels.
+#[test]
+fn bad_grid_files_are_errors() {
+    use wgtrace::scene::volume::{parse_vol, write_vol};
+    let header = |res: [i32; 3], channels: i32, bbox: [f32; 6]| {
+        let mut b = b"VOL\x03".to_vec();
+        for i in [1, res[0], res[1], res[2], channels] {
+            b.extend(i.to_le_bytes());
+        }
+        for f in bbox {
+            b.extend(f.to_le_bytes());
+        }
+        b
+    };
+    let unit = [0.0, 0.0, 0.0, 1.0, 1.0, 1.0];
+    let cases = [
+        (header([1 << 21, 1 << 21, 1 << 22], 1, unit), "at most"),
+        (header([1 << 30, 1 << 30, 1 << 30], 3, unit), "at most"),
+        (
+            {
+                let mut b = header([1, 1, 1], 1, [0.0, 0.0, 0.0, f32::NAN, 1.0, 1.0]);
+                b.extend(1.0f32.to_le_bytes());
+                b
+            },
+            "not finite",
+        ),
+        (header([2, 2, 2], 1, unit), "bytes of values"),
+        (header([1, 1, 1], 2, unit), "2 channels"),
+        (b"VOL".to_vec(), "not a Mitsuba .vol grid"),
+    ];
+    for (bytes, says) in cases {
+        let err = parse_vol(&bytes).expect_err(says);
+        assert!(err.contains(says), "{err}: should say {says}");
+    }
+    // and a good one reads back
+    let g = parse_vol(&write_vol([2, 1, 1], &[0.5, 1.5], ([0.0; 3], [1.0; 3]))).unwrap();
+    assert_eq!(
+        (g.res, g.channels, g.values),
+        ([2, 1, 1], 1, vec![0.5, 1.5])
+    );
+}
+
+/// Absorbing glass in a fog that fills the scene (the camera's medium) leaves into the
+/// fog: its record's media word holds the absorption's medium inside and the fog outside.
+#[test]
+fn absorbing_glass_in_a_scene_wide_fog_leaves_into_the_fog() {
+    let scene = common::scene_from_str(
+        r#"
+[camera]
+look_from = [0, 0, 5]
+look_at = [0, 0, 0]
+medium = "fog"
+
+[media.fog]
+type = "homogeneous"
+sigma_t = 0.1
+
+[materials]
+amber = { type = "dielectric", ior = 1.5, absorption = [0.5, 1, 2] }
+
+[[objects]]
+type = "sphere"
+center = [0, 0, 0]
+radius = 1
+material = "amber"
+"#,
+    );
+    use wgtrace::scene::records::MEDIA_SIDE;
+    assert_eq!(scene.num_media, 2);
+    let word = (scene.material_media * 4) as usize;
+    // the glass's medium is number 1 (after the fog, 0), the fog outside
+    assert_eq!(scene.tables[word >> 2][word & 3] as u32, 2 + MEDIA_SIDE);
 }

@@ -91,9 +91,9 @@ impl DeviceFit {
                     Slot::Materials => ("materials", scene.materials.len(), "use fewer materials"),
                     Slot::Emitters => ("lights", scene.emitters.len(), "use fewer emitting shapes"),
                     Slot::Tables => (
-                        "image background's distribution (scalars / 4)",
+                        "tables: the background's distribution, media and their grids (scalars / 4)",
                         scene.tables.len(),
-                        "use a smaller background image",
+                        "use a smaller background image or coarser density grids",
                     ),
                     _ => ("textures", scene.textures.len(), "use fewer textures"),
                 };

@@ -492,6 +492,8 @@ pub enum FlattenError {
     Texels(String),
     /// The scene's BVH and a group's together are deeper than the walk's stack.
     Depth(u32),
+    /// More media (the file's and those of absorbing glass) than a media word holds.
+    Media(u32),
 }
 
 /// What a scene's objects and textures bring from files, read before flattening.
@@ -662,8 +664,16 @@ pub fn flatten(
     // absorbing glass: its absorption is a medium of albedo 0 inside it (the interior of
     // each record of it, one medium per coefficient), so that paths and shadow rays
     // meet it as they do any medium
-    let absorbing = absorbing_glass(&mut materials, &mut media_words, file.media.len());
+    let absorbing = absorbing_glass(
+        &mut materials,
+        &mut media_words,
+        file.media.len(),
+        camera_medium,
+    );
     let num_media = (file.media.len() + absorbing.len()) as u32;
+    if num_media >= records::MEDIA_SIDE {
+        return Err(FlattenError::Media(num_media));
+    }
     // the media, after the other tables: (sigma_t, g), (albedo, 0) each
     let media = if num_media == 0 {
         0
@@ -704,17 +714,19 @@ pub fn flatten(
         let header = tables.len() as u32;
         tables[(media + i as u32 * records::MEDIUM_ENTRIES + 1) as usize][3] =
             f32::from_bits(header);
-        // the scene to the unit cube: the inverse of transform x (the file's box)
-        let mut to_world = transform
+        // the scene to a grid's unit cube: the inverse of transform x (its file's box)
+        let transform = transform
             .as_ref()
             .map_or(Affine3A::IDENTITY, transform_matrix);
-        if *use_grid_bbox {
-            let (lo, hi) = grid.bbox;
-            let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
-            to_world *= Affine3A::from_scale_rotation_translation(hi - lo, Default::default(), lo);
-        }
-        let to_unit = to_world.inverse();
-        let rows = glam::Mat4::from(to_unit).transpose();
+        let rows_of = |g: &DensityGrid| {
+            let mut to_world = transform;
+            if *use_grid_bbox {
+                let (lo, hi) = (Vec3::from(g.bbox.0), Vec3::from(g.bbox.1));
+                to_world *=
+                    Affine3A::from_scale_rotation_translation(hi - lo, Default::default(), lo);
+            }
+            glam::Mat4::from(to_world.inverse()).transpose()
+        };
         let entries = |v: &[f32]| (v.len() as u32).div_ceil(4);
         let bits = |v: [u32; 3], at: u32| [v[0], v[1], v[2], at].map(f32::from_bits);
         let data = header + records::GRID_ENTRIES;
@@ -728,6 +740,7 @@ pub fn flatten(
                          cells: [u32; 3],
                          majorants: u32,
                          albedo: u32| {
+            let rows = rows_of(g);
             for r in 0..3 {
                 tables.push(rows.col(r).to_array());
             }
@@ -902,10 +915,17 @@ pub fn flatten(
 }
 
 /// Moves each absorbing dielectric record's absorption into a homogeneous medium of
-/// albedo 0 (sigma_t the absorption), the interior of its media word unless the object
-/// names its own (validation refuses both on one object); returns the new media's
-/// extinctions, numbered from `first`, one per distinct coefficient.
-fn absorbing_glass(materials: &mut [Material], words: &mut [u32], first: usize) -> Vec<[f32; 3]> {
+/// albedo 0 (sigma_t the absorption), the interior of its media word (validation refuses
+/// an object of absorbing glass that names its own); where the object names no exterior,
+/// the camera's medium is outside (a glass in a fog that fills the scene leaves into the
+/// fog). Returns the new media's extinctions, numbered from `first`, one per distinct
+/// coefficient.
+fn absorbing_glass(
+    materials: &mut [Material],
+    words: &mut [u32],
+    first: usize,
+    camera_medium: u32,
+) -> Vec<[f32; 3]> {
     let mut media: Vec<[f32; 3]> = Vec::new();
     for (m, word) in materials.iter_mut().zip(words.iter_mut()) {
         if m.tag != MaterialKind::Dielectric.tag() {
@@ -922,6 +942,9 @@ fn absorbing_glass(materials: &mut [Material], words: &mut [u32], first: usize) 
         });
         if *word % records::MEDIA_SIDE == 0 {
             *word += (first + i) as u32 + 1;
+        }
+        if *word / records::MEDIA_SIDE == 0 && camera_medium != records::NO_MEDIUM {
+            *word += records::MEDIA_SIDE * (camera_medium + 1);
         }
         p.absorption = glam::Vec3::ZERO;
         p.write(m);

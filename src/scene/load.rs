@@ -237,10 +237,31 @@ pub fn load_str(
                 .collect(),
             FlattenError::Texels(why) => vec![Problem::at(src, 0, "textures", why)],
             FlattenError::Depth(d) => vec![Problem::at(src, 0, "groups", depth_problem(d))],
+            FlattenError::Media(n) => vec![Problem::at(src, 0, "media", media_problem(n))],
         })
     })?;
     scene.warnings = warnings;
     Ok(scene)
+}
+
+/// A grid whose file's box can place it where `use_grid_bbox` asks (a box of positive
+/// size), else why not.
+fn placeable(g: volume::DensityGrid, use_grid_bbox: bool) -> Result<volume::DensityGrid, String> {
+    let (lo, hi) = g.bbox;
+    if use_grid_bbox && (0..3).any(|k| hi[k] <= lo[k]) {
+        return Err(format!(
+            "its box {lo:?} to {hi:?} is empty, and use_grid_bbox places the grid by it"
+        ));
+    }
+    Ok(g)
+}
+
+/// Why a scene of too many media is refused.
+fn media_problem(n: u32) -> String {
+    format!(
+        "{n} media, counting one inside each glass of its own absorption: at most {}",
+        crate::scene::records::MEDIA_SIDE - 1
+    )
 }
 
 /// Why a scene whose BVH and a group's are too deep together is refused.
@@ -379,6 +400,7 @@ fn load_gltf_scene(
             }
             FlattenError::Texels(why) => why,
             FlattenError::Depth(d) => depth_problem(d),
+            FlattenError::Media(n) => media_problem(n),
         };
         invalid(vec![Problem::at("", 0, "", why)])
     })?;
@@ -605,12 +627,14 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
         .iter()
         .map(|(name, m)| match m.get_ref() {
             MediumDesc::Heterogeneous {
-                grid: Some(grid), ..
+                grid: Some(grid),
+                use_grid_bbox,
+                ..
             } => read_relative(
                 (src, dir, grid),
                 m.span().start,
                 format!("media.{name}.grid"),
-                volume::read_vol,
+                |p| placeable(volume::read_vol(p)?, *use_grid_bbox),
                 &mut problems,
             ),
             _ => None,
@@ -622,12 +646,13 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
         .map(|(name, m)| match m.get_ref() {
             MediumDesc::Heterogeneous {
                 albedo_grid: Some(grid),
+                use_grid_bbox,
                 ..
             } => read_relative(
                 (src, dir, grid),
                 m.span().start,
                 format!("media.{name}.albedo_grid"),
-                volume::read_albedo_vol,
+                |p| placeable(volume::read_albedo_vol(p)?, *use_grid_bbox),
                 &mut problems,
             ),
             _ => None,

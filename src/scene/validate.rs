@@ -439,6 +439,16 @@ impl Validator<'_> {
                     format!("\"{part}\" has an opacity mask: a blend's parts cannot be masked"),
                 );
             }
+            if matches!(m.get_ref(), MaterialDesc::Dielectric(d) if d.absorption != [0.0; 3]) {
+                self.push(
+                    at,
+                    &key,
+                    format!(
+                        "\"{part}\" absorbs: a glass's absorption is a medium inside its shape, \
+                         which a blend's part cannot hold (give the shape an `interior`)"
+                    ),
+                );
+            }
         }
         // the depth of nesting below this blend, following parts that are blends
         fn depth(file: &SceneFile, name: &str, seen: &mut Vec<String>) -> Option<u32> {

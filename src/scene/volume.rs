@@ -43,6 +43,12 @@ pub fn read_albedo_vol(path: &Path) -> Result<DensityGrid, String> {
         return Err(format!("value {i} is {}: an albedo is 0 to 1", g.values[i]));
     }
     if g.channels == 1 {
+        if g.values.len() as u64 * 3 > MAX_VOXELS {
+            return Err(format!(
+                "{} voxels of one channel: an albedo grid is kept as three, at most {MAX_VOXELS} values",
+                g.values.len()
+            ));
+        }
         g.values = g.values.iter().flat_map(|&v| [v; 3]).collect();
         g.channels = 3;
     }
@@ -82,12 +88,18 @@ pub fn parse_vol(bytes: &[u8]) -> Result<DensityGrid, String> {
     }
     let channels = channels as u32;
     let res = res.map(|r| r as u32);
-    let count = res.iter().map(|&r| u64::from(r)).product::<u64>() * u64::from(channels);
-    if count > MAX_VOXELS {
-        return Err(format!("{count} values: at most {MAX_VOXELS} are read"));
-    }
+    let count = res
+        .iter()
+        .try_fold(u64::from(channels), |n, &r| n.checked_mul(u64::from(r)))
+        .filter(|&n| n <= MAX_VOXELS)
+        .ok_or_else(|| {
+            format!("{res:?} voxels of {channels} channels: at most {MAX_VOXELS} values are read")
+        })?;
     let min = [float(24), float(28), float(32)];
     let max = [float(36), float(40), float(44)];
+    if !min.iter().chain(&max).all(|v| v.is_finite()) {
+        return Err(format!("its box {min:?} to {max:?} is not finite"));
+    }
     let data = &bytes[HEADER..];
     if data.len() as u64 != count * 4 {
         return Err(format!(
