@@ -121,8 +121,8 @@ pub fn scene_hash(scene: &FlatScene) -> u64 {
         params.spp = 0;
         params.strata_log2 = 0;
     }
-    // the parameters but the media's four words, which follow (a scene without media
-    // hashes as it did before media had them)
+    // the parameters but the media's four words, which follow and are hashed only for
+    // a scene with media (so a checkpoint's hash does not depend on their placement)
     let bytes = bytemuck::bytes_of(&params);
     let media_at = std::mem::offset_of!(Params, media);
     let before_media = [&bytes[..media_at], &bytes[media_at + 16..]].concat();

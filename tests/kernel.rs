@@ -700,7 +700,8 @@ fn gpu_lights_match_cpu_query_by_query() {
 /// material's own sampling, lights without a surface, alpha pass-through, blends,
 /// delta lobes, textures and normal maps, an environment light, Russian roulette, and
 /// media (the fog box of scenes/fog.toml: free flights, scattering points, shadow rays'
-/// transmittance through null boundaries, a glass sphere holding a medium). A
+/// transmittance through null boundaries, a glass sphere holding a medium; the smoke of
+/// scenes/smoke.toml: delta and ratio tracking through a density grid). A
 /// random number within rounding of a choice (a lobe, a roulette coin, a grazing edge)
 /// may send a path another way on the two backends: at most 1 in 100 paths may differ
 /// (the ray kernel's 1 in 1000 per decision, over a path's handful of bounces).

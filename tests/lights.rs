@@ -737,7 +737,7 @@ material = "panel"
 "#,
         common::repo_path("scenes/meshes/icosphere.obj").display()
     );
-    // rough glass (no absorption: it has a density) over a floor, lit by a panel above:
+    // rough glass (it has a density) over a floor, lit by a panel above:
     // light sampling weighs its reflection and its transmission out of the sphere
     let rough_glass = r#"
 [render]

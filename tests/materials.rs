@@ -5,7 +5,7 @@
 //! (chi-square, and the pdf's integral), the sampler's weight and pdf against `eval` and
 //! `pdf`, reciprocity, and no density for a delta. A new material adds rows there. Then
 //! the closed forms of each type: mirror, Snell, Fresnel's and Schlick's Fresnel, total
-//! internal reflection, Beer-Lambert, the microfacet's mirror limit and sphere integral,
+//! internal reflection, absorbing glass as clear glass, the microfacet's mirror limit and sphere integral,
 //! pbr's Lambertian limit, the conductor's Fresnel, the thin dielectric's summed
 //! reflections, the plastic's white base and its tables' smooth limit. (tests/kernel.rs runs the same table on the GPU against these
 //! functions; tests/gpu.rs renders white furnaces of every material on both backends.)

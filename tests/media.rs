@@ -29,48 +29,20 @@ fn image_mean(img: &Accumulation, c: usize) -> (f64, f64) {
     (sum / n as f64, var.sqrt() / n as f64)
 }
 
-/// A slab of sigma_t = (0.5, 1, 2) and albedo 0.5, 1 thick, between an orthographic camera
-/// and an emitter of radiance 1 that fills the view; one ray per path, so what reaches the
-/// camera is what crosses the slab unscattered: exp(-sigma_t) per channel, whichever
-/// channel draws each free flight.
+/// A homogeneous slab of sigma_t = (0.5, 1, 2) and albedo 0.5, 1 thick, between a tilted
+/// orthographic camera and an emitter of radiance 1 that fills the view ([`slab`]); one
+/// ray per path, so what reaches the camera is what crosses the slab unscattered:
+/// exp(-sigma_t / cos) per channel, whichever channel draws each free flight.
 #[test]
 fn a_homogeneous_slab_transmits_exp_of_minus_sigma_t_d() {
-    let src = r#"
-[render]
-width = 16
-height = 16
-spp = 256
-max_depth = 1
-
-[camera]
-look_from = [0, 0, 5]
-look_at = [0, 0, 0]
-projection = "orthographic"
-height = 2
-
-[media.slab]
-type = "homogeneous"
-sigma_t = [0.5, 1, 2]
-albedo = 0.5
-
-[materials]
-light = { type = "emissive", radiance = [1, 1, 1] }
-boundary = { type = "null" }
-
-[[objects]]
-type = "box"
-min = [-5, -5, -1]
-max = [5, 5, 0]
-material = "boundary"
-interior = "slab"
-
-[[objects]]
-type = "polygon"
-vertices = [[-5, -5, -3], [5, -5, -3], [5, 5, -3], [-5, 5, -3]]
-material = "light"
-"#;
-    let scene = common::scene_from_str(src);
-    assert_image_means(&scene, [0.5f64, 1.0, 2.0].map(|s| (-s).exp()));
+    let scene = slab(
+        "type = \"homogeneous\"\nsigma_t = [0.5, 1, 2]\nalbedo = 0.5",
+        "{ type = \"emissive\", radiance = [1, 1, 1] }",
+        1,
+        "",
+    );
+    let cos = slab_cos();
+    assert_image_means(&scene, [0.5f64, 1.0, 2.0].map(|s| (-s / cos).exp()));
 }
 
 /// A sphere of radius 1 holding a medium of albedo 0 (sigma_t = (1, 2, 3)) inside a null
@@ -398,9 +370,9 @@ fn an_rgb_density_grid_extinguishes_each_channel_by_its_own_density() {
 }
 
 fn delta_tracking(grid: &std::path::Path, sigma_t: &str) {
-    let scene = grid_slab(
+    let scene = slab(
         &format!(
-            "grid = \"{}\"\nsigma_t = {sigma_t}\nalbedo = 0.5\n{SLAB}",
+            "type = \"heterogeneous\"\ngrid = \"{}\"\nsigma_t = {sigma_t}\nalbedo = 0.5\n{SLAB}",
             grid.display()
         ),
         "{ type = \"emissive\", radiance = [1, 1, 1] }",
@@ -411,7 +383,7 @@ fn delta_tracking(grid: &std::path::Path, sigma_t: &str) {
     assert_image_means(&scene, [1.0f64, 2.0, 4.0].map(|s| (-s * 0.5 / cos).exp()));
 }
 
-/// The placement of a grid's unit cube on [`grid_slab`]'s slab.
+/// The placement of a grid's unit cube on [`slab`]'s slab.
 const SLAB: &str = "transform = { scale = [10, 10, 1], translate = [-5, -5, -1] }";
 
 /// A heterogeneous medium without a grid (Mitsuba's constant extinction in a
@@ -419,8 +391,8 @@ const SLAB: &str = "transform = { scale = [10, 10, 1], translate = [-5, -5, -1] 
 /// elsewhere: here the slab's back half, 0.5 thick, transmitting exp(-sigma_t 0.5 / cos).
 #[test]
 fn a_heterogeneous_medium_without_a_grid_fills_its_placed_cube() {
-    let scene = grid_slab(
-        "sigma_t = [1, 2, 4]\nalbedo = 0.5\n\
+    let scene = slab(
+        "type = \"heterogeneous\"\nsigma_t = [1, 2, 4]\nalbedo = 0.5\n\
          transform = { scale = [10, 10, 0.5], translate = [-5, -5, -1] }",
         "{ type = \"emissive\", radiance = [1, 1, 1] }",
         1,
@@ -430,16 +402,16 @@ fn a_heterogeneous_medium_without_a_grid_fills_its_placed_cube() {
     assert_image_means(&scene, [1.0f64, 2.0, 4.0].map(|s| (-s * 0.5 / cos).exp()));
 }
 
-/// The cosine of the angle between [`grid_slab`]'s camera rays and the slab's normal.
+/// The cosine of the angle between [`slab`]'s camera rays and the slab's normal.
 fn slab_cos() -> f64 {
     5.0 / (1.0f64 + 0.25 + 25.0).sqrt()
 }
 
-/// A slab 1 thick (z from -1 to 0, 10 wide) of a heterogeneous medium in its null box
-/// (the medium's keys after `type`: `medium`; its grid's unit cube placed on the slab),
+/// A slab 1 thick (z from -1 to 0, 10 wide) of a medium in its null box (the medium's
+/// keys: `medium`; a grid's unit cube placed on the slab by [`SLAB`]),
 /// seen by an orthographic camera tilted by [`slab_cos`], above a floor of material
 /// `floor` at z = -3; paths of `max_depth` rays; `extra` appended to the file.
-fn grid_slab(medium: &str, floor: &str, max_depth: u32, extra: &str) -> wgtrace::FlatScene {
+fn slab(medium: &str, floor: &str, max_depth: u32, extra: &str) -> wgtrace::FlatScene {
     common::scene_from_str(&format!(
         r#"
 [render]
@@ -455,7 +427,6 @@ projection = "orthographic"
 height = 1
 
 [media.smoke]
-type = "heterogeneous"
 {medium}
 
 [materials]
@@ -502,9 +473,9 @@ fn assert_image_means(scene: &FlatScene, expected: [f64; 3]) {
 /// the image matches the closed form within its standard error.
 #[test]
 fn ratio_tracking_through_a_density_grid_is_unbiased() {
-    let scene = grid_slab(
+    let scene = slab(
         &format!(
-            "grid = \"{}\"\nsigma_t = [0.5, 1, 2]\nalbedo = 0\n{SLAB}",
+            "type = \"heterogeneous\"\ngrid = \"{}\"\nsigma_t = [0.5, 1, 2]\nalbedo = 0\n{SLAB}",
             ramp_grid("ratio", 12).display()
         ),
         "{ type = \"lambertian\", albedo = [1, 1, 1] }",

@@ -296,6 +296,10 @@ fn agrees_with_mitsuba(name: &str, spp: u32) {
         ("gpu", common::render_gpu),
     ] {
         let (share, worst) = z_test(&dir, name, spp, render);
+        eprintln!(
+            "{name} ({backend}): {:.2}% within; worst: {worst}",
+            share * 100.0
+        );
         assert!(
             share >= 0.9975,
             "{name} ({backend}): {:.2}% of pixels and channels within the bound (99.75% \
@@ -388,7 +392,7 @@ fn media_agree_with_mitsuba() {
 
 #[test]
 fn smoke_agrees_with_mitsuba() {
-    agrees_with_mitsuba("smoke", 2048);
+    agrees_with_mitsuba("smoke", 4096);
 }
 
 #[test]

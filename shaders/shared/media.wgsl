@@ -291,11 +291,11 @@ fn medium_flight(m: Medium, ray: Ray, t_max: f32, u: vec2<f32>, k: u32) -> Fligh
 }
 
 // The transmittance of medium m along `ray` from 0 to t (an estimate by ratio tracking in
-// a grid, its stream seeded by u and k).
-fn medium_transmittance(m: Medium, ray: Ray, t: f32, u: f32, k: u32) -> vec3<f32> {
+// a grid, its stream seeded by the shadow ray's own sample us and the stretch k).
+fn medium_transmittance(m: Medium, ray: Ray, t: f32, us: vec2<f32>, k: u32) -> vec3<f32> {
 #ifdef HAS_GRID_MEDIA
     if (m.grid != 0u) {
-        return track(m, ray, t, tracking_seed(vec2<f32>(u, 0.0), k), false).weight;
+        return track(m, ray, t, tracking_seed(us, k), false).weight;
     }
 #endif
     return exp(-m.sigma_t * t);
@@ -304,8 +304,9 @@ fn medium_transmittance(m: Medium, ray: Ray, t: f32, u: f32, k: u32) -> vec3<f32
 // What reaches the end of a shadow ray of unit direction from its origin to t_max, which
 // starts in `medium`: each medium's transmittance exp(-sigma_t d) over the stretch it
 // holds, surfaces transparent where the ray meets them passed through (u deciding for
-// blended ones; crossing a shape with media changes the medium), 0 at an opaque one.
-fn transmittance(ray: Ray, t_max: f32, u: f32, medium: u32) -> vec3<f32> {
+// blended ones; crossing a shape with media changes the medium), 0 at an opaque one. us,
+// the sample of the light the ray goes to, seeds ratio tracking through grids.
+fn transmittance(ray: Ray, t_max: f32, u: f32, medium: u32, us: vec2<f32>) -> vec3<f32> {
     var r = ray;
     var t = t_max;
     var m = medium;
@@ -318,7 +319,7 @@ fn transmittance(ray: Ray, t_max: f32, u: f32, medium: u32) -> vec3<f32> {
         let cand = intersect_scene(r, t);
         let stretch = select(t, cand.t, cand.prim != NO_HIT);
         if (m != NO_MEDIUM) {
-            tr *= medium_transmittance(medium_record(m), r, stretch, u, k);
+            tr *= medium_transmittance(medium_record(m), r, stretch, us, k);
         }
         if (cand.prim == NO_HIT) {
             return tr;

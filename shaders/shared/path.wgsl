@@ -188,8 +188,11 @@ fn direct_light(v: Vertex, ray: Ray, u_light: f32, u: vec2<f32>, u_alpha: f32) -
     }
     let lit = ls.light != NO_LIGHT && any(f != vec3<f32>(0.0)) && any(le != vec3<f32>(0.0)) && t_max > 0.0;
 #ifdef HAS_MEDIA
-    let tr = transmittance(shadow, t_max, u_alpha, vertex_medium(v, ls.dir));
-    if (!lit || all(tr == vec3<f32>(0.0))) {
+    var tr = vec3<f32>(0.0);
+    if (lit) {
+        tr = transmittance(shadow, t_max, u_alpha, vertex_medium(v, ls.dir), u);
+    }
+    if (all(tr == vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
     let w = power_heuristic(ls.pdf, vertex_pdf(v, ray, pdf_dir));
@@ -220,8 +223,11 @@ fn direct_punctual(v: Vertex, ray: Ray, u: f32, u_alpha: f32) -> vec3<f32> {
     let f = vertex_eval(v, ray, s.dir);
     let lit = s.prob > 0.0 && s.d2 > 0.0 && t_max > 0.0 && any(f != vec3<f32>(0.0)) && any(s.le != vec3<f32>(0.0));
 #ifdef HAS_MEDIA
-    let tr = transmittance(shadow, t_max, u_alpha, vertex_medium(v, s.dir));
-    if (!lit || all(tr == vec3<f32>(0.0))) {
+    var tr = vec3<f32>(0.0);
+    if (lit) {
+        tr = transmittance(shadow, t_max, u_alpha, vertex_medium(v, s.dir), vec2<f32>(u, 0.5));
+    }
+    if (all(tr == vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
     return f * tr * s.le / s.prob;
@@ -297,7 +303,8 @@ fn survives_roulette(path: ptr<function, Path>, pixel: u32, sample: u32) -> bool
     return true;
 }
 
-// The next vertex along the path's ray: the closest surface (NO_HIT: none). With alpha
+// The next vertex along the path's ray: the closest surface (NO_HIT: none), or with media
+// the point of a free flight's scattering event (MEDIUM_HIT, flies). With alpha
 // materials, a surface transparent where the ray meets it is passed through (u decides for
 // blended ones): the ray goes on from just beyond, its origin moved but its direction's
 // pdf and the vertex it left (prev_p) kept, and the bounce not counted; the last surface

@@ -9,8 +9,9 @@
 #import shared/types
 
 // The dimension pairs drawn at each bounce (rand_2d's `dim`: DIM_PIXEL, DIM_LENS,
-// DIM_BSDF, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_RR, DIM_PUNCTUAL, DIM_ALPHA, DIM_BLEND) come
-// with the constants of types.wgsl.
+// DIM_BSDF, DIM_LIGHT, DIM_LIGHT_CHOICE, DIM_RR, DIM_PUNCTUAL, DIM_ALPHA, DIM_BLEND, and
+// DIM_MEDIUM + k for the k-th stretch's free flight) come with the constants of
+// types.wgsl.
 
 // Second dimension of Sobol' (primitive polynomial x + 1): the XOR of the direction numbers
 // v_k = v_{k-1} ^ (v_{k-1} >> 1), v_1 = 2^31, of the set bits of i. Bit a of i reaches

@@ -356,18 +356,34 @@ pub fn medium_flight(
     free_flight(m, t_max, u)
 }
 
-/// The transmittance of m along `ray` from 0 to t (ratio tracking in a grid).
-pub fn medium_transmittance(b: &Bindings, m: &Medium, ray: &Ray, t: f32, u: f32, k: u32) -> Vec3 {
+/// The transmittance of m along `ray` from 0 to t (ratio tracking in a grid, its stream
+/// seeded by the shadow ray's own sample us and the stretch k).
+pub fn medium_transmittance(
+    b: &Bindings,
+    m: &Medium,
+    ray: &Ray,
+    t: f32,
+    us: [f32; 2],
+    k: u32,
+) -> Vec3 {
     if m.grid != 0 {
-        return track(b, m, ray, t, tracking_seed([u, 0.0], k), false).weight;
+        return track(b, m, ray, t, tracking_seed(us, k), false).weight;
     }
     (-m.sigma_t * t).exp()
 }
 
 /// What reaches the end of a shadow ray (unit direction, to t_max) that starts in
 /// `medium`: the media's transmittance over their stretches, transparent surfaces passed
-/// through (media changing where a shape holds them), 0 at an opaque one.
-pub fn transmittance(b: &Bindings, ray: &Ray, t_max: f32, u: f32, medium: u32) -> Vec3 {
+/// through (media changing where a shape holds them), 0 at an opaque one; us, the sample
+/// of the light the ray goes to, seeds ratio tracking through grids.
+pub fn transmittance(
+    b: &Bindings,
+    ray: &Ray,
+    t_max: f32,
+    u: f32,
+    medium: u32,
+    us: [f32; 2],
+) -> Vec3 {
     let mut r = *ray;
     let mut t = t_max;
     let mut m = medium;
@@ -380,7 +396,7 @@ pub fn transmittance(b: &Bindings, ray: &Ray, t_max: f32, u: f32, medium: u32) -
         let cand = intersect_scene(b, &r, t);
         let stretch = if cand.prim != NO_HIT { cand.t } else { t };
         if m != NO_MEDIUM {
-            tr *= medium_transmittance(b, &medium_record(b, m), &r, stretch, u, k);
+            tr *= medium_transmittance(b, &medium_record(b, m), &r, stretch, us, k);
         }
         if cand.prim == NO_HIT {
             return tr;

@@ -223,7 +223,7 @@ pub fn direct_light(
         le
     };
     if b.has_media {
-        let tr = transmittance(b, &shadow, t_max, u_alpha, vertex_medium(v, ls.dir));
+        let tr = transmittance(b, &shadow, t_max, u_alpha, vertex_medium(v, ls.dir), u);
         if tr == Vec3::ZERO {
             return Vec3::ZERO;
         }
@@ -253,8 +253,18 @@ pub fn direct_punctual(b: &Bindings, v: &Vertex, ray: &Ray, u: f32, u_alpha: f32
     let f = vertex_eval(v, ray, s.dir);
     let lit = s.prob > 0.0 && s.d2 > 0.0 && t_max > 0.0 && f != Vec3::ZERO && s.le != Vec3::ZERO;
     if b.has_media {
-        let tr = transmittance(b, &shadow, t_max, u_alpha, vertex_medium(v, s.dir));
-        if !lit || tr == Vec3::ZERO {
+        if !lit {
+            return Vec3::ZERO;
+        }
+        let tr = transmittance(
+            b,
+            &shadow,
+            t_max,
+            u_alpha,
+            vertex_medium(v, s.dir),
+            [u, 0.5],
+        );
+        if tr == Vec3::ZERO {
             return Vec3::ZERO;
         }
         return f * tr * s.le / s.prob;

@@ -311,8 +311,6 @@ pub fn scene_features(scene: &FlatScene) -> FeatureSet {
     let texture = |tag: u32| scene.textures.iter().any(|t| t.tag == tag);
     let flag = |f: u32| scene.primitives.iter().any(|p| p.flags & f != 0);
     let bounded = scene.primitives.len() > scene.num_unbounded as usize;
-    // lights are sampled only toward surfaces with a lobe that has a density (the
-    // materials' own answer, `nee_applies`), and only when there are lights
     // next-event estimation applies at a material with a density, and at every point
     // where a path scatters in a medium
     let nee = scene.has_media() || scene.materials.iter().any(|m| m.nee());

@@ -731,9 +731,10 @@ pub fn flatten(
         let bits = |v: [u32; 3], at: u32| [v[0], v[1], v[2], at].map(f32::from_bits);
         let data = header + records::GRID_ENTRIES;
         let majorants = data + entries(&grid.values);
+        let cell_majorants = grid.majorants();
         let albedo_header = albedo
             .as_ref()
-            .map_or(0, |_| majorants + entries(&grid.majorants()));
+            .map_or(0, |_| majorants + entries(&cell_majorants));
         let push_grid = |tables: &mut Vec<[f32; 4]>,
                          g: &DensityGrid,
                          data: u32,
@@ -764,7 +765,7 @@ pub fn flatten(
             }));
         };
         pad(&mut tables, &grid.values);
-        pad(&mut tables, &grid.majorants());
+        pad(&mut tables, &cell_majorants);
         if let Some(a) = albedo {
             push_grid(
                 &mut tables,

@@ -622,42 +622,33 @@ fn read_files(file: &SceneFile, src: &str, dir: &Path) -> Result<SceneFiles, Vec
             _ => None,
         })
         .collect();
-    let grids = file
-        .media
-        .iter()
-        .map(|(name, m)| match m.get_ref() {
+    // each heterogeneous medium's density grid and albedo grid, where it names them
+    let mut grids = Vec::new();
+    let mut albedo_grids = Vec::new();
+    for (name, m) in &file.media {
+        let (grid, albedo_grid, use_grid_bbox) = match m.get_ref() {
             MediumDesc::Heterogeneous {
-                grid: Some(grid),
+                grid,
+                albedo_grid,
                 use_grid_bbox,
                 ..
-            } => read_relative(
-                (src, dir, grid),
-                m.span().start,
-                format!("media.{name}.grid"),
-                |p| placeable(volume::read_vol(p)?, *use_grid_bbox),
-                &mut problems,
-            ),
-            _ => None,
-        })
-        .collect();
-    let albedo_grids = file
-        .media
-        .iter()
-        .map(|(name, m)| match m.get_ref() {
-            MediumDesc::Heterogeneous {
-                albedo_grid: Some(grid),
-                use_grid_bbox,
-                ..
-            } => read_relative(
-                (src, dir, grid),
-                m.span().start,
-                format!("media.{name}.albedo_grid"),
-                |p| placeable(volume::read_albedo_vol(p)?, *use_grid_bbox),
-                &mut problems,
-            ),
-            _ => None,
-        })
-        .collect();
+            } => (grid.as_deref(), albedo_grid.as_deref(), *use_grid_bbox),
+            _ => (None, None, false),
+        };
+        let mut read = |rel: Option<&str>, key: &str, reader: fn(&Path) -> Result<_, String>| {
+            rel.and_then(|rel| {
+                read_relative(
+                    (src, dir, rel),
+                    m.span().start,
+                    format!("media.{name}.{key}"),
+                    |p| placeable(reader(p)?, use_grid_bbox),
+                    &mut problems,
+                )
+            })
+        };
+        grids.push(read(grid, "grid", volume::read_vol));
+        albedo_grids.push(read(albedo_grid, "albedo_grid", volume::read_albedo_vol));
+    }
     if problems.is_empty() {
         Ok(SceneFiles {
             meshes,

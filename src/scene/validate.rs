@@ -542,31 +542,34 @@ impl Validator<'_> {
     }
 
     /// One `[media.NAME]`: coefficients >= 0, an albedo in [0, 1], either sigma_t and
-    /// albedo or sigma_a and sigma_s, a scale >= 0 and |g| < 1.
+    /// albedo or sigma_a and sigma_s, a scale >= 0 and |g| < 1; a grid's transform, its
+    /// file for `use_grid_bbox`, an albedo grid instead of the albedo.
     fn medium(&mut self, name: &str, m: &Spanned<MediumDesc>) {
         let at = m.span().start;
         let key = |field: &str| format!("media.{name}.{field}");
-        if let MediumDesc::Heterogeneous {
-            grid: None,
-            use_grid_bbox: true,
-            ..
-        } = m.get_ref()
-        {
-            self.push(
-                at,
-                &key("use_grid_bbox"),
-                "needs a `grid`, whose file gives the box".into(),
-            );
-        }
-        if let MediumDesc::Heterogeneous {
-            transform,
-            albedo_grid,
+        let MediumCoefficients {
+            sigma_t,
             albedo,
             sigma_a,
             sigma_s,
+            scale,
+            g,
+        } = m.get_ref().written();
+        if let MediumDesc::Heterogeneous {
+            grid,
+            transform,
+            albedo_grid,
+            use_grid_bbox,
             ..
         } = m.get_ref()
         {
+            if grid.is_none() && *use_grid_bbox {
+                self.push(
+                    at,
+                    &key("use_grid_bbox"),
+                    "needs a `grid`, whose file gives the box".into(),
+                );
+            }
             if let Some(t) = transform {
                 self.transform(&key("transform"), t, at);
             }
@@ -579,57 +582,42 @@ impl Validator<'_> {
                 );
             }
         }
-        {
-            let MediumCoefficients {
-                sigma_t,
-                albedo,
-                sigma_a,
-                sigma_s,
-                scale,
-                g,
-            } = &m.get_ref().written();
-            {
-                for (field, value) in [
-                    ("sigma_t", sigma_t),
-                    ("sigma_a", sigma_a),
-                    ("sigma_s", sigma_s),
-                ] {
-                    if let Some(v) = value {
-                        self.nonnegative3(&key(field), v.rgb(), at);
-                    }
-                }
-                if let Some(a) = albedo {
-                    let a = a.rgb();
-                    if self.finite3(&key("albedo"), a, at)
-                        && a.iter().any(|x| !(0.0..=1.0).contains(x))
-                    {
-                        self.push(at, &key("albedo"), format!("must be in [0, 1], got {a:?}"));
-                    }
-                }
-                let split = sigma_a.is_some() || sigma_s.is_some();
-                for (field, given) in [("sigma_t", sigma_t.is_some()), ("albedo", albedo.is_some())]
-                {
-                    if split && given {
-                        self.push(
-                            at,
-                            &key(field),
-                            "give sigma_t and albedo, or sigma_a and sigma_s, not both".into(),
-                        );
-                    }
-                }
-                if !(*scale >= 0.0 && scale.is_finite()) {
-                    self.push(at, &key("scale"), format!("must be >= 0, got {scale}"));
-                } else if !m.get_ref().coefficients().0.iter().all(|x| x.is_finite()) {
-                    self.push(
-                        at,
-                        &key("scale"),
-                        format!("times the coefficients gives an infinite extinction ({scale})"),
-                    );
-                }
-                if g.is_nan() || g.abs() >= 1.0 {
-                    self.push(at, &key("g"), format!("must be in (-1, 1), got {g}"));
-                }
+        for (field, value) in [
+            ("sigma_t", sigma_t),
+            ("sigma_a", sigma_a),
+            ("sigma_s", sigma_s),
+        ] {
+            if let Some(v) = value {
+                self.nonnegative3(&key(field), v.rgb(), at);
             }
+        }
+        if let Some(a) = albedo {
+            let a = a.rgb();
+            if self.finite3(&key("albedo"), a, at) && a.iter().any(|x| !(0.0..=1.0).contains(x)) {
+                self.push(at, &key("albedo"), format!("must be in [0, 1], got {a:?}"));
+            }
+        }
+        let split = sigma_a.is_some() || sigma_s.is_some();
+        for (field, given) in [("sigma_t", sigma_t.is_some()), ("albedo", albedo.is_some())] {
+            if split && given {
+                self.push(
+                    at,
+                    &key(field),
+                    "give sigma_t and albedo, or sigma_a and sigma_s, not both".into(),
+                );
+            }
+        }
+        if !(scale >= 0.0 && scale.is_finite()) {
+            self.push(at, &key("scale"), format!("must be >= 0, got {scale}"));
+        } else if !m.get_ref().coefficients().0.iter().all(|x| x.is_finite()) {
+            self.push(
+                at,
+                &key("scale"),
+                format!("times the coefficients gives an infinite extinction ({scale})"),
+            );
+        }
+        if g.is_nan() || g.abs() >= 1.0 {
+            self.push(at, &key("g"), format!("must be in (-1, 1), got {g}"));
         }
     }
 
