@@ -587,9 +587,12 @@ fn lanes(md: &mut String) {
          BVH walk does not: a ray's node steps and leaf tests differ from its neighbours' \
          (incoherent bounce and shadow rays, shadow rays that stop at their first hit), and \
          each loop runs as long as its slowest lane, so about two thirds of the lanes of a \
-         walk's step wait. A wavefront design (rays queued by the state they are in and \
-         walked in full subgroups) would put them to work; within this megakernel the \
-         walk's steps are the cost to cut.\n"
+         walk's step wait. Issue 44 tried three ways to put them to work (the subgroup \
+         walking one ray at a time, a walk refilled with the path's next ray, the node \
+         loop ended once most lanes hold a leaf; \"What each optimization gave\", fifth \
+         round): none was faster on llvmpipe, where a subgroup operation is a loop over \
+         the lanes and every fetch a load per lane, so the cost of a step, not the lanes \
+         it leaves idle, is what pays to cut.\n"
     );
 }
 
@@ -927,7 +930,7 @@ fn mesh_memory(md: &mut String, dir: &Path) {
 }
 
 /// The optimizations kept: what each is, and the `--tune` knob that turns it off.
-const KNOBS: [(&str, &str); 7] = [
+const KNOBS: [(&str, &str); 8] = [
     ("shader assembled for the scene's features", "no-specialize"),
     (
         "records of at most 64 KiB in uniform buffers",
@@ -943,6 +946,7 @@ const KNOBS: [(&str, &str); 7] = [
         "no-baked-records",
     ),
     ("sample groups", "no-sample-groups"),
+    ("the BVH walk's stack in registers", "no-register-stack"),
     ("Russian roulette", "no-russian-roulette"),
 ];
 
@@ -1148,7 +1152,42 @@ fn optimizations(md: &mut String, dir: &Path) {
          CPUs with AVX-512 (0.546 and 0.582 to 0.621 and 0.627 Msamples/s on nefertiti, \
          measured on such a CPU); on this machine's AVX2 it changed nothing (nefertiti \
          0.72 to 0.76 at 256 bits, 0.68 to 0.79 at 512, 0.72 to 0.78 at 128), and the live \
-         lanes of a node step fall with the width (44% at 4 lanes, 31% at 8).\n"
+         lanes of a node step fall with the width (44% at 4 lanes, 31% at 8).\n\n\
+         Fifth round (issue 44), on an Intel Xeon with AVX-512 (llvmpipe 512 bits, 16 \
+         lanes; 16 spp, medians of 3 renders alternating, Msamples/s with / without unless \
+         said otherwise). Kept: (1) `main`'s workgroups declared 64 x 1 x 1 instead of 8 x \
+         8 x 1 (the same tiles): Mesa 22.3.6 there walked the BVH wrong in 8 x 8 x 1 \
+         workgroups outside storage buffers, so the spot check fell back to storage \
+         buffers on every mesh scene (nefertiti 0.197 to 0.235 in the fallback against \
+         0.47 to 0.58 in textures; `wgtrace check`: 6 of 12 rows fail with 8 x 8 x 1, none \
+         with 64 x 1 x 1); (2) the walk's stack in registers for trees of depth 8 at most \
+         (`--tune no-register-stack`): on Mesa 22.3 spot 1.30x, textured 1.05x, nefertiti \
+         1.29x, heightfield 1.22x (geometric mean 1.21x), on Mesa 25.0 1.05x, 1.05x, \
+         0.99x, 1.14x (1.05x); the node loop is 1225 JIT instructions with no loop over \
+         the lanes inside, against 1033 around two 16-lane loops (the stack's store and \
+         load, about 20 instructions a lane), the same images bit for bit. Tried and not kept, each giving the same \
+         images: the subgroup walking the rays of its last 2 walking lanes one at a time, \
+         a child box and a leaf primitive per lane (ballot, shuffle, or and min; the \
+         Embree way): 0.46x to 0.54x on the four meshes on Mesa 22.3 and 0.60x to 0.71x on \
+         Mesa 25 (geometric means 0.50x and 0.64x), because on llvmpipe a subgroup \
+         operation is a scalar loop over the lanes and a node fetch at an address every \
+         lane shares is still a load per lane: its node step was 633 JIT instructions plus \
+         those loops against 808 for a lane's own (at 256 bits). Nor does a form of the \
+         fetch share it: with the node index through `subgroupBroadcastFirst` the node \
+         loop went from 1225 to 1152 instructions in textures (the address arithmetic \
+         once, the 16 loads each) and from 1112 to 1127 in storage buffers (Mesa's \
+         single-load path takes only addresses uniform over the whole dispatch, \
+         `nir_src_is_always_uniform`). The refill of a walk (a vertex's shadow ray walked \
+         with the path's next ray in one walk, a lane taking the second as its first \
+         ends; the same rays and sums): the bounce loop 7178 to 5918 instructions, the \
+         node steps' live share 21.8% to 22.6%, speed 0.95x to 1.11x over 11 scene and \
+         driver pairs, geometric mean 1.02x (noise); a lane's walk is as long as its \
+         slowest stretch between leaves, not its end. Ending the node loop once at most a \
+         quarter of the walking lanes still look for a leaf (`subgroupAdd`): node steps \
+         22.6% to 27.1% live, primitive tests 23.5% to 19.1%, 0.90x to 1.09x, geometric \
+         mean 0.97x. Not built: a wavefront split, whose ray states would go through \
+         storage between kernels, a store and a load per lane and component on llvmpipe, \
+         the cost the register stack removed from the walk.\n"
     );
 }
 

@@ -7,15 +7,17 @@
 #import shared/samplers
 #import shared/types
 
-// 8 x 8 = BVH_STACK_LANES invocations
-@compute @workgroup_size(8, 8, 1)
+// BVH_STACK_LANES invocations, a tile of 8 x 8 pixels (the dispatch's workgroups are
+// tiles), in one dimension
+@compute @workgroup_size(64, 1, 1)
 fn main(
-    @builtin(global_invocation_id) gid: vec3<u32>,
+    @builtin(workgroup_id) tile: vec3<u32>,
     @builtin(local_invocation_index) lane: u32,
 #ifdef HAS_LANE_STATS
     @builtin(subgroup_size) subgroup_size: u32,
 #endif
 ) {
+    let gid = vec2<u32>(tile.x * 8u + (lane & 7u), tile.y * 8u + (lane >> 3u));
     stack_lane = lane;
 #ifdef HAS_LANE_STATS
     lane_subgroup_size = subgroup_size;

@@ -34,6 +34,9 @@ pub struct Tuning {
     pub sample_groups: bool,
     /// Primitives and BVH nodes too large for a uniform buffer read from textures.
     pub texture_records: bool,
+    /// The BVH walk's stack in registers where the tree is shallow enough
+    /// (`gpu::plan::REGISTER_STACK`).
+    pub register_stack: bool,
     /// Most pixels per band of rows (one accumulation buffer each): fewer, smaller
     /// buffers change no image (the tests hold renders in many bands to one in one).
     pub band_pixels: u32,
@@ -71,6 +74,7 @@ impl Default for Tuning {
             baked_records: true,
             sample_groups: true,
             texture_records: true,
+            register_stack: true,
             band_pixels: MAX_BAND_PIXELS,
             lane_stats: false,
             spot_check: true,
@@ -108,6 +112,10 @@ pub const KNOBS: &[(&str, &str)] = &[
     (
         "no-texture-records",
         "primitives and BVH nodes in storage buffers, never in textures",
+    ),
+    (
+        "no-register-stack",
+        "the BVH walk's stack in workgroup memory, not in registers, whatever the tree's depth",
     ),
     (
         "no-russian-roulette",
@@ -166,6 +174,7 @@ impl Tuning {
                 "no-baked-records" => t.baked_records = false,
                 "no-sample-groups" => t.sample_groups = false,
                 "no-texture-records" => t.texture_records = false,
+                "no-register-stack" => t.register_stack = false,
                 "no-russian-roulette" => t.russian_roulette = false,
                 "lane-stats" => t.lane_stats = true,
                 "no-spot-check" => t.spot_check = false,

@@ -1120,21 +1120,69 @@ fn specialized_and_full_shaders_render_the_same_image() {
         let scene = common::load_tuned(&path, &o, no_bvh);
         let a = common::render_gpu_tuned(&scene, no_bvh);
         let b = common::render_gpu_tuned(&scene, &format!("{no_bvh},no-specialize"));
-        let identical = (0..a.pixel_count())
-            .filter(|&i| a.mean(i) == b.mean(i))
-            .count() as f64
-            / a.pixel_count() as f64;
-        let c = compare(&a, &b, 8);
         let name = format!("{} {variant:?}", path.display());
-        eprintln!(
-            "{name}: {identical:.4} of pixels bit-identical, {} of {} tiles outside the bound",
-            c.failed_tiles.len(),
-            c.tiles
-        );
+        assert_same_image(&name, "specialized and full shaders", &a, &b);
+    }
+}
+
+/// Two renders of the same code under different shaders: bit for bit unless the compiler
+/// arranged the arithmetic differently (the share printed), and every tile of `a` within
+/// the statistical bound of `b`'s, 99% of pixels within rounding.
+fn assert_same_image(name: &str, what: &str, a: &wgtrace::Accumulation, b: &wgtrace::Accumulation) {
+    let identical = (0..a.pixel_count())
+        .filter(|&i| a.mean(i) == b.mean(i))
+        .count() as f64
+        / a.pixel_count() as f64;
+    let c = compare(a, b, 8);
+    eprintln!(
+        "{name}: {identical:.4} of pixels bit-identical, {} of {} tiles outside the bound",
+        c.failed_tiles.len(),
+        c.tiles
+    );
+    assert!(
+        c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
+        "{name}: {what} differ:\n{}",
+        c.failed_tiles.join("\n")
+    );
+}
+
+/// The BVH walk's stack in registers (gpu::plan::REGISTER_STACK) renders what the stack
+/// in workgroup memory renders: the same walk, so the pixels agree bit for bit unless the
+/// compiler arranged the arithmetic differently (printed), and every tile within the
+/// statistical bound. On scenes whose trees are shallow enough: meshes, planes before
+/// the BVH, punctual lights, delta lobes.
+#[test]
+fn the_walk_stack_in_registers_renders_the_same_image() {
+    for file in [
+        "scenes/mesh.toml",
+        "scenes/area-lights.toml",
+        "scenes/gltf-spheres.toml",
+        "bench/spot.toml",
+        "bench/nefertiti.toml",
+    ] {
+        let o = Overrides {
+            width: Some(32),
+            height: Some(24),
+            spp: Some(4),
+            seed: Some(5),
+            ..Default::default()
+        };
+        let scene = common::load_tuned(&common::repo_path(file), &o, "");
+        let fit = wgtrace::gpu::limits::DeviceFit::portable();
+        let plan = wgtrace::gpu::plan::GpuPlan::new(&scene, &fit, &wgtrace::Tuning::default());
         assert!(
-            c.failed_tiles.is_empty() && c.agree_fraction >= 0.99,
-            "{name}: specialized and full shaders differ:\n{}",
-            c.failed_tiles.join("\n")
+            plan.shader
+                .defines()
+                .contains(wgtrace::gpu::plan::REGISTER_STACK),
+            "{file}: its walk's stack is not in registers"
+        );
+        let a = common::render_gpu_tuned(&scene, "");
+        let b = common::render_gpu_tuned(&scene, "no-register-stack");
+        assert_same_image(
+            file,
+            "the stack in registers and in workgroup memory",
+            &a,
+            &b,
         );
     }
 }

@@ -78,6 +78,7 @@ fn every_entry_shader_validates_and_binds_what_it_reads() {
                 banks: 2,
                 scene_code: String::new(),
                 lane_stats: false,
+                register_stack: false,
             };
             for entry in ENTRY_SHADERS {
                 module(&spec, entry);
@@ -89,6 +90,12 @@ fn every_entry_shader_validates_and_binds_what_it_reads() {
                     module(&spec, entry);
                 }
                 spec.lane_stats = false;
+                // the walk's stack in registers (gpu::plan::REGISTER_STACK)
+                spec.register_stack = true;
+                for entry in ENTRY_SHADERS {
+                    module(&spec, entry);
+                }
+                spec.register_stack = false;
             }
             let named: Vec<Feature> = features.iter().collect();
             assert_eq!(spec.trace_slots(), naga_slots(&spec), "{named:?}");
@@ -665,6 +672,29 @@ fn the_plan_follows_the_tuning() {
         .unwrap_err()
         .contains("no-russian-roulette"));
     assert!(Tuning::parse("bvh,no-bvh").is_err());
+
+    // the BVH walk's stack in registers for a tree of depth at most BVH_REGISTER_STACK
+    // without instances, in workgroup memory otherwise or when turned off
+    use wgtrace::gpu::plan::REGISTER_STACK;
+    use wgtrace::scene::records::BVH_REGISTER_STACK;
+    let mesh = common::repo_path("scenes/mesh.toml");
+    let mut scene = wgtrace::load_scene(&mesh, &Overrides::default()).unwrap();
+    assert!(scene.use_bvh && scene.bvh_depth <= BVH_REGISTER_STACK);
+    let defines = |scene: &wgtrace::scene::flat::FlatScene, knobs: &str| {
+        GpuPlan::new(scene, &fit, &Tuning::parse(knobs).unwrap())
+            .shader
+            .defines()
+    };
+    assert!(defines(&scene, "").contains(REGISTER_STACK));
+    assert!(!defines(&scene, "no-register-stack").contains(REGISTER_STACK));
+    scene.bvh_depth = BVH_REGISTER_STACK + 1;
+    assert!(!defines(&scene, "").contains(REGISTER_STACK));
+    let head = "[camera]\nlook_from = [0, 1, 7]\nlook_at = [0, 0, 0]\n[background]\n\
+        color = [1, 1, 1]\n[materials]\nm = { type = \"lambertian\", albedo = [0.5, 0.5, 0.5] }\n";
+    let (instanced, _) = common::instances::instanced_and_expanded(head);
+    let scene = common::scene_from_file_str(&instanced, "scenes/instances-test.toml");
+    assert!(scene.use_bvh && scene.bvh_depth <= BVH_REGISTER_STACK);
+    assert!(!defines(&scene, "").contains(REGISTER_STACK));
 }
 
 /// Every entry point of the entry shaders runs BVH_STACK_LANES invocations per workgroup,
@@ -681,6 +711,7 @@ fn traversal_stacks_fit_workgroup_memory_one_column_per_invocation() {
         banks: 1,
         scene_code: String::new(),
         lane_stats: false,
+        register_stack: false,
     };
     for entry in ENTRY_SHADERS {
         let module = module(&spec, entry);

@@ -102,7 +102,9 @@ fn count_lanes(kind: u32) {
 }
 #endif
 #ifdef HAS_BVH
+#ifndef REGISTER_STACK
 var<workgroup> bvh_stack: array<vec2<u32>, BVH_STACK_SIZE * BVH_STACK_LANES>;
+#endif
 #endif
 
 // intersect_primitive for a primitive of the BVH. When all of them are untransformed
@@ -209,16 +211,67 @@ fn bvh_child_bits(bytes: u32, inner: u32, order: u32) -> vec4<u32> {
 }
 
 #ifdef HAS_BVH
+#ifdef REGISTER_STACK
+// The walk's stack in registers (gpu::plan::REGISTER_STACK, for trees of depth at most
+// BVH_REGISTER_STACK): e0 is the top; a push moves every entry one down, a pop one up.
+// llvmpipe blends the 8 entries under the lanes' mask, where a store to workgroup memory
+// and a load from it are each a scalar loop over the lanes.
+struct WalkStack {
+    e0: vec2<u32>,
+    e1: vec2<u32>,
+    e2: vec2<u32>,
+    e3: vec2<u32>,
+    e4: vec2<u32>,
+    e5: vec2<u32>,
+    e6: vec2<u32>,
+    e7: vec2<u32>,
+    size: u32,
+}
+
+fn walk_push(s: ptr<function, WalkStack>, group: vec2<u32>) {
+    (*s).e7 = (*s).e6;
+    (*s).e6 = (*s).e5;
+    (*s).e5 = (*s).e4;
+    (*s).e4 = (*s).e3;
+    (*s).e3 = (*s).e2;
+    (*s).e2 = (*s).e1;
+    (*s).e1 = (*s).e0;
+    (*s).e0 = group;
+    (*s).size += 1u;
+}
+
+fn walk_pop(s: ptr<function, WalkStack>) -> vec2<u32> {
+    let group = (*s).e0;
+    (*s).e0 = (*s).e1;
+    (*s).e1 = (*s).e2;
+    (*s).e2 = (*s).e3;
+    (*s).e3 = (*s).e4;
+    (*s).e4 = (*s).e5;
+    (*s).e5 = (*s).e6;
+    (*s).e6 = (*s).e7;
+    (*s).size -= 1u;
+    return group;
+}
+
+// The walk's next node: the highest node bit of the group (which must hold one) is taken
+// from it and the rest of the group pushed if it holds more.
+fn bvh_take(group: ptr<function, vec2<u32>>, stack: ptr<function, WalkStack>, order: u32) -> u32 {
+#else
 // The walk's next node: the highest node bit of the group (which must hold one) is taken
 // from it and the rest of the group pushed (bvh_stack at sp) if it holds more.
 fn bvh_take(group: ptr<function, vec2<u32>>, sp: ptr<function, u32>, order: u32) -> u32 {
+#endif
     let bit = firstLeadingBit((*group).y);
     (*group).y ^= 1u << bit;
     let slot = (bit - 24u) ^ order;
     let index = (*group).x + countOneBits((*group).y & ((1u << slot) - 1u));
     if (((*group).y & BVH_NODE_BITS) != 0u) {
+#ifdef REGISTER_STACK
+        walk_push(stack, *group);
+#else
         bvh_stack[*sp] = *group;
         *sp += BVH_STACK_LANES;
+#endif
     }
     return index;
 }
@@ -380,7 +433,11 @@ fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
     let inv_dir = safe_inverse(ray.dir);
     let order = bvh_order(inv_dir);
 #endif
+#ifdef REGISTER_STACK
+    var sp: WalkStack;
+#else
     var sp = stack_lane;
+#endif
     var group = vec2<u32>(0u, (1u << (24u + order)) | 1u);
     var prims = vec2<u32>(0u, 0u);
     var live = true;
@@ -399,12 +456,20 @@ fn bvh_walk(ray: Ray, start: Candidate, any_hit: bool) -> Candidate {
                     break;
                 }
 #endif
+#ifdef REGISTER_STACK
+                if (sp.size == 0u) {
+                    live = false;
+                    break;
+                }
+                group = walk_pop(&sp);
+#else
                 if (sp == stack_lane) {
                     live = false;
                     break;
                 }
                 sp -= BVH_STACK_LANES;
                 group = bvh_stack[sp];
+#endif
             }
 #ifdef HAS_LANE_STATS
             count_lanes(1u);

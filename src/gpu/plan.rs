@@ -476,6 +476,9 @@ pub struct ShaderSpec {
     pub features: FeatureSet,
     /// The lane statistics of `--tune lane-stats` ([`LANE_STATS`]).
     pub lane_stats: bool,
+    /// The BVH walk's stack in registers ([`REGISTER_STACK`]): a specialized shader, a
+    /// tree of depth at most `BVH_REGISTER_STACK`, no instances.
+    pub register_stack: bool,
     pub placements: Placements,
     /// Image texel banks the scene has (`scene::texels`): `texel_load` reads these.
     pub banks: u32,
@@ -573,6 +576,9 @@ impl ShaderSpec {
         if self.lane_stats {
             d.insert(LANE_STATS);
         }
+        if self.register_stack && f(Feature::Bvh) && !f(Feature::Instances) {
+            d.insert(REGISTER_STACK);
+        }
         // splatting weighs samples by the filter's profile
         if f(Feature::Splat) {
             d.insert(Feature::PixelFilter.define());
@@ -590,7 +596,13 @@ impl ShaderSpec {
         Feature::all()
             .map(Feature::define)
             .chain(BAKED_DEFINES.map(|(_, d)| d))
-            .chain([BOUNDED_TRIANGLES_ONLY, HAS_UNBOUNDED, LANE_STATS, HAS_ERF])
+            .chain([
+                BOUNDED_TRIANGLES_ONLY,
+                HAS_UNBOUNDED,
+                LANE_STATS,
+                REGISTER_STACK,
+                HAS_ERF,
+            ])
             .collect()
     }
 
@@ -722,6 +734,13 @@ const BAKED_DEFINES: [(Slot, &str); 3] = [
 /// share of the subgroup (subgroup size / active lanes) in the squares' (`lane_shares`).
 pub const LANE_STATS: &str = "HAS_LANE_STATS";
 
+/// The define of the BVH walk's stack in registers (`ShaderSpec::register_stack`): eight
+/// entries, the top first, a push shifting them all down and a pop up (`intersect.wgsl`,
+/// `WalkStack`), in place of a column of workgroup memory per invocation. For a tree of
+/// depth at most `BVH_REGISTER_STACK` (a walk holds an entry per level at most) without
+/// instances. The same walk: the same image.
+pub const REGISTER_STACK: &str = "REGISTER_STACK";
+
 /// The most primitives a scene's shader holds as constants: a scene without the BVH and
 /// without transformed primitives (`codegen::baked_primitives`), which is every scene of
 /// the plain list (`tuning::LIST_MAX_PRIMITIVES`).
@@ -763,6 +782,11 @@ impl GpuPlan {
         };
         shader.banks = scene.texels.banks.len() as u32;
         shader.lane_stats = tuning.lane_stats;
+        // (a specialized shader's: the full shader serves trees of every depth)
+        shader.register_stack = tuning.register_stack
+            && tuning.specialize
+            && scene.use_bvh
+            && scene.bvh_depth <= r::BVH_REGISTER_STACK;
         // the full shader reads every array from a storage buffer
         if tuning.specialize {
             for slot in Slot::RECORDS {

@@ -30,8 +30,10 @@ pub fn accum_bytes_per_pixel(aovs: bool) -> u64 {
     16 * entries_per_pixel(aovs) as u64
 }
 
-/// Workgroup side of `trace.wgsl`'s entry point: one invocation per column of the
-/// traversal stacks.
+/// Tile side of `trace.wgsl`'s workgroups: 8 x 8 pixels, one invocation per column of
+/// the traversal stacks. `main` declares them as 64 x 1 x 1 and finds its pixel from its
+/// local index (row by row): Mesa 22.3.6's lavapipe on an AVX-512 CPU walked the BVH
+/// wrong in 8 x 8 x 1 workgroups (docs/robustness.md, "A driver that computes wrong").
 const WORKGROUP: u32 = 8;
 const _: () = assert!(WORKGROUP * WORKGROUP == crate::scene::records::BVH_STACK_LANES);
 

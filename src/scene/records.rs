@@ -88,6 +88,9 @@ shared_constants! {
     /// one column per invocation, where llvmpipe writes an entry for the lanes that push
     /// one only; a stack in private memory costs it a masked write of all 8 lanes.
     BVH_STACK_LANES: u32 = 64;
+    /// Entries of the BVH walk's stack in registers (`gpu::plan::REGISTER_STACK`): a
+    /// walk holds at most one per level below the root, so trees of this depth at most.
+    BVH_REGISTER_STACK: u32 = 8;
     /// The bits of a BVH walk's hit mask (`BvhNode`'s meta bytes) that mark child nodes;
     /// the 24 below them mark primitives.
     BVH_NODE_BITS: u32 = 0xff00_0000;
