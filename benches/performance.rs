@@ -586,11 +586,11 @@ fn lanes(md: &mut String) {
          sample (sample groups), so only the last samples of a group leave lanes idle. The \
          BVH walk does not: a ray's node steps and leaf tests differ from its neighbours' \
          (incoherent bounce and shadow rays, shadow rays that stop at their first hit), and \
-         each loop runs as long as its slowest lane, so about two thirds of the lanes of a \
-         walk's step wait. Issue 44 tried three ways to put them to work (the subgroup \
-         walking one ray at a time, a walk refilled with the path's next ray, the node \
-         loop ended once most lanes hold a leaf; \"What each optimization gave\", fifth \
-         round): none was faster on llvmpipe, where a subgroup operation is a loop over \
+         each loop runs as long as its slowest lane, so most of the lanes of a walk's \
+         step wait. Issue 44 tried three ways to put them to work (the subgroup walking \
+         one ray at a time, a walk refilled with the path's next ray, the node loop ended \
+         once most lanes hold a leaf; docs/performance.md, \"What each optimization \
+         gave\", fifth round): none was faster on llvmpipe, where a subgroup operation is a loop over \
          the lanes and every fetch a load per lane, so the cost of a step, not the lanes \
          it leaves idle, is what pays to cut.\n"
     );

@@ -278,15 +278,18 @@ pub fn placements(plan: &GpuPlan) -> String {
         }
     }
     if parts.is_empty() {
-        "no records".into()
-    } else {
-        parts.join(", ")
+        parts.push("no records".into());
     }
+    if plan.shader.register_stack {
+        parts.push("the BVH walk's stack in registers".into());
+    }
+    parts.join(", ")
 }
 
 /// The next safer tuning after `plan` (made under `tuning`) disagreed: records in textures
-/// go to storage buffers; then those in uniform buffers or written into the shader. None
-/// when every array the shader reads is already in a storage buffer.
+/// go to storage buffers; then those in uniform buffers or written into the shader; then
+/// the BVH walk's stack leaves its registers for workgroup memory. None when every array
+/// the shader reads is already in a storage buffer and the stack in workgroup memory.
 pub fn safer(tuning: &Tuning, plan: &GpuPlan) -> Option<Tuning> {
     let read = plan.shader.trace_slots();
     let any = |place: Placement| {
@@ -304,6 +307,9 @@ pub fn safer(tuning: &Tuning, plan: &GpuPlan) -> Option<Tuning> {
     {
         t.uniform_records = false;
         t.baked_records = false;
+        Some(t)
+    } else if plan.shader.register_stack && t.register_stack {
+        t.register_stack = false;
         Some(t)
     } else {
         None

@@ -90,10 +90,16 @@ fn every_entry_shader_validates_and_binds_what_it_reads() {
                     module(&spec, entry);
                 }
                 spec.lane_stats = false;
-                // the walk's stack in registers (gpu::plan::REGISTER_STACK)
+                // the walk's stack in registers (gpu::plan::REGISTER_STACK): an entry per
+                // level of the deepest tree it serves, and the count
                 spec.register_stack = true;
                 for entry in ENTRY_SHADERS {
-                    module(&spec, entry);
+                    let m = module(&spec, entry);
+                    if !features.contains(Feature::Instances) {
+                        let (_, members) = naga_struct(&m, "WalkStack").expect("WalkStack");
+                        let want = wgtrace::scene::records::BVH_REGISTER_STACK as usize + 1;
+                        assert_eq!(members.len(), want, "{entry}");
+                    }
                 }
                 spec.register_stack = false;
             }

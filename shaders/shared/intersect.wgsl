@@ -392,7 +392,8 @@ fn occluded_bvh(ray: Ray, t_max: f32) -> bool {
 // nearer than start's, or, with any_hit (a constant at each call, which the compiler
 // folds), the first one found, the walk ending there (a shadow ray's). The walk's two
 // groups (bvh_node_hits): child nodes still to visit (a stack entry) and primitives to
-// test; sp indexes bvh_stack (the entries of this lane are BVH_STACK_LANES apart); the
+// test; sp indexes bvh_stack (the entries of this lane are BVH_STACK_LANES apart; with
+// REGISTER_STACK it is the WalkStack itself); the
 // root is a group of one child node, in slot 0. Boxes are culled against the closest hit
 // so far (an any-hit walk ends at its first, so it culls against t_max only).
 // With instances (HAS_INSTANCES), a primitive of the walk may be an instance: the

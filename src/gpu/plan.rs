@@ -555,8 +555,9 @@ impl ShaderSpec {
     }
 
     /// The preprocessor's defines: a `HAS_*` per feature, a `BAKED_*` per record array
-    /// written into the shader, and `BOUNDED_TRIANGLES_ONLY` when every primitive the BVH
-    /// can hold is an untransformed triangle (its leaves then test without a `switch`).
+    /// written into the shader, `BOUNDED_TRIANGLES_ONLY` when every primitive the BVH
+    /// can hold is an untransformed triangle (its leaves then test without a `switch`),
+    /// and `REGISTER_STACK` for the walk's stack in registers.
     pub fn defines(&self) -> BTreeSet<&'static str> {
         let mut d: BTreeSet<&'static str> = self.features.iter().map(Feature::define).collect();
         for (slot, define) in BAKED_DEFINES {
@@ -590,7 +591,8 @@ impl ShaderSpec {
     }
 
     /// Every name a shader file's `#if` may ask about: each feature's define, each
-    /// `BAKED_*`, `BOUNDED_TRIANGLES_ONLY`, `HAS_UNBOUNDED`, `LANE_STATS` and `HAS_ERF`.
+    /// `BAKED_*`, `BOUNDED_TRIANGLES_ONLY`, `HAS_UNBOUNDED`, `LANE_STATS`,
+    /// `REGISTER_STACK` and `HAS_ERF`.
     /// The preprocessor refuses any other.
     pub fn known_defines() -> BTreeSet<&'static str> {
         Feature::all()
@@ -786,6 +788,7 @@ impl GpuPlan {
         shader.register_stack = tuning.register_stack
             && tuning.specialize
             && scene.use_bvh
+            && !shader.features.contains(Feature::Instances)
             && scene.bvh_depth <= r::BVH_REGISTER_STACK;
         // the full shader reads every array from a storage buffer
         if tuning.specialize {
