@@ -1150,15 +1150,15 @@ fn assert_same_image(name: &str, what: &str, a: &wgtrace::Accumulation, b: &wgtr
 /// in workgroup memory renders: the same walk, so the pixels agree bit for bit unless the
 /// compiler arranged the arithmetic differently (printed), and every tile within the
 /// statistical bound. On scenes whose trees are shallow enough: meshes, planes before
-/// the BVH, punctual lights, delta lobes.
+/// the BVH, punctual lights, delta lobes, transformed shapes.
 #[test]
 fn the_walk_stack_in_registers_renders_the_same_image() {
     for file in [
         "scenes/mesh.toml",
         "scenes/area-lights.toml",
         "scenes/gltf-spheres.toml",
-        "bench/spot.toml",
-        "bench/nefertiti.toml",
+        "scenes/lights.toml",
+        "scenes/transforms.toml",
     ] {
         let o = Overrides {
             width: Some(32),
