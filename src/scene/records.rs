@@ -86,7 +86,8 @@ shared_constants! {
     /// Invocations in a workgroup of every entry point that traces rays (`@workgroup_size`
     /// of `trace.wgsl` and `kernel.wgsl`): the traversal stacks are in workgroup memory,
     /// one column per invocation, where llvmpipe writes an entry for the lanes that push
-    /// one only; a stack in private memory costs it a masked write of all 8 lanes.
+    /// one only; a stack in private memory costs it a masked write of all 8 lanes. (A
+    /// shallow tree's walk keeps its stack in registers instead: `BVH_REGISTER_STACK`.)
     BVH_STACK_LANES: u32 = 64;
     /// Entries of the BVH walk's stack in registers (`gpu::plan::REGISTER_STACK`): a
     /// walk holds at most one per level below the root, so trees of this depth at most.
